@@ -1,0 +1,19 @@
+"""knitlad: discrete elastic rods with frictional contact, for knitted fabric."""
+
+from knitlad.simulation import Simulation, SimulationBlowUp, UnstableTimeStep
+from knitlad.state import RodState, Scene
+from knitlad.units import NYLON, Material, Scales
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Material",
+    "NYLON",
+    "RodState",
+    "Scales",
+    "Scene",
+    "Simulation",
+    "SimulationBlowUp",
+    "UnstableTimeStep",
+    "__version__",
+]

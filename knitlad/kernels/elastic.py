@@ -1,0 +1,243 @@
+"""Elastic forces of discrete elastic rods (DER).
+
+References: Bergou et al. 2008, "Discrete Elastic Rods" (DER08); Bergou et al.
+2010, "Discrete Viscous Threads" (DVT10). Notation of ``shared/notes``:
+edge e^k, rest length |e_bar^k|, Voronoi length l_h = (|e_bar^{h-1}|+|e_bar^h|)/2,
+curvature binormal (kb)_h = 2 e^{h-1} x e^h / (|e^{h-1}||e^h| + e^{h-1}.e^h).
+
+Every ``*_forces`` kernel *adds* into its output, so a caller zeroes once and
+sums all contributions.
+"""
+
+import math
+
+from numba import njit
+
+from knitlad.kernels.vec import cross, dot
+
+# fast-math without "nnan"/"ninf", so the blow-up guard still sees NaN and infinity
+NUMBA_OPTS = dict(cache=True, error_model="numpy", fastmath={"nsz", "arcp", "contract", "afn", "reassoc"})
+
+
+@njit(**NUMBA_OPTS)
+def edge_vectors(x, edge_a, edge_b, edge_shift, e, elen):
+    """e^k = x_b + shift - x_a and |e^k| into ``e`` (ne, 3) and ``elen`` (ne,)."""
+    for k in range(edge_a.shape[0]):
+        a = edge_a[k]
+        b = edge_b[k]
+        ex = x[b, 0] + edge_shift[k, 0] - x[a, 0]
+        ey = x[b, 1] + edge_shift[k, 1] - x[a, 1]
+        ez = x[b, 2] + edge_shift[k, 2] - x[a, 2]
+        e[k, 0] = ex
+        e[k, 1] = ey
+        e[k, 2] = ez
+        elen[k] = math.sqrt(ex * ex + ey * ey + ez * ez)
+
+
+@njit(**NUMBA_OPTS)
+def stretching_forces(e, elen, v, edge_a, edge_b, rest_length, EA, damping, F):
+    """Axial spring plus internal dashpot on every edge.
+
+    Energy E_s = EA (|e| - |e_bar|)^2 / (2 |e_bar|); tension
+    T = EA (|e|/|e_bar| - 1) + c d|e|/dt, with c the edge's dashpot coefficient
+    (Kelvin-Voigt: it damps axial vibration, never rigid motion or bending).
+    """
+    for k in range(edge_a.shape[0]):
+        a = edge_a[k]
+        b = edge_b[k]
+        inv = 1.0 / elen[k]
+        tx = e[k, 0] * inv
+        ty = e[k, 1] * inv
+        tz = e[k, 2] * inv
+        stretch_rate = (v[b, 0] - v[a, 0]) * tx + (v[b, 1] - v[a, 1]) * ty + (v[b, 2] - v[a, 2]) * tz
+        tension = EA[k] * (elen[k] / rest_length[k] - 1.0) + damping[k] * stretch_rate
+        F[a, 0] += tension * tx
+        F[a, 1] += tension * ty
+        F[a, 2] += tension * tz
+        F[b, 0] -= tension * tx
+        F[b, 1] -= tension * ty
+        F[b, 2] -= tension * tz
+
+
+@njit(**NUMBA_OPTS)
+def stretching_energy(elen, rest_length, EA):
+    """E_s = sum_k EA (|e| - |e_bar|)^2 / (2 |e_bar|)."""
+    total = 0.0
+    for k in range(elen.shape[0]):
+        s = elen[k] - rest_length[k]
+        total += 0.5 * EA[k] * s * s / rest_length[k]
+    return total
+
+
+@njit(**NUMBA_OPTS)
+def bending_forces(e, elen, edge_a, edge_b, hinge_e0, hinge_e1, B_over_l, F):
+    """Isotropic DER bending of a rod straight at rest (no material frame).
+
+    E_b = sum_h B |kb_h|^2 / (2 l_h), DER08 eq. for an isotropic rod with zero
+    natural curvature. With a = e^{h-1}, b = e^h, D = |a||b| + a.b and
+    r = (B/l) kb, the exact gradients are
+        dE/da = (2 b x r - (kb.r)(|b| a/|a| + b)) / D
+        dE/db = (-2 a x r - (kb.r)(|a| b/|b| + a)) / D.
+    """
+    for h in range(hinge_e0.shape[0]):
+        k0 = hinge_e0[h]
+        k1 = hinge_e1[h]
+        ax, ay, az = e[k0, 0], e[k0, 1], e[k0, 2]
+        bx, by, bz = e[k1, 0], e[k1, 1], e[k1, 2]
+        la = elen[k0]
+        lb = elen[k1]
+        inv_D = 1.0 / (la * lb + dot(ax, ay, az, bx, by, bz))
+        cx, cy, cz = cross(ax, ay, az, bx, by, bz)
+        kbx, kby, kbz = 2.0 * cx * inv_D, 2.0 * cy * inv_D, 2.0 * cz * inv_D
+        s = B_over_l[h]
+        rx, ry, rz = s * kbx, s * kby, s * kbz
+        kr = dot(kbx, kby, kbz, rx, ry, rz)
+        brx, bry, brz = cross(bx, by, bz, rx, ry, rz)
+        arx, ary, arz = cross(ax, ay, az, rx, ry, rz)
+        fa = lb / la
+        fb = la / lb
+        gax = (2.0 * brx - kr * (fa * ax + bx)) * inv_D
+        gay = (2.0 * bry - kr * (fa * ay + by)) * inv_D
+        gaz = (2.0 * brz - kr * (fa * az + bz)) * inv_D
+        gbx = (-2.0 * arx - kr * (fb * bx + ax)) * inv_D
+        gby = (-2.0 * ary - kr * (fb * by + ay)) * inv_D
+        gbz = (-2.0 * arz - kr * (fb * bz + az)) * inv_D
+        p = edge_a[k0]
+        c = edge_b[k0]
+        nx = edge_b[k1]
+        F[p, 0] += gax
+        F[p, 1] += gay
+        F[p, 2] += gaz
+        F[c, 0] += gbx - gax
+        F[c, 1] += gby - gay
+        F[c, 2] += gbz - gaz
+        F[nx, 0] -= gbx
+        F[nx, 1] -= gby
+        F[nx, 2] -= gbz
+
+
+@njit(**NUMBA_OPTS)
+def bending_energy(e, elen, hinge_e0, hinge_e1, B_over_l):
+    """E_b = sum_h B |kb_h|^2 / (2 l_h) (rod straight at rest)."""
+    total = 0.0
+    for h in range(hinge_e0.shape[0]):
+        k0 = hinge_e0[h]
+        k1 = hinge_e1[h]
+        D = elen[k0] * elen[k1] + dot(e[k0, 0], e[k0, 1], e[k0, 2], e[k1, 0], e[k1, 1], e[k1, 2])
+        cx, cy, cz = cross(e[k0, 0], e[k0, 1], e[k0, 2], e[k1, 0], e[k1, 1], e[k1, 2])
+        kb2 = 4.0 * (cx * cx + cy * cy + cz * cz) / (D * D)
+        total += 0.5 * B_over_l[h] * kb2
+    return total
+
+
+@njit(**NUMBA_OPTS)
+def _material_curvatures(e, elen, d1, d2, k0, k1):
+    """kb, chi, tangents and (kappa_1, kappa_2) at the hinge between edges k0, k1.
+
+    kappa_1 = kb.(d2^{h-1} + d2^h)/2, kappa_2 = -kb.(d1^{h-1} + d1^h)/2 (DER08 sec. 4.2).
+    """
+    i0 = 1.0 / elen[k0]
+    i1 = 1.0 / elen[k1]
+    t0x, t0y, t0z = e[k0, 0] * i0, e[k0, 1] * i0, e[k0, 2] * i0
+    t1x, t1y, t1z = e[k1, 0] * i1, e[k1, 1] * i1, e[k1, 2] * i1
+    chi = 1.0 + dot(t0x, t0y, t0z, t1x, t1y, t1z)
+    cx, cy, cz = cross(t0x, t0y, t0z, t1x, t1y, t1z)
+    kbx, kby, kbz = 2.0 * cx / chi, 2.0 * cy / chi, 2.0 * cz / chi
+    k1_ = 0.5 * dot(kbx, kby, kbz, d2[k0, 0] + d2[k1, 0], d2[k0, 1] + d2[k1, 1], d2[k0, 2] + d2[k1, 2])
+    k2_ = -0.5 * dot(kbx, kby, kbz, d1[k0, 0] + d1[k1, 0], d1[k0, 1] + d1[k1, 1], d1[k0, 2] + d1[k1, 2])
+    return t0x, t0y, t0z, t1x, t1y, t1z, chi, kbx, kby, kbz, k1_, k2_
+
+
+@njit(**NUMBA_OPTS)
+def framed_bending_twisting_forces(
+    e, elen, d1, d2, edge_a, edge_b, hinge_e0, hinge_e1,
+    B_over_l, GJ_over_l, kappa_bar, ref_twist, twist_bar, theta, F, torque,
+):
+    """DER bending with natural curvature, and twisting, with material frames.
+
+    E_b = sum_h B/(2 l_h) [(kappa_1 - kappa_bar_1)^2 + (kappa_2 - kappa_bar_2)^2]
+    E_t = sum_h GJ/(2 l_h) (m_h - m_bar_h)^2,  m_h = theta^h - theta^{h-1} + ref_twist_h.
+    Gradients (DER08 sec. 7; derived again in docs): with t~ = (t^{h-1}+t^h)/chi,
+    d~_j = (d_j^{h-1} + d_j^h)/chi,
+        d kappa_1/d e^{h-1} = (-kappa_1 t~ + t^h x d~_2)/|e^{h-1}|
+        d kappa_1/d e^h     = (-kappa_1 t~ - t^{h-1} x d~_2)/|e^h|
+        d kappa_2/d e^{h-1} = (-kappa_2 t~ - t^h x d~_1)/|e^{h-1}|
+        d kappa_2/d e^h     = (-kappa_2 t~ + t^{h-1} x d~_1)/|e^h|
+        d kappa_1/d theta^j = -kb.d1^j/2,  d kappa_2/d theta^j = -kb.d2^j/2
+        d m/d e^{h-1} = kb/(2|e^{h-1}|),  d m/d e^h = kb/(2|e^h|).
+    Forces go to F (n, 3), torques about the edge tangents to ``torque`` (ne,).
+    """
+    for h in range(hinge_e0.shape[0]):
+        k0 = hinge_e0[h]
+        k1 = hinge_e1[h]
+        t0x, t0y, t0z, t1x, t1y, t1z, chi, kbx, kby, kbz, kap1, kap2 = _material_curvatures(
+            e, elen, d1, d2, k0, k1
+        )
+        ttx, tty, ttz = (t0x + t1x) / chi, (t0y + t1y) / chi, (t0z + t1z) / chi
+        a1x, a1y, a1z = (d1[k0, 0] + d1[k1, 0]) / chi, (d1[k0, 1] + d1[k1, 1]) / chi, (d1[k0, 2] + d1[k1, 2]) / chi
+        a2x, a2y, a2z = (d2[k0, 0] + d2[k1, 0]) / chi, (d2[k0, 1] + d2[k1, 1]) / chi, (d2[k0, 2] + d2[k1, 2]) / chi
+        # generalised forces dE/dkappa_j and dE/dm
+        g1 = B_over_l[h] * (kap1 - kappa_bar[h, 0])
+        g2 = B_over_l[h] * (kap2 - kappa_bar[h, 1])
+        gm = GJ_over_l[h] * (theta[k1] - theta[k0] + ref_twist[h] - twist_bar[h])
+        i0 = 1.0 / elen[k0]
+        i1 = 1.0 / elen[k1]
+        c1x, c1y, c1z = cross(t1x, t1y, t1z, a2x, a2y, a2z)  # t^h x d~2
+        c2x, c2y, c2z = cross(t1x, t1y, t1z, a1x, a1y, a1z)  # t^h x d~1
+        c3x, c3y, c3z = cross(t0x, t0y, t0z, a2x, a2y, a2z)  # t^{h-1} x d~2
+        c4x, c4y, c4z = cross(t0x, t0y, t0z, a1x, a1y, a1z)  # t^{h-1} x d~1
+        # dE/de^{h-1}
+        gax = i0 * (g1 * (-kap1 * ttx + c1x) + g2 * (-kap2 * ttx - c2x) + 0.5 * gm * kbx)
+        gay = i0 * (g1 * (-kap1 * tty + c1y) + g2 * (-kap2 * tty - c2y) + 0.5 * gm * kby)
+        gaz = i0 * (g1 * (-kap1 * ttz + c1z) + g2 * (-kap2 * ttz - c2z) + 0.5 * gm * kbz)
+        # dE/de^h
+        gbx = i1 * (g1 * (-kap1 * ttx - c3x) + g2 * (-kap2 * ttx + c4x) + 0.5 * gm * kbx)
+        gby = i1 * (g1 * (-kap1 * tty - c3y) + g2 * (-kap2 * tty + c4y) + 0.5 * gm * kby)
+        gbz = i1 * (g1 * (-kap1 * ttz - c3z) + g2 * (-kap2 * ttz + c4z) + 0.5 * gm * kbz)
+        p = edge_a[k0]
+        c = edge_b[k0]
+        nx = edge_b[k1]
+        F[p, 0] += gax
+        F[p, 1] += gay
+        F[p, 2] += gaz
+        F[c, 0] += gbx - gax
+        F[c, 1] += gby - gay
+        F[c, 2] += gbz - gaz
+        F[nx, 0] -= gbx
+        F[nx, 1] -= gby
+        F[nx, 2] -= gbz
+        # torques -dE/dtheta
+        kd1_0 = dot(kbx, kby, kbz, d1[k0, 0], d1[k0, 1], d1[k0, 2])
+        kd2_0 = dot(kbx, kby, kbz, d2[k0, 0], d2[k0, 1], d2[k0, 2])
+        kd1_1 = dot(kbx, kby, kbz, d1[k1, 0], d1[k1, 1], d1[k1, 2])
+        kd2_1 = dot(kbx, kby, kbz, d2[k1, 0], d2[k1, 1], d2[k1, 2])
+        torque[k0] -= -0.5 * (g1 * kd1_0 + g2 * kd2_0) - gm
+        torque[k1] -= -0.5 * (g1 * kd1_1 + g2 * kd2_1) + gm
+
+
+@njit(**NUMBA_OPTS)
+def framed_bending_twisting_energy(
+    e, elen, d1, d2, hinge_e0, hinge_e1, B_over_l, GJ_over_l, kappa_bar, ref_twist, twist_bar, theta
+):
+    """(E_b, E_t) of :func:`framed_bending_twisting_forces`."""
+    eb = 0.0
+    et = 0.0
+    for h in range(hinge_e0.shape[0]):
+        k0 = hinge_e0[h]
+        k1 = hinge_e1[h]
+        res = _material_curvatures(e, elen, d1, d2, k0, k1)
+        dk1 = res[10] - kappa_bar[h, 0]
+        dk2 = res[11] - kappa_bar[h, 1]
+        eb += 0.5 * B_over_l[h] * (dk1 * dk1 + dk2 * dk2)
+        m = theta[k1] - theta[k0] + ref_twist[h] - twist_bar[h]
+        et += 0.5 * GJ_over_l[h] * m * m
+    return eb, et
+
+
+@njit(**NUMBA_OPTS)
+def material_curvatures(e, elen, d1, d2, hinge_e0, hinge_e1, out):
+    """(kappa_1, kappa_2) per hinge into ``out`` (nh, 2): used to set a rest shape."""
+    for h in range(hinge_e0.shape[0]):
+        res = _material_curvatures(e, elen, d1, d2, hinge_e0[h], hinge_e1[h])
+        out[h, 0] = res[10]
+        out[h, 1] = res[11]

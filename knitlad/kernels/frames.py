@@ -1,0 +1,103 @@
+"""Reference and material frames of DER edges (DVT10 sec. 4.1, "time-parallel").
+
+Each edge k carries a unit reference director u^k orthogonal to its tangent
+t^k. After every position update u^k is parallel-transported from the old
+tangent to the new one (the rotation of least angle), and the reference twist
+of each hinge is advanced by the signed angle between the space-parallel
+transport of u^{h-1} onto t^h and u^h. The material frame is then
+d1 = cos(theta) u + sin(theta) v, d2 = -sin(theta) u + cos(theta) v, v = t x u.
+"""
+
+import math
+
+from numba import njit
+
+from knitlad.kernels.vec import cross, dot
+
+# fast-math without "nnan"/"ninf", so the blow-up guard still sees NaN and infinity
+NUMBA_OPTS = dict(cache=True, error_model="numpy", fastmath={"nsz", "arcp", "contract", "afn", "reassoc"})
+
+
+@njit(**NUMBA_OPTS)
+def _transport(ux, uy, uz, ax, ay, az, bx, by, bz):
+    """Parallel transport of u from unit tangent a to unit tangent b."""
+    nx, ny, nz = cross(ax, ay, az, bx, by, bz)
+    s = math.sqrt(nx * nx + ny * ny + nz * nz)
+    c = dot(ax, ay, az, bx, by, bz)
+    if s < 1e-14:
+        return ux, uy, uz
+    nx /= s
+    ny /= s
+    nz /= s
+    # Rodrigues rotation about n by the angle between a and b (cos c, sin s)
+    ndu = dot(nx, ny, nz, ux, uy, uz)
+    wx, wy, wz = cross(nx, ny, nz, ux, uy, uz)
+    rx = ux * c + wx * s + nx * ndu * (1.0 - c)
+    ry = uy * c + wy * s + ny * ndu * (1.0 - c)
+    rz = uz * c + wz * s + nz * ndu * (1.0 - c)
+    return rx, ry, rz
+
+
+@njit(**NUMBA_OPTS)
+def _signed_angle(ux, uy, uz, wx, wy, wz, nx, ny, nz):
+    """Angle from u to w about axis n."""
+    cx, cy, cz = cross(ux, uy, uz, wx, wy, wz)
+    return math.atan2(dot(cx, cy, cz, nx, ny, nz), dot(ux, uy, uz, wx, wy, wz))
+
+
+@njit(**NUMBA_OPTS)
+def transport_reference_frames(e, elen, tangent, ref_u):
+    """Carry u^k from the stored tangent to the current one, in place (both updated)."""
+    for k in range(e.shape[0]):
+        inv = 1.0 / elen[k]
+        bx, by, bz = e[k, 0] * inv, e[k, 1] * inv, e[k, 2] * inv
+        ux, uy, uz = _transport(ref_u[k, 0], ref_u[k, 1], ref_u[k, 2], tangent[k, 0], tangent[k, 1], tangent[k, 2], bx, by, bz)
+        # remove the round-off drift out of the normal plane, then renormalise
+        p = dot(ux, uy, uz, bx, by, bz)
+        ux -= p * bx
+        uy -= p * by
+        uz -= p * bz
+        nrm = 1.0 / math.sqrt(ux * ux + uy * uy + uz * uz)
+        ref_u[k, 0] = ux * nrm
+        ref_u[k, 1] = uy * nrm
+        ref_u[k, 2] = uz * nrm
+        tangent[k, 0] = bx
+        tangent[k, 1] = by
+        tangent[k, 2] = bz
+
+
+@njit(**NUMBA_OPTS)
+def update_reference_twist(tangent, ref_u, hinge_e0, hinge_e1, ref_twist):
+    """Advance the reference twist of every hinge, keeping it continuous in time."""
+    for h in range(hinge_e0.shape[0]):
+        k0 = hinge_e0[h]
+        k1 = hinge_e1[h]
+        px, py, pz = _transport(
+            ref_u[k0, 0], ref_u[k0, 1], ref_u[k0, 2],
+            tangent[k0, 0], tangent[k0, 1], tangent[k0, 2],
+            tangent[k1, 0], tangent[k1, 1], tangent[k1, 2],
+        )
+        # rotate the transported director by the previous twist, then add the residual angle
+        c = math.cos(ref_twist[h])
+        s = math.sin(ref_twist[h])
+        tx, ty, tz = tangent[k1, 0], tangent[k1, 1], tangent[k1, 2]
+        wx, wy, wz = cross(tx, ty, tz, px, py, pz)
+        qx, qy, qz = c * px + s * wx, c * py + s * wy, c * pz + s * wz
+        ref_twist[h] += _signed_angle(qx, qy, qz, ref_u[k1, 0], ref_u[k1, 1], ref_u[k1, 2], tx, ty, tz)
+
+
+@njit(**NUMBA_OPTS)
+def material_frames(tangent, ref_u, theta, d1, d2):
+    """d1, d2 of every edge from the reference frame and the twist angle theta."""
+    for k in range(theta.shape[0]):
+        tx, ty, tz = tangent[k, 0], tangent[k, 1], tangent[k, 2]
+        ux, uy, uz = ref_u[k, 0], ref_u[k, 1], ref_u[k, 2]
+        vx, vy, vz = cross(tx, ty, tz, ux, uy, uz)
+        c = math.cos(theta[k])
+        s = math.sin(theta[k])
+        d1[k, 0] = c * ux + s * vx
+        d1[k, 1] = c * uy + s * vy
+        d1[k, 2] = c * uz + s * vz
+        d2[k, 0] = -s * ux + c * vx
+        d2[k, 1] = -s * uy + c * vy
+        d2[k, 2] = -s * uz + c * vz

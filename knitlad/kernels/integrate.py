@@ -1,0 +1,253 @@
+"""Time stepping: force assembly, velocity Verlet, FIRE relaxation, blow-up guard.
+
+All loops over steps run inside Numba so a small scene pays no Python cost per
+step. ``s`` is a :class:`knitlad.state.RodState`, ``w`` a
+:class:`knitlad.state.Workspace`.
+"""
+
+import math
+
+from numba import njit
+
+from knitlad.kernels.elastic import (
+    bending_energy,
+    bending_forces,
+    edge_vectors,
+    framed_bending_twisting_energy,
+    framed_bending_twisting_forces,
+    stretching_energy,
+    stretching_forces,
+)
+from knitlad.kernels.frames import material_frames, transport_reference_frames, update_reference_twist
+
+# fast-math without "nnan"/"ninf", so the blow-up guard still sees NaN and infinity
+NUMBA_OPTS = dict(cache=True, error_model="numpy", fastmath={"nsz", "arcp", "contract", "afn", "reassoc"})
+
+
+@njit(**NUMBA_OPTS)
+def compute_forces(s, w, twist, drag):
+    """Total force on every node (``w.force``) and torque on every edge (``w.torque``).
+
+    ``twist``: framed DER bending + twisting, else isotropic bending of a rod
+    straight at rest. ``drag`` [1/ms]: a global viscous drag -drag m v, used
+    only while relaxing.
+    """
+    for i in range(s.x.shape[0]):
+        for c in range(3):
+            w.force[i, c] = s.f_ext[i, c]
+    if drag != 0.0:
+        for i in range(s.x.shape[0]):
+            for c in range(3):
+                w.force[i, c] -= drag * s.mass[i] * s.v[i, c]
+    w.torque[:] = 0.0
+    edge_vectors(s.x, s.edge_a, s.edge_b, s.edge_shift, w.e, w.elen)
+    stretching_forces(w.e, w.elen, s.v, s.edge_a, s.edge_b, s.rest_length, s.EA, s.stretch_damping, w.force)
+    if twist:
+        transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u)
+        update_reference_twist(s.tangent, s.ref_u, s.hinge_e0, s.hinge_e1, s.ref_twist)
+        material_frames(s.tangent, s.ref_u, s.theta, w.d1, w.d2)
+        framed_bending_twisting_forces(
+            w.e, w.elen, w.d1, w.d2, s.edge_a, s.edge_b, s.hinge_e0, s.hinge_e1,
+            s.B_over_l, s.GJ_over_l, s.kappa_bar, s.ref_twist, s.twist_bar, s.theta, w.force, w.torque,
+        )
+    else:
+        bending_forces(w.e, w.elen, s.edge_a, s.edge_b, s.hinge_e0, s.hinge_e1, s.B_over_l, w.force)
+
+
+@njit(**NUMBA_OPTS)
+def potential_energy(s, w, twist):
+    """(stretching, bending, twisting, external) energies [uJ] at the current state."""
+    edge_vectors(s.x, s.edge_a, s.edge_b, s.edge_shift, w.e, w.elen)
+    es = stretching_energy(w.elen, s.rest_length, s.EA)
+    if twist:
+        transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u)
+        update_reference_twist(s.tangent, s.ref_u, s.hinge_e0, s.hinge_e1, s.ref_twist)
+        material_frames(s.tangent, s.ref_u, s.theta, w.d1, w.d2)
+        eb, et = framed_bending_twisting_energy(
+            w.e, w.elen, w.d1, w.d2, s.hinge_e0, s.hinge_e1,
+            s.B_over_l, s.GJ_over_l, s.kappa_bar, s.ref_twist, s.twist_bar, s.theta,
+        )
+    else:
+        eb = bending_energy(w.e, w.elen, s.hinge_e0, s.hinge_e1, s.B_over_l)
+        et = 0.0
+    ext = 0.0
+    for i in range(s.x.shape[0]):
+        ext -= s.f_ext[i, 0] * s.x[i, 0] + s.f_ext[i, 1] * s.x[i, 1] + s.f_ext[i, 2] * s.x[i, 2]
+    return es, eb, et, ext
+
+
+@njit(**NUMBA_OPTS)
+def kinetic_energy(s):
+    """(1/2) sum m v^2 + (1/2) sum I omega^2 [uJ]."""
+    k = 0.0
+    for i in range(s.x.shape[0]):
+        k += 0.5 * s.mass[i] * (s.v[i, 0] ** 2 + s.v[i, 1] ** 2 + s.v[i, 2] ** 2)
+    for j in range(s.theta.shape[0]):
+        k += 0.5 * s.twist_inertia[j] * s.omega[j] ** 2
+    return k
+
+
+@njit(**NUMBA_OPTS)
+def _half_kick(s, w, half_dt, twist):
+    for i in range(s.x.shape[0]):
+        if not s.held[i]:
+            inv_m = half_dt / s.mass[i]
+            s.v[i, 0] += w.force[i, 0] * inv_m
+            s.v[i, 1] += w.force[i, 1] * inv_m
+            s.v[i, 2] += w.force[i, 2] * inv_m
+    if twist:
+        for j in range(s.theta.shape[0]):
+            if not s.theta_held[j]:
+                s.omega[j] += half_dt * w.torque[j] / s.twist_inertia[j]
+
+
+@njit(**NUMBA_OPTS)
+def _drift(s, dt, twist):
+    for i in range(s.x.shape[0]):
+        if s.held[i]:
+            for c in range(3):
+                s.v[i, c] = s.v_prescribed[i, c]
+        for c in range(3):
+            s.x[i, c] += dt * s.v[i, c]
+    if twist:
+        for j in range(s.theta.shape[0]):
+            if s.theta_held[j]:
+                s.omega[j] = 0.0
+            s.theta[j] += dt * s.omega[j]
+
+
+@njit(**NUMBA_OPTS)
+def verlet_steps(s, w, dt, n_steps, twist, drag):
+    """Advance ``n_steps`` of velocity Verlet (kick-drift-kick).
+
+    Expects ``w.force``/``w.torque`` to hold the forces of the current state
+    (call :func:`compute_forces` once before the first call). Held nodes move
+    with their prescribed velocity; the force left on them in ``w.force`` is
+    minus the reaction of the support.
+    """
+    # the closing half-kick of one step and the opening one of the next are fused
+    _half_kick(s, w, 0.5 * dt, twist)
+    for step in range(n_steps):
+        _drift(s, dt, twist)
+        compute_forces(s, w, twist, drag)
+        _half_kick(s, w, dt if step < n_steps - 1 else 0.5 * dt, twist)
+
+
+@njit(**NUMBA_OPTS)
+def max_free_force(s, w, twist):
+    """(max |F| over free nodes [mN], max |torque| over free edges [mN mm])."""
+    fmax = 0.0
+    for i in range(s.x.shape[0]):
+        if not s.held[i]:
+            f = math.sqrt(w.force[i, 0] ** 2 + w.force[i, 1] ** 2 + w.force[i, 2] ** 2)
+            if f > fmax:
+                fmax = f
+    tmax = 0.0
+    if twist:
+        for j in range(s.theta.shape[0]):
+            if not s.theta_held[j] and abs(w.torque[j]) > tmax:
+                tmax = abs(w.torque[j])
+    return fmax, tmax
+
+
+@njit(**NUMBA_OPTS)
+def fire_relax(s, w, dt_start, dt_max, max_steps, force_tol, torque_tol, twist):
+    """FIRE energy minimisation (Bitzek et al. 2006, with the FIRE 2.0 back-step of
+    Guenole et al. 2020) over free node positions and free twist angles.
+
+    Held nodes stay where they are. Stops when max |F| <= force_tol and
+    max |torque| <= torque_tol. Returns (steps taken, max |F|, max |torque|).
+    """
+    alpha0 = 0.1
+    alpha = alpha0
+    n_delay = 5
+    f_inc = 1.1
+    f_dec = 0.5
+    f_alpha = 0.99
+    dt = dt_start
+    dt_min = 0.02 * dt_start
+    n_pos = 0
+    for i in range(s.x.shape[0]):
+        for c in range(3):
+            s.v[i, c] = 0.0
+    s.omega[:] = 0.0
+    compute_forces(s, w, twist, 0.0)
+    fmax, tmax = max_free_force(s, w, twist)
+    step = 0
+    while step < max_steps and (fmax > force_tol or tmax > torque_tol):
+        step += 1
+        power = 0.0
+        for i in range(s.x.shape[0]):
+            if not s.held[i]:
+                power += w.force[i, 0] * s.v[i, 0] + w.force[i, 1] * s.v[i, 1] + w.force[i, 2] * s.v[i, 2]
+        if twist:
+            for j in range(s.theta.shape[0]):
+                if not s.theta_held[j]:
+                    power += w.torque[j] * s.omega[j]
+        if power > 0.0:
+            n_pos += 1
+            if n_pos > n_delay:
+                dt = min(dt * f_inc, dt_max)
+                alpha *= f_alpha
+        else:
+            n_pos = 0
+            dt = max(dt * f_dec, dt_min)
+            alpha = alpha0
+            for i in range(s.x.shape[0]):
+                if not s.held[i]:
+                    for c in range(3):
+                        s.x[i, c] -= 0.5 * dt * s.v[i, c]
+                        s.v[i, c] = 0.0
+            if twist:
+                for j in range(s.theta.shape[0]):
+                    s.theta[j] -= 0.5 * dt * s.omega[j]
+                    s.omega[j] = 0.0
+        # semi-implicit Euler with FIRE mixing, positions and twist mixed separately
+        vv = 0.0
+        ff = 0.0
+        for i in range(s.x.shape[0]):
+            if not s.held[i]:
+                for c in range(3):
+                    s.v[i, c] += dt * w.force[i, c] / s.mass[i]
+                    vv += s.v[i, c] ** 2
+                    ff += w.force[i, c] ** 2
+        scale = alpha * math.sqrt(vv / ff) if ff > 0.0 else 0.0
+        for i in range(s.x.shape[0]):
+            if not s.held[i]:
+                for c in range(3):
+                    s.v[i, c] = (1.0 - alpha) * s.v[i, c] + scale * w.force[i, c]
+                    s.x[i, c] += dt * s.v[i, c]
+        if twist:
+            oo = 0.0
+            tt = 0.0
+            for j in range(s.theta.shape[0]):
+                if not s.theta_held[j]:
+                    s.omega[j] += dt * w.torque[j] / s.twist_inertia[j]
+                    oo += s.omega[j] ** 2
+                    tt += w.torque[j] ** 2
+            tscale = alpha * math.sqrt(oo / tt) if tt > 0.0 else 0.0
+            for j in range(s.theta.shape[0]):
+                if not s.theta_held[j]:
+                    s.omega[j] = (1.0 - alpha) * s.omega[j] + tscale * w.torque[j]
+                    s.theta[j] += dt * s.omega[j]
+        compute_forces(s, w, twist, 0.0)
+        fmax, tmax = max_free_force(s, w, twist)
+    for i in range(s.x.shape[0]):
+        for c in range(3):
+            s.v[i, c] = 0.0
+    s.omega[:] = 0.0
+    return step, fmax, tmax
+
+
+@njit(**NUMBA_OPTS)
+def first_bad_node(x, v, max_speed):
+    """Index of the first node with a non-finite position/velocity or a speed
+    above ``max_speed``; -1 if all are sane. (Kinds: 1 non-finite, 2 too fast.)"""
+    vmax2 = max_speed * max_speed
+    for i in range(x.shape[0]):
+        for c in range(3):
+            if not (math.isfinite(x[i, c]) and math.isfinite(v[i, c])):
+                return i, 1
+        if v[i, 0] ** 2 + v[i, 1] ** 2 + v[i, 2] ** 2 > vmax2:
+            return i, 2
+    return -1, 0

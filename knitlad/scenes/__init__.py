@@ -1,0 +1,1 @@
+"""Scenes build a :class:`knitlad.state.RodState` for one kind of experiment."""

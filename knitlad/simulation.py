@@ -1,0 +1,186 @@
+"""The public driver: run a :class:`~knitlad.state.RodState` in time or to equilibrium.
+
+Units at the edges: methods whose names end in ``_si`` or take ``*_s`` / ``*_N``
+arguments speak SI; the state itself is in internal units (:mod:`knitlad.units`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Callable
+
+import numpy as np
+
+from knitlad import units
+from knitlad.kernels.integrate import (
+    compute_forces,
+    fire_relax,
+    first_bad_node,
+    kinetic_energy,
+    potential_energy,
+    verlet_steps,
+)
+from knitlad.state import RodState, Workspace
+from knitlad.timestep import DEFAULT_SAFETY, TimeStepLimits, critical_time_steps
+
+
+class SimulationBlowUp(RuntimeError):
+    """The state became non-finite or a node outran the axial wave speed."""
+
+
+class UnstableTimeStep(ValueError):
+    """A requested time step exceeds the explicit stability limit."""
+
+
+class Simulation:
+    """Explicit dynamics and FIRE statics of a rod scene.
+
+    Parameters
+    ----------
+    state: the scene (from :meth:`knitlad.state.Scene.build`); modified in place.
+    dt_s: time step [s]; default ``safety`` x the stability limit. A larger one
+        than the limit is refused with :class:`UnstableTimeStep`.
+    safety: fraction of the stability limit used when ``dt_s`` is not given.
+    drag_per_s: global viscous drag rate [1/s] (0 for true dynamics).
+    guard_every: steps between blow-up checks.
+    """
+
+    def __init__(
+        self,
+        state: RodState,
+        dt_s: float | None = None,
+        safety: float = DEFAULT_SAFETY,
+        drag_per_s: float = 0.0,
+        guard_every: int = 500,
+    ) -> None:
+        if not 0.0 < safety <= 1.0:
+            raise ValueError(f"safety must lie in (0, 1], got {safety}")
+        self.state = state
+        self.work = Workspace.for_state(state)
+        self.twist = bool(np.any(state.GJ_over_l) or np.any(state.kappa_bar))
+        self.limits: TimeStepLimits = critical_time_steps(state, self.twist)
+        if dt_s is None:
+            self.dt = safety * self.limits.combined
+        else:
+            dt = dt_s / units.TIME
+            if not (dt > 0 and math.isfinite(dt)):
+                raise ValueError(f"dt must be a positive number of seconds, got {dt_s!r}")
+            if dt > self.limits.combined:
+                raise UnstableTimeStep(
+                    f"dt = {dt_s:.3e} s exceeds the stability limit {self.limits.combined * units.TIME:.3e} s "
+                    f"(set by {self.limits.limiting()}); use dt <= {self.limits.combined * units.TIME:.3e} s "
+                    "or leave dt unset"
+                )
+            self.dt = dt
+        if not math.isfinite(self.dt):
+            self.dt = 1.0  # nothing moves; any step is stable
+        self.drag = drag_per_s * units.TIME
+        self.guard_every = int(guard_every)
+        self.steps = 0
+        self.time = 0.0  # internal ms
+        self.max_speed = self._axial_wave_speed()
+        compute_forces(self.state, self.work, self.twist, self.drag)
+
+    def _axial_wave_speed(self) -> float:
+        s = self.state
+        rho = s.mass.sum() / max(s.rest_length.sum(), 1e-300)
+        c = np.sqrt(s.EA / rho) if s.EA.size else np.array([1.0])
+        return float(np.max(c))
+
+    # ------------------------------------------------------------------ dynamics
+    @property
+    def dt_s(self) -> float:
+        return self.dt * units.TIME
+
+    @property
+    def time_s(self) -> float:
+        return self.time * units.TIME
+
+    def step(self, n_steps: int = 1) -> None:
+        """Advance ``n_steps`` steps, checking for blow-up every ``guard_every``."""
+        left = int(n_steps)
+        while left > 0:
+            chunk = min(left, self.guard_every)
+            verlet_steps(self.state, self.work, self.dt, chunk, self.twist, self.drag)
+            self.steps += chunk
+            self.time += chunk * self.dt
+            left -= chunk
+            self._guard()
+
+    def run(
+        self,
+        duration_s: float,
+        observe: Callable[["Simulation"], None] | None = None,
+        observe_every_s: float | None = None,
+    ) -> None:
+        """Advance by ``duration_s``; call ``observe(self)`` every ``observe_every_s``."""
+        n_total = max(1, int(round(duration_s / self.dt_s)))
+        every = n_total if observe_every_s is None else max(1, int(round(observe_every_s / self.dt_s)))
+        done = 0
+        while done < n_total:
+            chunk = min(every, n_total - done)
+            self.step(chunk)
+            done += chunk
+            if observe is not None:
+                observe(self)
+
+    def _guard(self) -> None:
+        node, kind = first_bad_node(self.state.x, self.state.v, self.max_speed)
+        if node >= 0:
+            yarn, local = self.state.yarn_of(node)
+            what = "non-finite position or velocity" if kind == 1 else (
+                f"speed above the axial wave speed {self.max_speed * units.VELOCITY:.0f} m/s"
+            )
+            raise SimulationBlowUp(
+                f"blow-up by step {self.steps} (t = {self.time_s:.4e} s): {what} at yarn {yarn}, node {local}; "
+                f"dt = {self.dt_s:.3e} s, stability limit {self.limits.combined * units.TIME:.3e} s"
+            )
+
+    # ------------------------------------------------------------------ statics
+    def relax(self, force_tol_N: float = 1e-7, max_steps: int = 200_000, torque_tol_Nm: float | None = None) -> dict:
+        """FIRE minimisation to static equilibrium with the held nodes fixed.
+
+        Returns a dict with ``steps``, ``max_force_N``, ``converged``.
+        """
+        ftol = force_tol_N / units.FORCE
+        ttol = (torque_tol_Nm if torque_tol_Nm is not None else force_tol_N * 1e-3) / (units.FORCE * units.LENGTH)
+        steps, fmax, tmax = fire_relax(
+            self.state, self.work, 0.5 * self.dt, self.dt, int(max_steps), ftol, ttol, self.twist
+        )
+        self._guard()
+        compute_forces(self.state, self.work, self.twist, self.drag)
+        return {
+            "steps": int(steps),
+            "max_force_N": float(fmax * units.FORCE),
+            "max_torque_Nm": float(tmax * units.FORCE * units.LENGTH),
+            "converged": bool(fmax <= ftol and tmax <= ttol),
+        }
+
+    # ------------------------------------------------------------------ read-out
+    def positions_m(self) -> np.ndarray:
+        return self.state.x * units.LENGTH
+
+    def velocities_m_s(self) -> np.ndarray:
+        return self.state.v * units.VELOCITY
+
+    def forces_N(self) -> np.ndarray:
+        """Net force on each node at the last evaluation [N]."""
+        return self.work.force * units.FORCE
+
+    def reaction_forces_N(self) -> np.ndarray:
+        """Force [N] the supports exert on each held node (zero on free nodes).
+
+        A held node moves at constant prescribed velocity, so the support
+        balances every other force on it: R = -F_rest.
+        """
+        r = -self.work.force * units.FORCE
+        r[~self.state.held] = 0.0
+        return r
+
+    def energies_J(self) -> dict[str, float]:
+        """Kinetic, stretching, bending, twisting, external-potential and total energy [J]."""
+        es, eb, et, ext = potential_energy(self.state, self.work, self.twist)
+        ek = kinetic_energy(self.state)
+        e = {"kinetic": ek, "stretching": es, "bending": eb, "twisting": et, "external": ext}
+        e["total"] = sum(e.values())
+        return {k: float(v) * units.ENERGY for k, v in e.items()}

@@ -1,0 +1,322 @@
+"""One structure-of-arrays state for all yarns, and the builder that makes it.
+
+All yarns live in the same arrays; ``yarn_start[y]`` is the index of yarn y's
+first node (``yarn_start[-1] == n``). Node arrays are ``(n, 3)``. Every value is
+in internal units (:mod:`knitlad.units`: mm, mg, ms, mN). Edges and bending
+hinges are flat index lists derived once from the offsets, so an open yarn, a
+ring and a yarn periodised with a shift all use the same kernels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import NamedTuple, Sequence
+
+import numpy as np
+
+from knitlad import units
+from knitlad.kernels.elastic import edge_vectors, material_curvatures
+from knitlad.kernels.frames import material_frames, update_reference_twist
+from knitlad.units import Material
+
+
+class RodState(NamedTuple):
+    """Arrays of every yarn at once (internal units). Kernels receive this tuple."""
+
+    # nodes (n,)
+    x: np.ndarray  # (n, 3) positions
+    v: np.ndarray  # (n, 3) velocities
+    mass: np.ndarray  # (n,) lumped masses
+    radius: np.ndarray  # (n,) yarn radius at the node (contact)
+    held: np.ndarray  # (n,) bool: position prescribed, x(t) = x + t * v_prescribed
+    v_prescribed: np.ndarray  # (n, 3)
+    f_ext: np.ndarray  # (n, 3) constant external force
+    node_yarn: np.ndarray  # (n,) int64 yarn of each node
+    yarn_start: np.ndarray  # (n_yarns + 1,) int64 offsets
+    # edges (ne,)
+    edge_a: np.ndarray
+    edge_b: np.ndarray
+    edge_shift: np.ndarray  # (ne, 3) added to x[edge_b] (periodised yarns)
+    rest_length: np.ndarray
+    EA: np.ndarray
+    stretch_damping: np.ndarray  # dashpot coefficient c (mN ms / mm)
+    theta: np.ndarray  # twist angle of the material frame
+    omega: np.ndarray  # d theta / dt
+    twist_inertia: np.ndarray  # rho_L d^2/8 |e_bar|
+    theta_held: np.ndarray  # bool: twist angle clamped
+    ref_u: np.ndarray  # (ne, 3) reference director
+    tangent: np.ndarray  # (ne, 3) unit tangent at the last frame update
+    # hinges (nh,)
+    hinge_e0: np.ndarray
+    hinge_e1: np.ndarray
+    B_over_l: np.ndarray  # B / l_h (Voronoi length of the rest shape)
+    GJ_over_l: np.ndarray
+    kappa_bar: np.ndarray  # (nh, 2) natural material curvature (integrated, dimensionless)
+    twist_bar: np.ndarray  # natural twist (integrated)
+    ref_twist: np.ndarray
+
+    @property
+    def n_nodes(self) -> int:
+        return self.x.shape[0]
+
+    @property
+    def n_yarns(self) -> int:
+        return self.yarn_start.shape[0] - 1
+
+    def yarn_of(self, node: int) -> tuple[int, int]:
+        """(yarn, index of the node within its yarn)."""
+        y = int(self.node_yarn[node])
+        return y, int(node - self.yarn_start[y])
+
+    def copy(self) -> "RodState":
+        return RodState(*(np.array(a, copy=True) for a in self))
+
+
+class Workspace(NamedTuple):
+    """Preallocated scratch for one force evaluation."""
+
+    e: np.ndarray  # (ne, 3) edge vectors
+    elen: np.ndarray  # (ne,)
+    d1: np.ndarray  # (ne, 3) material frame
+    d2: np.ndarray
+    force: np.ndarray  # (n, 3) total force on each node
+    torque: np.ndarray  # (ne,) torque about each edge tangent
+
+    @staticmethod
+    def for_state(state: RodState) -> "Workspace":
+        ne = state.edge_a.shape[0]
+        n = state.x.shape[0]
+        return Workspace(
+            np.zeros((ne, 3)), np.zeros(ne), np.zeros((ne, 3)), np.zeros((ne, 3)), np.zeros((n, 3)), np.zeros(ne)
+        )
+
+
+@dataclass
+class _Yarn:
+    points: np.ndarray  # (k, 3) metres
+    material: Material
+    closed: bool
+    period: np.ndarray  # (3,) metres, shift of the closing edge
+    natural_curvature: str
+    held: dict[int, np.ndarray] = field(default_factory=dict)  # node -> velocity (m/s)
+    forces: dict[int, np.ndarray] = field(default_factory=dict)  # node -> force (N)
+    twist_held: set[int] = field(default_factory=set)
+
+
+class Scene:
+    """Build a :class:`RodState` from yarn centrelines given in SI units.
+
+    Example::
+
+        scene = Scene()
+        y = scene.add_yarn(points)            # (k, 3) array in metres
+        scene.hold(y, [0, 1])                 # clamp the first two nodes
+        scene.apply_force(y, -1, (0, -1e-3, 0))  # 1 mN downward at the tip
+        state = scene.build()
+    """
+
+    def __init__(self, material: Material | None = None) -> None:
+        self.material = material or units.NYLON
+        self._yarns: list[_Yarn] = []
+
+    def add_yarn(
+        self,
+        points: np.ndarray,
+        material: Material | None = None,
+        closed: bool = False,
+        period: Sequence[float] | None = None,
+        natural_curvature: str = "straight",
+    ) -> int:
+        """Add a yarn through ``points`` (k, 3) [m]; returns its index.
+
+        ``closed``: the last node joins the first (a ring); with ``period`` (m),
+        the closing edge goes to ``points[0] + period`` (a yarn periodised along
+        ``period``). ``natural_curvature``: ``"straight"`` (rest shape straight,
+        the paper's simulations) or ``"rest"`` (the given shape is force-free;
+        needs ``build(twist=True)``).
+        """
+        pts = np.asarray(points, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] < 2:
+            raise ValueError(f"points must be a (k >= 2, 3) array, got shape {pts.shape}")
+        if not np.all(np.isfinite(pts)):
+            raise ValueError("points contain NaN or infinity")
+        if natural_curvature not in ("straight", "rest"):
+            raise ValueError(f"natural_curvature must be 'straight' or 'rest', got {natural_curvature!r}")
+        if period is not None and not closed:
+            raise ValueError("period only applies to a closed (periodised) yarn")
+        if closed and pts.shape[0] < 3:
+            raise ValueError("a closed yarn needs at least 3 nodes")
+        shift = np.zeros(3) if period is None else np.asarray(period, dtype=float)
+        ends = np.vstack([pts, pts[:1] + shift]) if closed else pts
+        if np.any(np.linalg.norm(np.diff(ends, axis=0), axis=1) <= 0):
+            raise ValueError("two consecutive points coincide (zero-length edge)")
+        self._yarns.append(_Yarn(pts, material or self.material, closed, shift, natural_curvature))
+        return len(self._yarns) - 1
+
+    def _yarn(self, yarn: int) -> _Yarn:
+        if not 0 <= yarn < len(self._yarns):
+            raise IndexError(f"no yarn {yarn}: the scene has {len(self._yarns)}")
+        return self._yarns[yarn]
+
+    def _node_index(self, y: _Yarn, node: int) -> int:
+        k = y.points.shape[0]
+        if not -k <= node < k:
+            raise IndexError(f"node {node} out of range for a yarn of {k} nodes")
+        return node % k
+
+    def hold(self, yarn: int, nodes: Sequence[int], velocity: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
+        """Prescribe the motion of ``nodes``: x(t) = x(0) + t * velocity [m/s]."""
+        y = self._yarn(yarn)
+        for node in nodes:
+            y.held[self._node_index(y, node)] = np.asarray(velocity, dtype=float)
+
+    def hold_twist(self, yarn: int, edges: Sequence[int]) -> None:
+        """Clamp the twist angle of ``edges`` (a clamped end: hold 2 nodes and edge 0)."""
+        y = self._yarn(yarn)
+        ne = y.points.shape[0] if y.closed else y.points.shape[0] - 1
+        for k in edges:
+            if not -ne <= k < ne:
+                raise IndexError(f"edge {k} out of range for a yarn of {ne} edges")
+            y.twist_held.add(k % ne)
+
+    def apply_force(self, yarn: int, node: int, force: Sequence[float]) -> None:
+        """A constant external force [N] on one node."""
+        y = self._yarn(yarn)
+        y.forces[self._node_index(y, node)] = np.asarray(force, dtype=float)
+
+    def build(self, twist: bool | None = None, stretch_damping_ratio: float = 0.2) -> RodState:
+        """Assemble the state in internal units.
+
+        ``twist``: carry material frames and twist (needed for natural curvature
+        or twist loads); default: on only if some yarn has ``natural_curvature="rest"``.
+        ``stretch_damping_ratio``: the internal dashpot of each edge as a fraction
+        of the critical damping of its axial mode (0 = no dissipation).
+        """
+        if not self._yarns:
+            raise ValueError("the scene has no yarn")
+        needs_frames = any(y.natural_curvature == "rest" for y in self._yarns)
+        if twist is None:
+            twist = needs_frames
+        if needs_frames and not twist:
+            raise ValueError("natural_curvature='rest' needs build(twist=True): a curvature lives in the material frame")
+        if stretch_damping_ratio < 0:
+            raise ValueError("stretch_damping_ratio must be >= 0")
+
+        L = units.LENGTH
+        counts = [y.points.shape[0] for y in self._yarns]
+        yarn_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        n = int(yarn_start[-1])
+        x = np.vstack([y.points for y in self._yarns]) / L
+        node_yarn = np.repeat(np.arange(len(counts)), counts).astype(np.int64)
+
+        edge_a, edge_b, edge_shift, edge_yarn = [], [], [], []
+        hinge_e0, hinge_e1 = [], []
+        for iy, y in enumerate(self._yarns):
+            s = int(yarn_start[iy])
+            k = counts[iy]
+            first_edge = len(edge_a)
+            ne = k if y.closed else k - 1
+            for j in range(ne):
+                edge_a.append(s + j)
+                edge_b.append(s + (j + 1) % k)
+                edge_shift.append(y.period / L if (y.closed and j == k - 1) else np.zeros(3))
+                edge_yarn.append(iy)
+            for j in range(1 if not y.closed else 0, ne):
+                hinge_e0.append(first_edge + (j - 1) % ne)
+                hinge_e1.append(first_edge + j)
+        edge_a = np.array(edge_a, dtype=np.int64)
+        edge_b = np.array(edge_b, dtype=np.int64)
+        edge_shift = np.array(edge_shift, dtype=float).reshape(-1, 3)
+        edge_yarn = np.array(edge_yarn, dtype=np.int64)
+        hinge_e0 = np.array(hinge_e0, dtype=np.int64)
+        hinge_e1 = np.array(hinge_e1, dtype=np.int64)
+        ne = edge_a.shape[0]
+        nh = hinge_e0.shape[0]
+
+        e = np.zeros((ne, 3))
+        elen = np.zeros(ne)
+        edge_vectors(x, edge_a, edge_b, edge_shift, e, elen)
+        rest_length = elen.copy()
+
+        mats = [y.material for y in self._yarns]
+        rho = np.array([m.line_density / units.LINE_DENSITY for m in mats])[edge_yarn]
+        EA = np.array([m.stretching_stiffness / units.FORCE for m in mats])[edge_yarn]
+        d = np.array([m.diameter / L for m in mats])
+        mass = np.zeros(n)
+        np.add.at(mass, edge_a, 0.5 * rho * rest_length)
+        np.add.at(mass, edge_b, 0.5 * rho * rest_length)
+        # critical damping of the two-node axial mode: c = 2 zeta sqrt(k m_a m_b / (m_a + m_b))
+        reduced = mass[edge_a] * mass[edge_b] / (mass[edge_a] + mass[edge_b])
+        stretch_damping = 2.0 * stretch_damping_ratio * np.sqrt(EA / rest_length * reduced)
+        twist_inertia = rho * d[edge_yarn] ** 2 / 8.0 * rest_length
+
+        voronoi = 0.5 * (rest_length[hinge_e0] + rest_length[hinge_e1])
+        hinge_yarn = edge_yarn[hinge_e1] if nh else np.zeros(0, dtype=np.int64)
+        B = np.array([m.bending_stiffness / units.BENDING_STIFFNESS for m in mats])
+        GJ = np.array([m.twisting_stiffness / units.BENDING_STIFFNESS for m in mats])
+        B_over_l = B[hinge_yarn] / voronoi
+        GJ_over_l = (GJ[hinge_yarn] / voronoi) if twist else np.zeros(nh)
+
+        tangent = e / elen[:, None]
+        ref_u = _initial_reference_directors(tangent, edge_yarn)
+        ref_twist = np.zeros(nh)
+        if twist:
+            update_reference_twist(tangent, ref_u, hinge_e0, hinge_e1, ref_twist)
+
+        kappa_bar = np.zeros((nh, 2))
+        twist_bar = np.zeros(nh)
+        theta = np.zeros(ne)
+        if twist:
+            d1 = np.zeros((ne, 3))
+            d2 = np.zeros((ne, 3))
+            material_frames(tangent, ref_u, theta, d1, d2)
+            rest_curv = np.zeros((nh, 2))
+            material_curvatures(e, elen, d1, d2, hinge_e0, hinge_e1, rest_curv)
+            curved = np.array([y.natural_curvature == "rest" for y in self._yarns])[hinge_yarn]
+            kappa_bar[curved] = rest_curv[curved]
+            twist_bar[curved] = ref_twist[curved]
+
+        held = np.zeros(n, dtype=bool)
+        v_prescribed = np.zeros((n, 3))
+        f_ext = np.zeros((n, 3))
+        theta_held = np.zeros(ne, dtype=bool)
+        first_edge = 0
+        for iy, y in enumerate(self._yarns):
+            s = int(yarn_start[iy])
+            for j, vel in y.held.items():
+                held[s + j] = True
+                v_prescribed[s + j] = vel / units.VELOCITY
+            for j, f in y.forces.items():
+                f_ext[s + j] = f / units.FORCE
+            for j in y.twist_held:
+                theta_held[first_edge + j] = True
+            first_edge += counts[iy] if y.closed else counts[iy] - 1
+
+        radius = 0.5 * d[node_yarn]
+        return RodState(
+            x=x, v=np.zeros((n, 3)), mass=mass, radius=radius, held=held, v_prescribed=v_prescribed,
+            f_ext=f_ext, node_yarn=node_yarn, yarn_start=yarn_start,
+            edge_a=edge_a, edge_b=edge_b, edge_shift=edge_shift, rest_length=rest_length, EA=EA,
+            stretch_damping=stretch_damping, theta=theta, omega=np.zeros(ne), twist_inertia=twist_inertia,
+            theta_held=theta_held, ref_u=ref_u, tangent=tangent,
+            hinge_e0=hinge_e0, hinge_e1=hinge_e1, B_over_l=B_over_l, GJ_over_l=GJ_over_l,
+            kappa_bar=kappa_bar, twist_bar=twist_bar, ref_twist=ref_twist,
+        )
+
+
+def _initial_reference_directors(tangent: np.ndarray, edge_yarn: np.ndarray) -> np.ndarray:
+    """Space-parallel reference frame along each yarn (Bishop frame), from a seed normal."""
+    ne = tangent.shape[0]
+    ref_u = np.zeros((ne, 3))
+    from knitlad.kernels.frames import _transport
+
+    for k in range(ne):
+        t = tangent[k]
+        if k > 0 and edge_yarn[k] == edge_yarn[k - 1]:
+            u = np.array(_transport(*ref_u[k - 1], *tangent[k - 1], *t))
+        else:
+            seed = np.array([0.0, 0.0, 1.0]) if abs(t[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+            u = seed - seed.dot(t) * t
+        u -= u.dot(t) * t
+        ref_u[k] = u / np.linalg.norm(u)
+    return ref_u
