@@ -37,6 +37,8 @@ def compute_forces(s, w, twist, drag):
             w.force[i, c] = s.f_ext[i, c]
     if drag != 0.0:
         for i in range(s.x.shape[0]):
+            if s.held[i]:
+                continue  # drag on a held node would leak into its reaction force
             for c in range(3):
                 w.force[i, c] -= drag * s.mass[i] * s.v[i, c]
     w.torque[:] = 0.0

@@ -1,0 +1,77 @@
+import math
+
+import numpy as np
+import pytest
+
+import knitlad as kl
+from knitlad.scenes.rod import Cantilever
+
+
+def test_time_step_limit_matches_the_textbook_stretching_bound():
+    """Uniform rod: dt_crit = (l / c_E)(sqrt(1+zeta^2) - zeta) for stretching."""
+    c = Cantilever(0.02, 41)
+    sim = kl.Simulation(c.build(stretch_damping_ratio=0.0))
+    expected = c.segment / kl.NYLON.axial_wave_speed / kl.units.TIME
+    assert sim.limits.stretching == pytest.approx(expected, rel=1e-6)
+    bend = c.segment**2 / 2 * math.sqrt(kl.NYLON.line_density / kl.NYLON.bending_stiffness) / kl.units.TIME
+    assert sim.limits.bending == pytest.approx(bend, rel=1e-6)
+
+
+def test_unstable_time_step_is_refused_before_anything_runs():
+    state = Cantilever(0.02, 21).build()
+    probe = kl.Simulation(state.copy())
+    limit = probe.limits.combined * kl.units.TIME
+    with pytest.raises(kl.UnstableTimeStep, match="stability limit"):
+        kl.Simulation(state, dt_s=1.01 * limit)
+    kl.Simulation(state, dt_s=0.99 * limit)  # accepted
+
+
+def test_a_step_just_below_the_limit_is_stable_and_conserves_energy():
+    """The Gershgorin bound is safe: 0.99 dt_crit runs 2000 steps with bounded energy."""
+    c = Cantilever(0.02, 21)
+    state = c.build(tip_force=(0, -1e-6, 0), stretch_damping_ratio=0.0)
+    kl.Simulation(state).relax(force_tol_N=1e-12)
+    state.f_ext[:] = 0
+    sim = kl.Simulation(state, dt_s=0.99 * kl.Simulation(state.copy()).limits.combined * kl.units.TIME)
+    e0 = sim.energies_J()["total"]
+    sim.step(2000)
+    assert abs(sim.energies_J()["total"] / e0 - 1) < 0.05
+
+
+def test_blow_up_names_the_step_yarn_and_node():
+    scene = kl.Scene()
+    pts = np.zeros((10, 3))
+    pts[:, 0] = np.linspace(0, 0.005, 10)
+    scene.add_yarn(pts)
+    scene.add_yarn(pts + [0, 0.002, 0])
+    sim = kl.Simulation(scene.build(), guard_every=1)
+    sim.state.v[13, 1] = np.nan
+    # within one step the NaN reaches the bending stencil (two nodes either side)
+    with pytest.raises(kl.SimulationBlowUp, match=r"step 1 .*yarn 1, node [1-5];"):
+        sim.step(50)
+
+
+def test_runaway_speed_is_caught():
+    sim = kl.Simulation(Cantilever(0.02, 11).build(), guard_every=1)
+    sim.state.v[5, 0] = 10 * sim.max_speed
+    with pytest.raises(kl.SimulationBlowUp, match="axial wave speed"):
+        sim.step(1)
+
+
+def test_held_nodes_follow_their_prescribed_motion():
+    scene = kl.Scene()
+    pts = np.zeros((6, 3))
+    pts[:, 0] = np.linspace(0, 0.005, 6)
+    y = scene.add_yarn(pts)
+    scene.hold(y, [0], velocity=(0.0, 0.0, 0.0))
+    scene.hold(y, [5], velocity=(0.01, 0.0, 0.0))
+    sim = kl.Simulation(scene.build(), drag_per_s=1e3)
+    sim.run(1e-3)
+    assert sim.positions_m()[5, 0] == pytest.approx(0.005 + 0.01 * sim.time_s, rel=1e-9)
+    # held still and relaxed: the supports pull outward with the tension EA * strain
+    sim.state.v_prescribed[:] = 0.0
+    sim.relax(force_tol_N=1e-10)
+    strain = (sim.positions_m()[5, 0] - sim.positions_m()[0, 0]) / 0.005 - 1.0
+    r = sim.reaction_forces_N()
+    assert r[5, 0] == pytest.approx(kl.NYLON.stretching_stiffness * strain, rel=1e-6)
+    assert r[0, 0] == pytest.approx(-r[5, 0], rel=1e-9)
