@@ -1,0 +1,14 @@
+"""The README's Python example runs as written."""
+
+import pathlib
+import re
+
+
+def test_readme_python_example_runs(capsys):
+    text = (pathlib.Path(__file__).parents[1] / "README.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    assert blocks, "the README has no python example"
+    for block in blocks:
+        exec(compile(block, "README.md", "exec"), {})
+    out = capsys.readouterr().out
+    assert "tip [m]" in out and "energies [J]" in out
