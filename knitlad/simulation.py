@@ -12,10 +12,12 @@ from typing import Callable
 import numpy as np
 
 from knitlad import units
+from knitlad.contact import MU, ContactModel, Contacts, contact_time_step, make_contacts
 from knitlad.kernels.integrate import (
     compute_forces,
     fire_relax,
     first_bad_node,
+    half_kick,
     kinetic_energy,
     potential_energy,
     verlet_steps,
@@ -43,6 +45,7 @@ class Simulation:
     safety: fraction of the stability limit used when ``dt_s`` is not given.
     drag_per_s: global viscous drag rate [1/s] (0 for true dynamics).
     guard_every: steps between blow-up checks.
+    contact: yarn-yarn contact (:class:`knitlad.contact.ContactModel`), or None.
     """
 
     def __init__(
@@ -52,13 +55,16 @@ class Simulation:
         safety: float = DEFAULT_SAFETY,
         drag_per_s: float = 0.0,
         guard_every: int = 500,
+        contact: ContactModel | None = None,
     ) -> None:
         if not 0.0 < safety <= 1.0:
             raise ValueError(f"safety must lie in (0, 1], got {safety}")
         self.state = state
         self.work = Workspace.for_state(state)
+        self.contact_model = contact
+        self.contacts: Contacts = make_contacts(state, contact)
         self.twist = bool(np.any(state.GJ_over_l) or np.any(state.kappa_bar))
-        self.limits: TimeStepLimits = critical_time_steps(state, self.twist)
+        self.limits: TimeStepLimits = critical_time_steps(state, self.twist, contact_time_step(state, contact))
         if dt_s is None:
             self.dt = safety * self.limits.combined
         else:
@@ -79,7 +85,40 @@ class Simulation:
         self.steps = 0
         self.time = 0.0  # internal ms
         self.max_speed = self._axial_wave_speed()
-        compute_forces(self.state, self.work, self.twist, self.drag)
+        self._compute_forces()
+
+    def _grow_contacts(self) -> None:
+        """Double the pair buffer (past what the last build needed), keeping the history."""
+        c = self.contacts
+        cap = max(2 * c.pairs.shape[0], int(1.5 * c.status[1]))
+        self.contacts = make_contacts(self.state, self.contact_model, capacity=cap, previous=c)
+
+    def _compute_forces(self) -> None:
+        while not compute_forces(self.state, self.work, self.contacts, self.twist, self.drag, self.dt):
+            self._grow_contacts()
+
+    def set_friction(self, mu: float) -> None:
+        """Change the Coulomb coefficient from the next step on (the paper: 0 while stretching, then 0.4)."""
+        if self.contact_model is None:
+            raise ValueError("this simulation has no contact model")
+        if not (mu >= 0 and math.isfinite(mu)):
+            raise ValueError(f"friction must be >= 0, got {mu!r}")
+        self.contacts.params[MU] = mu
+
+    @property
+    def friction(self) -> float:
+        return float(self.contacts.params[MU]) if self.contact_model is not None else 0.0
+
+    def contact_stats(self) -> dict[str, float]:
+        """At the last force evaluation: touching pairs, largest overlap [m], sum of normal forces [N], sliding pairs, candidate pairs."""
+        st = self.contacts.stats
+        return {
+            "touching": int(st[0]),
+            "max_overlap_m": float(st[1] * units.LENGTH),
+            "normal_force_sum_N": float(st[2] * units.FORCE),
+            "sliding": int(st[3]),
+            "candidates": int(self.contacts.n_pairs[0]),
+        }
 
     def _axial_wave_speed(self) -> float:
         s = self.state
@@ -101,10 +140,15 @@ class Simulation:
         left = int(n_steps)
         while left > 0:
             chunk = min(left, self.guard_every)
-            verlet_steps(self.state, self.work, self.dt, chunk, self.twist, self.drag)
-            self.steps += chunk
-            self.time += chunk * self.dt
-            left -= chunk
+            done = verlet_steps(self.state, self.work, self.contacts, self.dt, chunk, self.twist, self.drag)
+            if done < chunk:
+                # the contact buffer overflowed inside step `done`: grow it and close that step
+                self._compute_forces()
+                half_kick(self.state, self.work, 0.5 * self.dt, self.twist)
+                done += 1
+            self.steps += done
+            self.time += done * self.dt
+            left -= done
             self._guard()
 
     def run(
@@ -144,11 +188,15 @@ class Simulation:
         """
         ftol = force_tol_N / units.FORCE
         ttol = (torque_tol_Nm if torque_tol_Nm is not None else force_tol_N * 1e-3) / (units.FORCE * units.LENGTH)
-        steps, fmax, tmax = fire_relax(
-            self.state, self.work, 0.5 * self.dt, self.dt, int(max_steps), ftol, ttol, self.twist
-        )
+        while True:
+            steps, fmax, tmax = fire_relax(
+                self.state, self.work, self.contacts, 0.5 * self.dt, self.dt, int(max_steps), ftol, ttol, self.twist
+            )
+            if steps >= 0:
+                break
+            self._grow_contacts()
         self._guard()
-        compute_forces(self.state, self.work, self.twist, self.drag)
+        self._compute_forces()
         return {
             "steps": int(steps),
             "max_force_N": float(fmax * units.FORCE),
@@ -178,9 +226,9 @@ class Simulation:
         return r
 
     def energies_J(self) -> dict[str, float]:
-        """Kinetic, stretching, bending, twisting, external-potential and total energy [J]."""
-        es, eb, et, ext = potential_energy(self.state, self.work, self.twist)
+        """Kinetic, stretching, bending, twisting, contact (stored), external-potential and total energy [J]."""
+        es, eb, et, ec, ext = potential_energy(self.state, self.work, self.contacts, self.twist)
         ek = kinetic_energy(self.state)
-        e = {"kinetic": ek, "stretching": es, "bending": eb, "twisting": et, "external": ext}
+        e = {"kinetic": ek, "stretching": es, "bending": eb, "twisting": et, "contact": ec, "external": ext}
         e["total"] = sum(e.values())
         return {k: float(v) * units.ENERGY for k, v in e.items()}

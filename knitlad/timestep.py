@@ -27,10 +27,11 @@ class TimeStepLimits:
     stretching: float
     bending: float
     twisting: float
+    contact: float
     combined: float
 
     def limiting(self) -> str:
-        parts = {"stretching": self.stretching, "bending": self.bending, "twisting": self.twisting}
+        parts = {"stretching": self.stretching, "bending": self.bending, "twisting": self.twisting, "contact": self.contact}
         return min(parts, key=parts.get)
 
 
@@ -56,12 +57,12 @@ def stiffness_row_sums(state: RodState, twist: bool) -> tuple[np.ndarray, np.nda
     return stretch, bend, twist_rows
 
 
-def critical_time_steps(state: RodState, twist: bool) -> TimeStepLimits:
-    """Stability limits dt_crit = 2 / omega_max of the rod part of the scene."""
+def critical_time_steps(state: RodState, twist: bool, contact: float = math.inf) -> TimeStepLimits:
+    """Stability limits dt_crit = 2 / omega_max; ``contact`` is the contact springs' own limit."""
     stretch, bend, twist_rows = stiffness_row_sums(state, twist)
     free = ~state.held
     if not np.any(free):
-        return TimeStepLimits(math.inf, math.inf, math.inf, math.inf)
+        return TimeStepLimits(math.inf, math.inf, math.inf, math.inf, math.inf)
     m = state.mass[free]
 
     def limit(rows: np.ndarray, mass: np.ndarray) -> float:
@@ -78,4 +79,6 @@ def critical_time_steps(state: RodState, twist: bool) -> TimeStepLimits:
     dt_all = limit(stretch[free] + bend[free], m) * damping_factor
     free_edges = ~state.theta_held
     dt_t = limit(twist_rows[free_edges], state.twist_inertia[free_edges]) if twist else math.inf
-    return TimeStepLimits(dt_s, dt_b, dt_t, min(dt_all, dt_t))
+    # contact and rod stiffness add: 1/dt^2 add in quadrature (omega^2 adds)
+    dt_combined = 1.0 / math.sqrt(1.0 / dt_all**2 + 1.0 / contact**2) if math.isfinite(contact) else dt_all
+    return TimeStepLimits(dt_s, dt_b, dt_t, contact, min(dt_combined, dt_t))

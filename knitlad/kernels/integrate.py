@@ -18,6 +18,7 @@ from knitlad.kernels.elastic import (
     stretching_energy,
     stretching_forces,
 )
+from knitlad.kernels.contact import contact_energy, contact_forces, refresh_contacts
 from knitlad.kernels.frames import material_frames, transport_reference_frames, update_reference_twist
 
 # fast-math without "nnan"/"ninf", so the blow-up guard still sees NaN and infinity
@@ -25,22 +26,24 @@ NUMBA_OPTS = dict(cache=True, error_model="numpy", fastmath={"nsz", "arcp", "con
 
 
 @njit(**NUMBA_OPTS)
-def compute_forces(s, w, twist, drag):
+def compute_forces(s, w, c, twist, drag, dt):
     """Total force on every node (``w.force``) and torque on every edge (``w.torque``).
 
-    ``twist``: framed DER bending + twisting, else isotropic bending of a rod
-    straight at rest. ``drag`` [1/ms]: a global viscous drag -drag m v, used
-    only while relaxing.
+    ``c``: contact buffers (:class:`knitlad.contact.Contacts`; capacity 0 = no
+    contact). ``twist``: framed DER bending + twisting, else isotropic bending of a
+    rod straight at rest. ``drag`` [1/ms]: a global viscous drag -drag m v, used
+    only while relaxing. ``dt``: the step over which contact slip accumulates.
+    Returns False if the contact buffer overflowed (forces incomplete).
     """
     for i in range(s.x.shape[0]):
-        for c in range(3):
-            w.force[i, c] = s.f_ext[i, c]
+        for k in range(3):
+            w.force[i, k] = s.f_ext[i, k]
     if drag != 0.0:
         for i in range(s.x.shape[0]):
             if s.held[i]:
                 continue  # drag on a held node would leak into its reaction force
-            for c in range(3):
-                w.force[i, c] -= drag * s.mass[i] * s.v[i, c]
+            for k in range(3):
+                w.force[i, k] -= drag * s.mass[i] * s.v[i, k]
     w.torque[:] = 0.0
     edge_vectors(s.x, s.edge_a, s.edge_b, s.edge_shift, w.e, w.elen)
     stretching_forces(w.e, w.elen, s.v, s.edge_a, s.edge_b, s.rest_length, s.EA, s.stretch_damping, w.force)
@@ -54,11 +57,21 @@ def compute_forces(s, w, twist, drag):
         )
     else:
         bending_forces(w.e, w.elen, s.edge_a, s.edge_b, s.hinge_e0, s.hinge_e1, s.B_over_l, w.force)
+    if c.pairs.shape[0] > 0:
+        if not refresh_contacts(s.x, s.edge_a, s.edge_b, s.edge_shift, c):
+            return False
+        p = c.params
+        contact_forces(
+            s.x, s.v, s.mass, s.edge_a, s.edge_b, s.edge_shift, c.edge_radius, c.edge_prev, c.edge_next,
+            c.pairs, c.n_pairs[0], c.slip,
+            p[0], p[1], p[2], p[3], p[4], dt, w.force, c.stats,
+        )
+    return True
 
 
 @njit(**NUMBA_OPTS)
-def potential_energy(s, w, twist):
-    """(stretching, bending, twisting, external) energies [uJ] at the current state."""
+def potential_energy(s, w, c, twist):
+    """(stretching, bending, twisting, contact, external) energies [uJ] at the current state."""
     edge_vectors(s.x, s.edge_a, s.edge_b, s.edge_shift, w.e, w.elen)
     es = stretching_energy(w.elen, s.rest_length, s.EA)
     if twist:
@@ -72,10 +85,16 @@ def potential_energy(s, w, twist):
     else:
         eb = bending_energy(w.e, w.elen, s.hinge_e0, s.hinge_e1, s.B_over_l)
         et = 0.0
+    ec = 0.0
+    if c.pairs.shape[0] > 0:
+        ec = contact_energy(
+            s.x, s.edge_a, s.edge_b, s.edge_shift, c.edge_radius, c.edge_prev, c.edge_next,
+            c.pairs, c.n_pairs[0], c.slip, c.params[0], c.params[2],
+        )
     ext = 0.0
     for i in range(s.x.shape[0]):
         ext -= s.f_ext[i, 0] * s.x[i, 0] + s.f_ext[i, 1] * s.x[i, 1] + s.f_ext[i, 2] * s.x[i, 2]
-    return es, eb, et, ext
+    return es, eb, et, ec, ext
 
 
 @njit(**NUMBA_OPTS)
@@ -90,7 +109,7 @@ def kinetic_energy(s):
 
 
 @njit(**NUMBA_OPTS)
-def _half_kick(s, w, half_dt, twist):
+def half_kick(s, w, half_dt, twist):
     for i in range(s.x.shape[0]):
         if not s.held[i]:
             inv_m = half_dt / s.mass[i]
@@ -119,20 +138,24 @@ def _drift(s, dt, twist):
 
 
 @njit(**NUMBA_OPTS)
-def verlet_steps(s, w, dt, n_steps, twist, drag):
-    """Advance ``n_steps`` of velocity Verlet (kick-drift-kick).
+def verlet_steps(s, w, c, dt, n_steps, twist, drag):
+    """Advance ``n_steps`` of velocity Verlet (kick-drift-kick); return the steps completed.
 
     Expects ``w.force``/``w.torque`` to hold the forces of the current state
     (call :func:`compute_forces` once before the first call). Held nodes move
     with their prescribed velocity; the force left on them in ``w.force`` is
-    minus the reaction of the support.
+    minus the reaction of the support. If the contact buffer overflows in step
+    k, returns k with that step drifted but not closed: grow the buffer, call
+    :func:`compute_forces` and ``half_kick(dt/2)`` to finish it.
     """
     # the closing half-kick of one step and the opening one of the next are fused
-    _half_kick(s, w, 0.5 * dt, twist)
+    half_kick(s, w, 0.5 * dt, twist)
     for step in range(n_steps):
         _drift(s, dt, twist)
-        compute_forces(s, w, twist, drag)
-        _half_kick(s, w, dt if step < n_steps - 1 else 0.5 * dt, twist)
+        if not compute_forces(s, w, c, twist, drag, dt):
+            return step
+        half_kick(s, w, dt if step < n_steps - 1 else 0.5 * dt, twist)
+    return n_steps
 
 
 @njit(**NUMBA_OPTS)
@@ -153,12 +176,13 @@ def max_free_force(s, w, twist):
 
 
 @njit(**NUMBA_OPTS)
-def fire_relax(s, w, dt_start, dt_max, max_steps, force_tol, torque_tol, twist):
+def fire_relax(s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, twist):
     """FIRE energy minimisation (Bitzek et al. 2006, with the FIRE 2.0 back-step of
     Guenole et al. 2020) over free node positions and free twist angles.
 
     Held nodes stay where they are. Stops when max |F| <= force_tol and
-    max |torque| <= torque_tol. Returns (steps taken, max |F|, max |torque|).
+    max |torque| <= torque_tol. Returns (steps taken, max |F|, max |torque|);
+    steps = -1 if the contact buffer overflowed (grow it and call again).
     """
     alpha0 = 0.1
     alpha = alpha0
@@ -170,10 +194,11 @@ def fire_relax(s, w, dt_start, dt_max, max_steps, force_tol, torque_tol, twist):
     dt_min = 0.02 * dt_start
     n_pos = 0
     for i in range(s.x.shape[0]):
-        for c in range(3):
-            s.v[i, c] = 0.0
+        for k in range(3):
+            s.v[i, k] = 0.0
     s.omega[:] = 0.0
-    compute_forces(s, w, twist, 0.0)
+    if not compute_forces(s, w, c, twist, 0.0, dt):
+        return -1, 0.0, 0.0
     fmax, tmax = max_free_force(s, w, twist)
     step = 0
     while step < max_steps and (fmax > force_tol or tmax > torque_tol):
@@ -197,9 +222,9 @@ def fire_relax(s, w, dt_start, dt_max, max_steps, force_tol, torque_tol, twist):
             alpha = alpha0
             for i in range(s.x.shape[0]):
                 if not s.held[i]:
-                    for c in range(3):
-                        s.x[i, c] -= 0.5 * dt * s.v[i, c]
-                        s.v[i, c] = 0.0
+                    for k in range(3):
+                        s.x[i, k] -= 0.5 * dt * s.v[i, k]
+                        s.v[i, k] = 0.0
             if twist:
                 for j in range(s.theta.shape[0]):
                     s.theta[j] -= 0.5 * dt * s.omega[j]
@@ -209,16 +234,16 @@ def fire_relax(s, w, dt_start, dt_max, max_steps, force_tol, torque_tol, twist):
         ff = 0.0
         for i in range(s.x.shape[0]):
             if not s.held[i]:
-                for c in range(3):
-                    s.v[i, c] += dt * w.force[i, c] / s.mass[i]
-                    vv += s.v[i, c] ** 2
-                    ff += w.force[i, c] ** 2
+                for k in range(3):
+                    s.v[i, k] += dt * w.force[i, k] / s.mass[i]
+                    vv += s.v[i, k] ** 2
+                    ff += w.force[i, k] ** 2
         scale = alpha * math.sqrt(vv / ff) if ff > 0.0 else 0.0
         for i in range(s.x.shape[0]):
             if not s.held[i]:
-                for c in range(3):
-                    s.v[i, c] = (1.0 - alpha) * s.v[i, c] + scale * w.force[i, c]
-                    s.x[i, c] += dt * s.v[i, c]
+                for k in range(3):
+                    s.v[i, k] = (1.0 - alpha) * s.v[i, k] + scale * w.force[i, k]
+                    s.x[i, k] += dt * s.v[i, k]
         if twist:
             oo = 0.0
             tt = 0.0
@@ -232,11 +257,12 @@ def fire_relax(s, w, dt_start, dt_max, max_steps, force_tol, torque_tol, twist):
                 if not s.theta_held[j]:
                     s.omega[j] = (1.0 - alpha) * s.omega[j] + tscale * w.torque[j]
                     s.theta[j] += dt * s.omega[j]
-        compute_forces(s, w, twist, 0.0)
+        if not compute_forces(s, w, c, twist, 0.0, dt):
+            return -1, 0.0, 0.0
         fmax, tmax = max_free_force(s, w, twist)
     for i in range(s.x.shape[0]):
-        for c in range(3):
-            s.v[i, c] = 0.0
+        for k in range(3):
+            s.v[i, k] = 0.0
     s.omega[:] = 0.0
     return step, fmax, tmax
 

@@ -7,6 +7,7 @@ import pytest
 
 import knitlad as kl
 from knitlad.kernels.integrate import compute_forces, potential_energy
+from knitlad.contact import make_contacts
 from knitlad.state import Workspace
 
 
@@ -21,13 +22,13 @@ def wiggly_rod(n: int = 9, seed: int = 0) -> np.ndarray:
 
 def energy(state: kl.RodState, twist: bool) -> float:
     s = state.copy()
-    return float(sum(potential_energy(s, Workspace.for_state(s), twist)))
+    return float(sum(potential_energy(s, Workspace.for_state(s), make_contacts(s, None), twist)))
 
 
 def check_gradient(state: kl.RodState, twist: bool, rel_tol: float) -> None:
     s = state.copy()
     w = Workspace.for_state(s)
-    compute_forces(s, w, twist, 0.0)
+    compute_forces(s, w, make_contacts(s, None), twist, 0.0, 1.0)
     eps = 1e-7  # mm
     fd = np.zeros_like(state.x)
     for i in range(state.x.shape[0]):
@@ -68,5 +69,5 @@ def test_framed_bending_with_natural_curvature_and_twist_are_minus_the_energy_gr
     state.x[:] += rng.normal(scale=0.05e-3 / kl.units.LENGTH, size=state.x.shape)
     state.theta[:] = rng.normal(scale=0.3, size=state.theta.shape)
     # bring the frames to the perturbed shape first: the FD energies transport from here
-    compute_forces(state, Workspace.for_state(state), True, 0.0)
+    compute_forces(state, Workspace.for_state(state), make_contacts(state, None), True, 0.0, 1.0)
     check_gradient(state, twist=True, rel_tol=1e-5)

@@ -8,6 +8,7 @@ import numpy as np
 
 import knitlad as kl
 from knitlad.kernels.integrate import compute_forces
+from knitlad.contact import make_contacts
 from knitlad.state import Workspace
 
 B = kl.NYLON.bending_stiffness
@@ -32,7 +33,7 @@ def test_pre_curved_ring_is_force_free_in_its_rest_shape():
     scene.add_yarn(circle(R, 40), closed=True, natural_curvature="rest")
     state = scene.build()
     w = Workspace.for_state(state)
-    compute_forces(state, w, True, 0.0)
+    compute_forces(state, w, make_contacts(state, None), True, 0.0, 1.0)
     scale = B / R**2 / kl.units.FORCE
     assert np.max(np.abs(w.force)) < 1e-9 * scale
     assert np.max(np.abs(w.torque)) < 1e-9 * scale * R / kl.units.LENGTH

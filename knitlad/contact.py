@@ -1,0 +1,184 @@
+"""Contact model (parameters in SI) and its buffers (internal units).
+
+See :mod:`knitlad.kernels.contact` for the physics. Stiffness is set from the
+working force of a scene: ``ContactModel.for_force(F, overlap_fraction=0.05)``
+gives the k_n at which a contact carrying F overlaps by 5 % of the diameter.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from knitlad import units
+from knitlad.state import RodState
+
+# parameter slots of Contacts.params (internal units)
+K_N, DAMP_N, K_T, DAMP_T, MU, SKIN = range(6)
+
+
+@dataclass(frozen=True)
+class ContactModel:
+    """Yarn-yarn contact parameters (SI).
+
+    stiffness       k_n [N/m]   normal penalty stiffness
+    friction        mu  [-]     Coulomb coefficient (changeable during a run)
+    damping_ratio   zeta_n [-]  normal dashpot as a fraction of critical (per contact)
+    tangential_stiffness_ratio  k_t / k_n [-]
+    tangential_damping_ratio    zeta_t [-]
+    skin            [m]         neighbour-list margin (default: the smallest yarn diameter)
+    exclusion_diameters [-]     same-yarn edges closer than this many diameters of arc
+                                (and at least the adjacent edge) never interact
+    contacts_per_node [-]       contacts one node may carry at once, for the time-step limit
+    capacity_per_edge [-]       initial pair-buffer size per edge (grown on overflow)
+    """
+
+    stiffness: float
+    friction: float = 0.0
+    damping_ratio: float = 0.3
+    tangential_stiffness_ratio: float = 0.5
+    tangential_damping_ratio: float = 0.3
+    skin: float | None = None
+    exclusion_diameters: float = 2.5
+    contacts_per_node: int = 2
+    capacity_per_edge: int = 4
+
+    def __post_init__(self) -> None:
+        if not (self.stiffness > 0 and math.isfinite(self.stiffness)):
+            raise ValueError(f"contact stiffness must be > 0 N/m, got {self.stiffness!r}")
+        if not (self.friction >= 0 and math.isfinite(self.friction)):
+            raise ValueError(f"friction must be >= 0, got {self.friction!r}")
+        for name in ("damping_ratio", "tangential_damping_ratio", "exclusion_diameters"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+        if not self.tangential_stiffness_ratio > 0:
+            raise ValueError("tangential_stiffness_ratio must be > 0")
+        if self.skin is not None and not self.skin > 0:
+            raise ValueError(f"skin must be > 0 m, got {self.skin!r}")
+
+    @staticmethod
+    def for_force(force_N: float, diameter_m: float, overlap_fraction: float = 0.05, **kwargs) -> "ContactModel":
+        """k_n such that a contact carrying ``force_N`` overlaps by ``overlap_fraction`` x d."""
+        if not 0 < overlap_fraction < 1:
+            raise ValueError("overlap_fraction must lie in (0, 1)")
+        return ContactModel(stiffness=force_N / (overlap_fraction * diameter_m), **kwargs)
+
+
+class Contacts(NamedTuple):
+    """Buffers of the contact kernels (internal units). Rebuilt by :func:`make_contacts`."""
+
+    pairs: np.ndarray  # (cap, 2) candidate edge pairs, i < j, sorted
+    keys: np.ndarray  # (cap,) i * ne + j
+    slip: np.ndarray  # (cap, 3) tangential spring elongation u_t per pair
+    n_pairs: np.ndarray  # (1,) valid pairs
+    status: np.ndarray  # (2,) [1 if the list must be rebuilt, pairs found at the last overflow]
+    x_ref: np.ndarray  # (n, 3) positions at the last rebuild
+    edge_radius: np.ndarray
+    edge_prev: np.ndarray  # previous edge along the yarn, -1 at an open end
+    edge_next: np.ndarray  # next edge along the yarn, -1 at an open end
+    edge_yarn: np.ndarray
+    edge_local: np.ndarray
+    yarn_edges: np.ndarray
+    yarn_closed: np.ndarray
+    exclusion: np.ndarray  # (n_yarns,) edges excluded either side along a yarn
+    params: np.ndarray  # K_N, DAMP_N, K_T, DAMP_T, MU, SKIN
+    stats: np.ndarray  # touching pairs, max overlap, sum f_n, sliding pairs
+
+
+def edge_topology(state: RodState) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Yarn of each edge, its index within the yarn, edges per yarn, closed flags."""
+    edge_yarn = state.node_yarn[state.edge_a]
+    n_yarns = state.n_yarns
+    yarn_edges = np.bincount(edge_yarn, minlength=n_yarns).astype(np.int64)
+    first = np.concatenate([[0], np.cumsum(yarn_edges)[:-1]])
+    edge_local = np.arange(edge_yarn.shape[0]) - first[edge_yarn]
+    yarn_nodes = np.diff(state.yarn_start)
+    yarn_closed = yarn_edges == yarn_nodes
+    return edge_yarn.astype(np.int64), edge_local.astype(np.int64), yarn_edges, yarn_closed
+
+
+def edge_neighbours(edge_local, yarn_edges, yarn_closed, edge_yarn) -> tuple[np.ndarray, np.ndarray]:
+    """Previous and next edge of each edge along its yarn (cyclic on closed yarns, -1 at open ends)."""
+    k = np.arange(edge_local.shape[0])
+    n = yarn_edges[edge_yarn]
+    closed = yarn_closed[edge_yarn]
+    prev = np.where(edge_local > 0, k - 1, np.where(closed, k + n - 1, -1))
+    nxt = np.where(edge_local < n - 1, k + 1, np.where(closed, k - n + 1, -1))
+    return prev.astype(np.int64), nxt.astype(np.int64)
+
+
+def make_contacts(state: RodState, model: ContactModel | None, capacity: int | None = None,
+                  previous: Contacts | None = None) -> Contacts:
+    """Contact buffers for ``state``; empty (capacity 0) when ``model`` is None.
+
+    With ``previous`` (a buffer that overflowed), its valid pairs, slips and
+    parameters are copied so the friction history and a changed mu survive the
+    growth; the new buffer is rebuilt at the next step.
+    """
+    n = state.x.shape[0]
+    ne = state.edge_a.shape[0]
+    edge_yarn, edge_local, yarn_edges, yarn_closed = edge_topology(state)
+    edge_radius = 0.5 * (state.radius[state.edge_a] + state.radius[state.edge_b])
+    edge_prev, edge_next = edge_neighbours(edge_local, yarn_edges, yarn_closed, edge_yarn)
+    if model is None:
+        cap = 0
+        params = np.zeros(6)
+        exclusion = np.zeros(state.n_yarns, dtype=np.int64)
+    else:
+        cap = capacity if capacity is not None else max(16, model.capacity_per_edge * ne)
+        d_min = 2.0 * float(edge_radius.min())
+        skin = model.skin / units.LENGTH if model.skin is not None else d_min
+        params = np.array([
+            model.stiffness * units.LENGTH / units.FORCE,
+            model.damping_ratio,
+            model.stiffness * model.tangential_stiffness_ratio * units.LENGTH / units.FORCE,
+            model.tangential_damping_ratio,
+            model.friction,
+            skin,
+        ])
+        # exclusion: edges within `exclusion_diameters` d of arc, and always the adjacent edge
+        seg = np.bincount(edge_yarn, weights=state.rest_length, minlength=state.n_yarns) / np.maximum(yarn_edges, 1)
+        d_yarn = 2.0 * np.bincount(edge_yarn, weights=edge_radius, minlength=state.n_yarns) / np.maximum(yarn_edges, 1)
+        exclusion = np.maximum(1, np.ceil(model.exclusion_diameters * d_yarn / seg)).astype(np.int64)
+    contacts = Contacts(
+        pairs=np.zeros((cap, 2), dtype=np.int64),
+        keys=np.zeros(cap, dtype=np.int64),
+        slip=np.zeros((cap, 3)),
+        n_pairs=np.zeros(1, dtype=np.int64),
+        status=np.array([1, 0], dtype=np.int64),
+        x_ref=state.x.copy(),
+        edge_radius=edge_radius,
+        edge_prev=edge_prev,
+        edge_next=edge_next,
+        edge_yarn=edge_yarn,
+        edge_local=edge_local,
+        yarn_edges=yarn_edges,
+        yarn_closed=yarn_closed,
+        exclusion=exclusion,
+        params=params,
+        stats=np.zeros(4),
+    )
+    if previous is not None:
+        m = int(previous.n_pairs[0])
+        contacts.pairs[:m] = previous.pairs[:m]
+        contacts.keys[:m] = previous.keys[:m]
+        contacts.slip[:m] = previous.slip[:m]
+        contacts.n_pairs[0] = m
+        contacts.params[:] = previous.params
+    return contacts
+
+
+def contact_time_step(state: RodState, model: ContactModel | None) -> float:
+    """Critical time step [ms] of the contact springs: 2/omega with omega^2 = z (k_n + k_t) * 2 / m_min."""
+    if model is None:
+        return math.inf
+    k = model.stiffness * (1 + model.tangential_stiffness_ratio) * units.LENGTH / units.FORCE
+    free = ~state.held
+    if not np.any(free):
+        return math.inf
+    m = float(state.mass[free].min())
+    zeta = max(model.damping_ratio, model.tangential_damping_ratio)
+    return 2.0 / math.sqrt(2.0 * model.contacts_per_node * k / m) * (math.sqrt(1 + zeta * zeta) - zeta)

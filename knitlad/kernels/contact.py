@@ -1,0 +1,407 @@
+"""Yarn-yarn contact: capsules, O(N) broad phase, penalty normal force, Coulomb friction.
+
+Every edge is a capsule (a cylinder of its yarn's radius with spherical caps).
+
+* Narrow phase: closest points P(s), Q(t) of two segments, s, t in [0, 1]
+  (Ericson, *Real-Time Collision Detection*, sec. 5.1.9); for near-parallel
+  segments the midpoint of their overlap, so the contact point moves
+  continuously when two yarns lie side by side.
+* Broad phase: edge midpoints hashed into cells of size >= the longest
+  interaction reach; candidate pairs closer than r_a + r_b + skin go to a
+  fixed-capacity buffer. A count past the capacity is reported so the caller
+  can grow the buffer and rebuild (the kernel never allocates). The list stays
+  valid until some node has moved by skin / 2.
+* Normal force (overlap delta = r_a + r_b - |P - Q|): f_n = k_n delta + gamma_n d(delta)/dt,
+  never pulling. Tangential force (Cundall & Strack 1979): a spring stretched by
+  the tangential slip u_t accumulated per persistent pair, plus a dashpot,
+  capped by Coulomb |f_t| <= mu f_n; when capped, u_t is reset to the slipping
+  value. u_t is reset when the pair separates and carried across rebuilds.
+* A yarn is the *union* of its capsules, so a contact at a node shared by two
+  edges of a yarn is counted once (:func:`owns_contact`): without this, a yarn
+  sliding over a chain of capsules feels a bump and doubled friction at every
+  node (seen in the slider test before this rule).
+* Forces go to the two nodes of each segment by the lever rule ((1 - s), s),
+  which keeps the force and its moment about the contact point.
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+from knitlad.kernels.vec import cross, dot
+
+NUMBA_OPTS = dict(cache=True, error_model="numpy", fastmath={"nsz", "arcp", "contract", "afn", "reassoc"})
+
+PARALLEL_EPS = 1e-10
+
+
+@njit(**NUMBA_OPTS)
+def _clamp01(v):
+    return 0.0 if v < 0.0 else (1.0 if v > 1.0 else v)
+
+
+@njit(**NUMBA_OPTS)
+def segment_closest_points(p0x, p0y, p0z, d1x, d1y, d1z, q0x, q0y, q0z, d2x, d2y, d2z):
+    """Parameters (s, t) of the closest points of P(s) = p0 + s d1 and Q(t) = q0 + t d2."""
+    rx, ry, rz = p0x - q0x, p0y - q0y, p0z - q0z
+    a = dot(d1x, d1y, d1z, d1x, d1y, d1z)
+    e = dot(d2x, d2y, d2z, d2x, d2y, d2z)
+    f = dot(d2x, d2y, d2z, rx, ry, rz)
+    c = dot(d1x, d1y, d1z, rx, ry, rz)
+    b = dot(d1x, d1y, d1z, d2x, d2y, d2z)
+    denom = a * e - b * b
+    if denom > PARALLEL_EPS * a * e:
+        s = _clamp01((b * f - c * e) / denom)
+    else:
+        # (near) parallel: centre of the overlap of Q's projection on P
+        s0 = -c / a
+        s1 = (b - c) / a
+        lo = min(s0, s1)
+        hi = max(s0, s1)
+        lo = max(lo, 0.0)
+        hi = min(hi, 1.0)
+        s = 0.5 * (lo + hi) if lo <= hi else (0.0 if max(s0, s1) < 0.0 else 1.0)
+    t = _clamp01((b * s + f) / e)
+    s = _clamp01((b * t - c) / a)
+    return s, t
+
+
+@njit(**NUMBA_OPTS)
+def _segment(x, edge_a, edge_b, edge_shift, k):
+    a = edge_a[k]
+    b = edge_b[k]
+    return (
+        x[a, 0], x[a, 1], x[a, 2],
+        x[b, 0] + edge_shift[k, 0] - x[a, 0],
+        x[b, 1] + edge_shift[k, 1] - x[a, 1],
+        x[b, 2] + edge_shift[k, 2] - x[a, 2],
+    )
+
+
+@njit(**NUMBA_OPTS)
+def segment_distance(x, edge_a, edge_b, edge_shift, i, j):
+    """Distance between the axes of edges i and j, and the closest-point parameters."""
+    p0x, p0y, p0z, d1x, d1y, d1z = _segment(x, edge_a, edge_b, edge_shift, i)
+    q0x, q0y, q0z, d2x, d2y, d2z = _segment(x, edge_a, edge_b, edge_shift, j)
+    s, t = segment_closest_points(p0x, p0y, p0z, d1x, d1y, d1z, q0x, q0y, q0z, d2x, d2y, d2z)
+    dx = p0x + s * d1x - q0x - t * d2x
+    dy = p0y + s * d1y - q0y - t * d2y
+    dz = p0z + s * d1z - q0z - t * d2z
+    return math.sqrt(dx * dx + dy * dy + dz * dz), s, t
+
+
+@njit(**NUMBA_OPTS)
+def _owns_end(x, edge_a, edge_b, edge_shift, i, s, j, edge_prev, edge_next):
+    """Whether edge i keeps a contact with edge j whose closest point on i is at parameter s.
+
+    At an interior node the capsules of edges i and i' (its neighbour) overlap.
+    A closest point clamped at the start node (s = 0) belongs to the predecessor;
+    one clamped at the end node (s = 1) belongs to i unless the successor reaches
+    the same place from its interior (then its own closest point is not the node).
+    """
+    if s <= 0.0:
+        return edge_prev[i] < 0
+    if s >= 1.0:
+        nxt = edge_next[i]
+        if nxt < 0:
+            return True
+        _, s2, _ = segment_distance(x, edge_a, edge_b, edge_shift, nxt, j)
+        return s2 <= 0.0
+    return True
+
+
+@njit(**NUMBA_OPTS)
+def owns_contact(x, edge_a, edge_b, edge_shift, i, j, s, t, edge_prev, edge_next):
+    """Count the pair (i, j) only if neither end of it is owned by a neighbouring edge."""
+    return _owns_end(x, edge_a, edge_b, edge_shift, i, s, j, edge_prev, edge_next) and _owns_end(
+        x, edge_a, edge_b, edge_shift, j, t, i, edge_prev, edge_next
+    )
+
+
+@njit(**NUMBA_OPTS)
+def _cell_hash(cx, cy, cz, table_size):
+    h = (cx * 73856093) ^ (cy * 19349663) ^ (cz * 83492791)
+    return h % table_size
+
+
+@njit(**NUMBA_OPTS)
+def excluded_pair(i, j, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion):
+    """Same yarn and at most ``exclusion`` edges apart along it (cyclically if closed)."""
+    y = edge_yarn[i]
+    if y != edge_yarn[j]:
+        return False
+    gap = abs(edge_local[i] - edge_local[j])
+    if yarn_closed[y]:
+        gap = min(gap, yarn_edges[y] - gap)
+    return gap <= exclusion[y]
+
+
+@njit(**NUMBA_OPTS)
+def build_candidate_pairs(
+    x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion,
+    cell_size, skin, pairs, keys,
+):
+    """Fill ``pairs`` (cap, 2) with candidate edge pairs (i < j), sorted; return how many were found.
+
+    A return value above ``pairs.shape[0]`` means the buffer overflowed (only the
+    first ``cap`` are stored, unsorted): grow it and call again.
+    """
+    ne = edge_a.shape[0]
+    cap = pairs.shape[0]
+    table = 2 * ne + 1
+    cells = np.empty((ne, 3), dtype=np.int64)
+    bucket_count = np.zeros(table + 1, dtype=np.int64)
+    for k in range(ne):
+        a = edge_a[k]
+        b = edge_b[k]
+        inv = 1.0 / cell_size
+        cells[k, 0] = int(math.floor(0.5 * (x[a, 0] + x[b, 0] + edge_shift[k, 0]) * inv))
+        cells[k, 1] = int(math.floor(0.5 * (x[a, 1] + x[b, 1] + edge_shift[k, 1]) * inv))
+        cells[k, 2] = int(math.floor(0.5 * (x[a, 2] + x[b, 2] + edge_shift[k, 2]) * inv))
+        bucket_count[_cell_hash(cells[k, 0], cells[k, 1], cells[k, 2], table) + 1] += 1
+    for h in range(table):
+        bucket_count[h + 1] += bucket_count[h]
+    fill = bucket_count[:-1].copy()
+    order = np.empty(ne, dtype=np.int64)
+    for k in range(ne):
+        h = _cell_hash(cells[k, 0], cells[k, 1], cells[k, 2], table)
+        order[fill[h]] = k
+        fill[h] += 1
+    n = 0
+    for i in range(ne):
+        for ox in range(-1, 2):
+            for oy in range(-1, 2):
+                for oz in range(-1, 2):
+                    cx = cells[i, 0] + ox
+                    cy = cells[i, 1] + oy
+                    cz = cells[i, 2] + oz
+                    h = _cell_hash(cx, cy, cz, table)
+                    for idx in range(bucket_count[h], bucket_count[h + 1]):
+                        j = order[idx]
+                        if j <= i or cells[j, 0] != cx or cells[j, 1] != cy or cells[j, 2] != cz:
+                            continue
+                        if excluded_pair(i, j, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion):
+                            continue
+                        dist, _, _ = segment_distance(x, edge_a, edge_b, edge_shift, i, j)
+                        if dist < edge_radius[i] + edge_radius[j] + skin:
+                            if n < cap:
+                                pairs[n, 0] = i
+                                pairs[n, 1] = j
+                            n += 1
+    if n <= cap:
+        for p in range(n):
+            keys[p] = pairs[p, 0] * ne + pairs[p, 1]
+        perm = np.argsort(keys[:n])
+        tmp = pairs[:n].copy()
+        ktmp = keys[:n].copy()
+        for p in range(n):
+            pairs[p, 0] = tmp[perm[p], 0]
+            pairs[p, 1] = tmp[perm[p], 1]
+            keys[p] = ktmp[perm[p]]
+    return n
+
+
+@njit(**NUMBA_OPTS)
+def carry_history(old_keys, old_slip, n_old, new_keys, new_slip, n_new):
+    """Copy the tangential slip of pairs present in both sorted lists; zero the new ones."""
+    p = 0
+    for q in range(n_new):
+        while p < n_old and old_keys[p] < new_keys[q]:
+            p += 1
+        if p < n_old and old_keys[p] == new_keys[q]:
+            new_slip[q, 0] = old_slip[p, 0]
+            new_slip[q, 1] = old_slip[p, 1]
+            new_slip[q, 2] = old_slip[p, 2]
+        else:
+            new_slip[q, 0] = 0.0
+            new_slip[q, 1] = 0.0
+            new_slip[q, 2] = 0.0
+
+
+@njit(**NUMBA_OPTS)
+def max_displacement(x, x_ref):
+    """Largest |x - x_ref| over the nodes."""
+    m = 0.0
+    for i in range(x.shape[0]):
+        d = (x[i, 0] - x_ref[i, 0]) ** 2 + (x[i, 1] - x_ref[i, 1]) ** 2 + (x[i, 2] - x_ref[i, 2]) ** 2
+        if d > m:
+            m = d
+    return math.sqrt(m)
+
+
+@njit(**NUMBA_OPTS)
+def contact_forces(
+    x, v, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, n_pairs, slip,
+    k_n, damping_n, k_t, damping_t, mu, dt, F, stats,
+):
+    """Add contact forces of the ``n_pairs`` candidate pairs to F; advance the slip history.
+
+    ``damping_n``/``damping_t`` are damping ratios of the contact springs (gamma =
+    2 zeta sqrt(k m_eff)). ``stats`` (4,) receives: number of touching pairs,
+    largest overlap, normal-force sum, number of sliding pairs.
+    """
+    n_touch = 0
+    max_overlap = 0.0
+    fn_sum = 0.0
+    n_slide = 0
+    for p in range(n_pairs):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        dist, s, t = segment_distance(x, edge_a, edge_b, edge_shift, i, j)
+        overlap = edge_radius[i] + edge_radius[j] - dist
+        if overlap <= 0.0 or not owns_contact(x, edge_a, edge_b, edge_shift, i, j, s, t, edge_prev, edge_next):
+            slip[p, 0] = 0.0
+            slip[p, 1] = 0.0
+            slip[p, 2] = 0.0
+            continue
+        a0 = edge_a[i]
+        a1 = edge_b[i]
+        b0 = edge_a[j]
+        b1 = edge_b[j]
+        p0x, p0y, p0z, d1x, d1y, d1z = _segment(x, edge_a, edge_b, edge_shift, i)
+        q0x, q0y, q0z, d2x, d2y, d2z = _segment(x, edge_a, edge_b, edge_shift, j)
+        nx = p0x + s * d1x - q0x - t * d2x
+        ny = p0y + s * d1y - q0y - t * d2y
+        nz = p0z + s * d1z - q0z - t * d2z
+        if dist > 1e-12 * (edge_radius[i] + edge_radius[j]):
+            nx /= dist
+            ny /= dist
+            nz /= dist
+        else:
+            # axes intersect: push apart along the common normal of the two segments
+            nx, ny, nz = cross(d1x, d1y, d1z, d2x, d2y, d2z)
+            nn = math.sqrt(nx * nx + ny * ny + nz * nz) + 1e-300
+            nx /= nn
+            ny /= nn
+            nz /= nn
+        # relative velocity of the contact points (material points of the two axes)
+        vrx = (1 - s) * v[a0, 0] + s * v[a1, 0] - (1 - t) * v[b0, 0] - t * v[b1, 0]
+        vry = (1 - s) * v[a0, 1] + s * v[a1, 1] - (1 - t) * v[b0, 1] - t * v[b1, 1]
+        vrz = (1 - s) * v[a0, 2] + s * v[a1, 2] - (1 - t) * v[b0, 2] - t * v[b1, 2]
+        vn = dot(vrx, vry, vrz, nx, ny, nz)  # > 0: separating
+        m_a = (1 - s) * mass[a0] + s * mass[a1]
+        m_b = (1 - t) * mass[b0] + t * mass[b1]
+        m_eff = m_a * m_b / (m_a + m_b)
+        fn = k_n * overlap - 2.0 * damping_n * math.sqrt(k_n * m_eff) * vn
+        if fn < 0.0:
+            fn = 0.0
+        # tangential slip: keep it in the current tangent plane with its length
+        ux, uy, uz = slip[p, 0], slip[p, 1], slip[p, 2]
+        u_len = math.sqrt(ux * ux + uy * uy + uz * uz)
+        un = dot(ux, uy, uz, nx, ny, nz)
+        ux -= un * nx
+        uy -= un * ny
+        uz -= un * nz
+        u_new = math.sqrt(ux * ux + uy * uy + uz * uz)
+        if u_new > 0.0:
+            ux *= u_len / u_new
+            uy *= u_len / u_new
+            uz *= u_len / u_new
+        vtx = vrx - vn * nx
+        vty = vry - vn * ny
+        vtz = vrz - vn * nz
+        ux += vtx * dt
+        uy += vty * dt
+        uz += vtz * dt
+        gamma_t = 2.0 * damping_t * math.sqrt(k_t * m_eff)
+        ftx = -k_t * ux - gamma_t * vtx
+        fty = -k_t * uy - gamma_t * vty
+        ftz = -k_t * uz - gamma_t * vtz
+        ft = math.sqrt(ftx * ftx + fty * fty + ftz * ftz)
+        limit = mu * fn
+        if ft > limit:
+            # sliding: Coulomb force along the trial direction, spring set to match it
+            scale = limit / ft if ft > 0.0 else 0.0
+            ftx *= scale
+            fty *= scale
+            ftz *= scale
+            ux = -(ftx + gamma_t * vtx) / k_t
+            uy = -(fty + gamma_t * vty) / k_t
+            uz = -(ftz + gamma_t * vtz) / k_t
+            n_slide += 1
+        slip[p, 0] = ux
+        slip[p, 1] = uy
+        slip[p, 2] = uz
+        fx = fn * nx + ftx
+        fy = fn * ny + fty
+        fz = fn * nz + ftz
+        F[a0, 0] += (1 - s) * fx
+        F[a0, 1] += (1 - s) * fy
+        F[a0, 2] += (1 - s) * fz
+        F[a1, 0] += s * fx
+        F[a1, 1] += s * fy
+        F[a1, 2] += s * fz
+        F[b0, 0] -= (1 - t) * fx
+        F[b0, 1] -= (1 - t) * fy
+        F[b0, 2] -= (1 - t) * fz
+        F[b1, 0] -= t * fx
+        F[b1, 1] -= t * fy
+        F[b1, 2] -= t * fz
+        n_touch += 1
+        fn_sum += fn
+        if overlap > max_overlap:
+            max_overlap = overlap
+    stats[0] = n_touch
+    stats[1] = max_overlap
+    stats[2] = fn_sum
+    stats[3] = n_slide
+
+
+@njit(**NUMBA_OPTS)
+def contact_energy(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, n_pairs, slip, k_n, k_t):
+    """Stored contact energy: sum of k_n delta^2 / 2 + k_t |u_t|^2 / 2 over counted touching pairs."""
+    total = 0.0
+    for p in range(n_pairs):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        dist, s, t = segment_distance(x, edge_a, edge_b, edge_shift, i, j)
+        overlap = edge_radius[i] + edge_radius[j] - dist
+        if overlap > 0.0 and owns_contact(x, edge_a, edge_b, edge_shift, i, j, s, t, edge_prev, edge_next):
+            total += 0.5 * k_n * overlap * overlap
+            total += 0.5 * k_t * (slip[p, 0] ** 2 + slip[p, 1] ** 2 + slip[p, 2] ** 2)
+    return total
+
+
+@njit(**NUMBA_OPTS)
+def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
+    """Rebuild the candidate list of ``c`` (a :class:`knitlad.contact.Contacts`) if stale
+    or if a node moved by more than skin/2 since the last build (two segments then
+    may have approached by up to skin). Returns False on overflow: the old list is
+    kept, ``c.status[1]`` holds the pairs needed, and the caller must grow the buffer.
+    """
+    skin = c.params[5]
+    if c.status[0] == 0 and max_displacement(x, c.x_ref) <= 0.5 * skin:
+        return True
+    n_old = c.n_pairs[0]
+    old_pairs = c.pairs[:n_old].copy()
+    old_keys = c.keys[:n_old].copy()
+    old_slip = c.slip[:n_old].copy()
+    longest = 0.0
+    for k in range(edge_a.shape[0]):
+        a = edge_a[k]
+        b = edge_b[k]
+        l2 = 0.0
+        for d in range(3):
+            l2 += (x[b, d] + edge_shift[k, d] - x[a, d]) ** 2
+        longest = max(longest, math.sqrt(l2))
+    r_max = 0.0
+    for k in range(c.edge_radius.shape[0]):
+        r_max = max(r_max, c.edge_radius[k])
+    cell = longest + 2.0 * r_max + skin
+    n = build_candidate_pairs(
+        x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_yarn, c.edge_local, c.yarn_edges,
+        c.yarn_closed, c.exclusion, cell, skin, c.pairs, c.keys,
+    )
+    if n > c.pairs.shape[0]:
+        c.pairs[:n_old] = old_pairs
+        c.keys[:n_old] = old_keys
+        c.slip[:n_old] = old_slip
+        c.status[0] = 1
+        c.status[1] = n
+        return False
+    carry_history(old_keys, old_slip, n_old, c.keys, c.slip, n)
+    c.n_pairs[0] = n
+    c.x_ref[:] = x
+    c.status[0] = 0
+    return True

@@ -1,0 +1,152 @@
+"""Contact kernels: narrow phase, broad phase, force distribution."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import knitlad as kl
+from knitlad.contact import ContactModel, make_contacts
+from knitlad.kernels.contact import segment_closest_points
+from knitlad.kernels.integrate import compute_forces
+from knitlad.scenes.weave import plain_weave
+from knitlad.state import Workspace
+
+D = kl.NYLON.diameter
+
+
+def brute_closest(p0, d1, q0, d2, n=401):
+    s = np.linspace(0, 1, n)
+    P = p0 + s[:, None] * d1
+    Q = q0 + s[:, None] * d2
+    dist = np.linalg.norm(P[:, None, :] - Q[None, :, :], axis=2)
+    return dist.min()
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_closest_points_match_a_brute_force_search(seed):
+    rng = np.random.default_rng(seed)
+    p0, d1, q0, d2 = rng.normal(size=(4, 3))
+    if seed % 4 == 0:
+        d2 = d1 * rng.uniform(-2, 2) + 1e-9 * rng.normal(size=3)  # near parallel
+    s, t = segment_closest_points(*p0, *d1, *q0, *d2)
+    dist = np.linalg.norm(p0 + s * d1 - q0 - t * d2)
+    assert 0 <= s <= 1 and 0 <= t <= 1
+    assert dist <= brute_closest(p0, d1, q0, d2) + 1e-9
+
+
+def test_parallel_overlapping_segments_touch_at_the_middle_of_their_overlap():
+    s, t = segment_closest_points(0, 0, 0, 1, 0, 0, 0.5, 1, 0, 1, 0, 0)  # overlap x in [0.5, 1]
+    assert s == pytest.approx(0.75) and t == pytest.approx(0.25)
+
+
+def dense_weave(n=4):
+    return plain_weave(n, spacing=4 * D, nodes_per_spacing=6)
+
+
+def contact_forces_of(state, model):
+    """Contact part of the nodal forces (Simulation grows the pair buffer as needed)."""
+    with_contact = kl.Simulation(state.copy(), contact=model)
+    without = kl.Simulation(state.copy())
+    return with_contact.work.force - without.work.force, with_contact.contacts
+
+
+def pressed_weave():
+    """A weave whose crossings overlap: amplitude 0.4 d, so axes are 0.8 d apart."""
+    return plain_weave(4, spacing=4 * D, nodes_per_spacing=6, amplitude=0.4 * D).build()
+
+
+def test_contact_forces_obey_newtons_third_law_and_exert_no_torque():
+    state = pressed_weave()
+    f, c = contact_forces_of(state, ContactModel(stiffness=1e3))
+    assert c.stats[0] >= 16  # every one of the 16 crossings touches
+    scale = np.abs(f).max()
+    assert scale > 0
+    np.testing.assert_allclose(f.sum(axis=0), 0.0, atol=1e-12 * scale * len(f))
+    torque = np.cross(state.x, f).sum(axis=0)
+    assert np.abs(torque).max() < 1e-10 * scale * np.abs(state.x).max() * len(f)
+
+
+def brute_force_touching(state, exclusion):
+    """Touching edge pairs by an all-pairs search (the reference for the broad phase)."""
+    from knitlad.contact import edge_topology
+
+    edge_yarn, edge_local, _, _ = edge_topology(state)
+    x = state.x
+    a, b = state.edge_a, state.edge_b
+    r = 0.5 * (state.radius[a] + state.radius[b])
+    found = set()
+    for i in range(len(a)):
+        for j in range(i + 1, len(a)):
+            if edge_yarn[i] == edge_yarn[j] and abs(edge_local[i] - edge_local[j]) <= exclusion:
+                continue
+            s, t = segment_closest_points(*x[a[i]], *(x[b[i]] - x[a[i]]), *x[a[j]], *(x[b[j]] - x[a[j]]))
+            dist = np.linalg.norm(x[a[i]] + s * (x[b[i]] - x[a[i]]) - x[a[j]] - t * (x[b[j]] - x[a[j]]))
+            if dist < r[i] + r[j]:
+                found.add((i, j))
+    return found
+
+
+def test_broad_phase_finds_exactly_the_pairs_of_an_all_pairs_search():
+    state = pressed_weave()
+    c = make_contacts(state, ContactModel(stiffness=1e3))
+    from knitlad.kernels.contact import refresh_contacts, segment_distance
+
+    assert refresh_contacts(state.x, state.edge_a, state.edge_b, state.edge_shift, c)
+    touching = {
+        (int(i), int(j))
+        for i, j in c.pairs[: c.n_pairs[0]]
+        if segment_distance(state.x, state.edge_a, state.edge_b, state.edge_shift, i, j)[0] < c.edge_radius[i] + c.edge_radius[j]
+    }
+    assert touching == brute_force_touching(state, int(c.exclusion[0]))
+    assert len(touching) > 0
+
+
+@pytest.mark.parametrize("skin_d", [0.05, 0.5, 3.0])
+def test_contact_count_and_forces_do_not_depend_on_the_cell_size(skin_d):
+    """The cell size is longest edge + 2 r + skin: changing the skin changes the cells."""
+    state = pressed_weave()
+    reference, c_ref = contact_forces_of(state, ContactModel(stiffness=1e3, skin=1.0 * D))
+    f, c = contact_forces_of(state, ContactModel(stiffness=1e3, skin=skin_d * D))
+    assert c.stats[0] == c_ref.stats[0]
+    np.testing.assert_allclose(f, reference, rtol=0, atol=1e-12 * np.abs(reference).max())
+
+
+def test_a_full_buffer_is_grown_and_the_run_goes_on():
+    state = pressed_weave()
+    sim = kl.Simulation(state, contact=ContactModel(stiffness=1e3, capacity_per_edge=0))
+    assert sim.contacts.pairs.shape[0] >= sim.contacts.n_pairs[0] > 0
+    sim.step(10)
+    assert np.isfinite(sim.state.x).all()
+
+
+def test_same_yarn_neighbours_are_excluded_but_distant_loops_of_one_yarn_touch():
+    """A hairpin: one yarn folded back on itself touches itself away from the fold."""
+    n = 40
+    s = np.linspace(0, 1, n)
+    arm = 10 * D
+    pts = np.zeros((2 * n, 3))
+    pts[:n, 0] = s * arm
+    pts[n:, 0] = arm - s * arm
+    pts[n:, 1] = 0.9 * D  # overlapping by 0.1 d
+    pts[n:, 0] += 0.5 * arm / n  # no coincident points at the fold
+    scene = kl.Scene()
+    scene.add_yarn(pts)
+    state = scene.build()
+    f, c = contact_forces_of(state, ContactModel(stiffness=1e3))
+    assert c.stats[0] > 10  # the two arms touch along their length
+    # straight neighbours never interact: no force on a lone straight yarn
+    scene2 = kl.Scene()
+    scene2.add_yarn(pts[:n])
+    f2, c2 = contact_forces_of(scene2.build(), ContactModel(stiffness=1e3))
+    assert c2.stats[0] == 0 and np.abs(f2).max() < 1e-9
+
+
+def test_bad_contact_parameters_are_refused():
+    with pytest.raises(ValueError, match="stiffness"):
+        ContactModel(stiffness=-1)
+    with pytest.raises(ValueError, match="friction"):
+        ContactModel(stiffness=1, friction=-0.1)
+    sim = kl.Simulation(pressed_weave(), contact=ContactModel(stiffness=1e3))
+    with pytest.raises(ValueError, match="friction"):
+        sim.set_friction(float("nan"))
