@@ -1,0 +1,174 @@
+"""Jersey (stockinette) fabric: n_x stitches per course, n_y courses.
+
+Centreline of course r (after Crane's "plain-knit-yarn", see shared/notes), one
+stitch per 2 pi of the parameter t:
+
+    x = (t + a sin 2t) l_x / (2 pi),  y = r l_y + H cos t,  z = c cos 2t,   a = 3/2.
+
+Heads (needle loops, pointing +y) sit at t = 2 pi i (column i), sinker loops
+(pointing -y) at t = 2 pi i + pi. The loop half-height H is solved so that each
+stitch holds exactly l0 of yarn; c = 2 d by default keeps crossing yarns about
+3 d apart. Each course runs from the sinker left of column 0 to the sinker right
+of column n_x - 1, then straight tails reach its two held ends. One extra course
+below (r = -1) and above (r = n_y), entirely held, secure the bottom and top
+edges so that a ladder reaching them stops there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from knitlad.state import RodState, Scene
+from knitlad.units import NYLON, Material
+
+CRANE_A = 1.5
+
+
+@dataclass(frozen=True)
+class Jersey:
+    """Geometry of a jersey knit (SI units)."""
+
+    n_x: int = 42
+    n_y: int = 42
+    l_x: float = 0.245 * NYLON.stitch_length
+    l_y: float = 0.245 * NYLON.stitch_length
+    nodes_per_stitch: int = 36
+    material: Material = NYLON
+    depth: float | None = None  # c, default 2 d
+    tail: float = 0.5  # straight tail beyond the last sinker, in l_x
+
+    def __post_init__(self) -> None:
+        if self.n_x < 2 or self.n_y < 2:
+            raise ValueError(f"the knit needs at least 2 x 2 stitches, got {self.n_x} x {self.n_y}")
+        if self.nodes_per_stitch < 8:
+            raise ValueError(f"nodes_per_stitch must be >= 8, got {self.nodes_per_stitch}")
+        l0 = self.material.stitch_length
+        if not 0 < self.l_x < l0 or not 0 < self.l_y < l0:
+            raise ValueError("l_x and l_y must lie strictly between 0 and l0")
+
+    @property
+    def c(self) -> float:
+        return 2.0 * self.material.diameter if self.depth is None else self.depth
+
+    @property
+    def segment(self) -> float:
+        return self.material.stitch_length / self.nodes_per_stitch
+
+    def column_x(self, i: np.ndarray | int) -> np.ndarray | float:
+        """x of the head (column centre) of column i; the knit is centred on x = 0."""
+        return (np.asarray(i) - 0.5 * (self.n_x - 1)) * self.l_x
+
+    def curve(self, t: np.ndarray, row: int, H: float) -> np.ndarray:
+        x = (t + CRANE_A * np.sin(2 * t)) * self.l_x / (2 * math.pi) + self.column_x(0)
+        y = row * self.l_y + H * np.cos(t)
+        z = self.c * np.cos(2 * t)
+        return np.column_stack([x, y, z])
+
+    def stitch_length_for(self, H: float, samples: int = 4000) -> float:
+        t = np.linspace(0.0, 2 * math.pi, samples + 1)
+        return float(np.linalg.norm(np.diff(self.curve(t, 0, H), axis=0), axis=1).sum())
+
+    def loop_half_height(self, length: float | None = None) -> float:
+        """H such that one stitch of the smooth curve holds ``length`` (default l0) of yarn."""
+        l0 = self.material.stitch_length if length is None else length
+        lo, hi = 0.0, self.material.stitch_length
+        if self.stitch_length_for(lo) > l0:
+            raise ValueError(
+                f"l_x/l0 = {self.l_x / l0:.3f} is too wide for this centreline: a flat course is already longer than l0"
+            )
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            if self.stitch_length_for(mid) < l0:
+                lo = mid
+            else:
+                hi = mid
+        return 0.5 * (lo + hi)
+
+    def course_points(self, row: int, H: float) -> tuple[np.ndarray, np.ndarray]:
+        """Nodes of one course, uniform in arc length, and the parameter t of each.
+
+        The tails are straight, from the end sinkers out to the held ends.
+        """
+        fine_per_stitch = 400
+        t = np.linspace(-math.pi, 2 * math.pi * (self.n_x - 1) + math.pi, fine_per_stitch * self.n_x + 1)
+        pts = self.curve(t, row, H)
+        s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+        n_seg = self.nodes_per_stitch * self.n_x
+        targets = np.linspace(0.0, s[-1], n_seg + 1)
+        knit = np.column_stack([np.interp(targets, s, pts[:, k]) for k in range(3)])
+        tk = np.interp(targets, s, t)
+        seg = s[-1] / n_seg
+        n_tail = max(1, int(round(self.tail * self.l_x / seg)))
+        left = knit[0] + np.outer(np.arange(n_tail, 0, -1) * seg, [-1.0, 0.0, 0.0])
+        right = knit[-1] + np.outer(np.arange(1, n_tail + 1) * seg, [1.0, 0.0, 0.0])
+        t_left = np.full(n_tail, -np.inf)
+        t_right = np.full(n_tail, np.inf)
+        return np.vstack([left, knit, right]), np.concatenate([t_left, tk, t_right])
+
+
+@dataclass
+class KnitScene:
+    """The built knit: its state plus the bookkeeping the protocol and observers need."""
+
+    geometry: Jersey
+    state: RodState
+    H: float
+    courses: list[int]  # yarn index of each free course, bottom to top
+    bars: list[int]  # yarn indices of the held edge courses
+    node_t: np.ndarray  # centreline parameter of each node (+-inf on tails)
+    left_end: np.ndarray  # node index of the held left end of each free course
+    right_end: np.ndarray
+    meta: dict = field(default_factory=dict)
+
+    def course_nodes(self, k: int) -> slice:
+        """Node slice of free course k (0 = bottom)."""
+        y = self.courses[k]
+        return slice(int(self.state.yarn_start[y]), int(self.state.yarn_start[y + 1]))
+
+
+def discrete_loop_half_height(geometry: Jersey) -> float:
+    """H at which the resampled polygon (not the smooth curve) holds l0 per stitch.
+
+    Chords are shorter than the arcs they span, by about (kappa seg)^2 / 24; the
+    smooth curve is lengthened to compensate, in two fixed-point passes.
+    """
+    l0 = geometry.material.stitch_length
+    target = l0
+    H = geometry.loop_half_height(target)
+    for _ in range(3):
+        pts, t = geometry.course_points(0, H)
+        inside = np.isfinite(t)
+        chord = np.linalg.norm(np.diff(pts[inside], axis=0), axis=1).sum() / geometry.n_x
+        target *= l0 / chord
+        H = geometry.loop_half_height(target)
+    return H
+
+
+def build_jersey(geometry: Jersey) -> KnitScene:
+    """A jersey knit at (l_x, l_y), every course held at its two ends, edge courses held whole."""
+    H = discrete_loop_half_height(geometry)
+    scene = Scene(geometry.material)
+    courses, bars, ts = [], [], []
+    left, right = [], []
+    offset = 0
+    for row in range(-1, geometry.n_y + 1):
+        pts, t = geometry.course_points(row, H)
+        y = scene.add_yarn(pts)
+        ts.append(t)
+        if row in (-1, geometry.n_y):
+            scene.hold(y, range(pts.shape[0]))
+            bars.append(y)
+        else:
+            scene.hold(y, [0, pts.shape[0] - 1])
+            courses.append(y)
+            left.append(offset)
+            right.append(offset + pts.shape[0] - 1)
+        offset += pts.shape[0]
+    state = scene.build(twist=False)
+    return KnitScene(
+        geometry=geometry, state=state, H=H, courses=courses, bars=bars, node_t=np.concatenate(ts),
+        left_end=np.array(left), right_end=np.array(right),
+    )

@@ -1,0 +1,87 @@
+"""The jersey scene: yarn length, no initial overlap, the right topology."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import knitlad as kl
+from knitlad.contact import ContactModel, make_contacts
+from knitlad.kernels.contact import refresh_contacts, segment_distance
+from knitlad.scenes.jersey import Jersey, build_jersey
+from knitlad.topology import piercings
+
+D = kl.NYLON.diameter
+L0 = kl.NYLON.stitch_length
+
+
+@pytest.fixture(scope="module")
+def knit():
+    return build_jersey(Jersey(n_x=5, n_y=4, nodes_per_stitch=36))
+
+
+def test_each_stitch_holds_l0_of_yarn(knit):
+    g = knit.geometry
+    # the resampled course (chords, as the rod sees it): n_x stitches between the end sinkers
+    s = knit.state
+    nodes = knit.course_nodes(0)
+    t = knit.node_t[nodes]
+    inside = np.isfinite(t)
+    x = s.x[nodes][inside] * kl.units.LENGTH
+    length = np.linalg.norm(np.diff(x, axis=0), axis=1).sum()
+    assert length == pytest.approx(g.n_x * L0, rel=1e-4)
+
+
+def test_no_two_non_neighbouring_segments_are_closer_than_d(knit):
+    """At l_x = l_y = 0.245 l0 the yarn axes stay >= 2.5 d apart (the notes: ~2.9 d)."""
+    s = knit.state
+    c = make_contacts(s, ContactModel(stiffness=1.0, skin=3 * D))
+    assert refresh_contacts(s.x, s.edge_a, s.edge_b, s.edge_shift, c)
+    dists = [segment_distance(s.x, s.edge_a, s.edge_b, s.edge_shift, i, j)[0] for i, j in c.pairs[: c.n_pairs[0]]]
+    assert len(dists) > 0
+    assert min(dists) * kl.units.LENGTH > 2.5 * D
+
+
+def head_ring(knit, row, col):
+    """Closed head of course `row` at column `col`: t in [2 pi col - pi/2, 2 pi col + pi/2]."""
+    nodes = knit.course_nodes(row)
+    t = knit.node_t[nodes]
+    sel = (t >= 2 * math.pi * col - math.pi / 2) & (t <= 2 * math.pi * col + math.pi / 2)
+    return knit.state.x[nodes][sel]
+
+
+def loop_arc(knit, row, col):
+    """Loop of course `row` at column `col`, sinker to sinker: t in [2 pi col - pi, 2 pi col + pi]."""
+    nodes = knit.course_nodes(row)
+    t = knit.node_t[nodes]
+    sel = (t >= 2 * math.pi * col - math.pi) & (t <= 2 * math.pi * col + math.pi)
+    return knit.state.x[nodes][sel]
+
+
+def test_jersey_topology_each_loop_passes_through_the_loop_of_the_course_below(knit):
+    """Loop (r+1, i) threads head (r, i) exactly (two opposite piercings); no other pair touches."""
+    n_x, n_y = knit.geometry.n_x, knit.geometry.n_y
+    for r in range(n_y - 1):
+        for i in range(1, n_x - 1):
+            ring = head_ring(knit, r, i)
+            assert piercings(ring, loop_arc(knit, r + 1, i)) == (2, 0), (r, i)
+            for other_row, other_col in ((r + 1, i - 1), (r + 1, i + 1), (r, i), (r - 1, i)):
+                if 0 <= other_row < n_y and (other_row, other_col) != (r, i):
+                    assert piercings(ring, loop_arc(knit, other_row, other_col))[0] == 0, (r, i, other_row, other_col)
+
+
+def test_edge_courses_are_held_and_courses_are_held_at_their_ends(knit):
+    s = knit.state
+    for y in knit.bars:
+        assert s.held[s.yarn_start[y]: s.yarn_start[y + 1]].all()
+    for k, y in enumerate(knit.courses):
+        held = np.flatnonzero(s.held[s.yarn_start[y]: s.yarn_start[y + 1]])
+        assert held.tolist() == [0, s.yarn_start[y + 1] - s.yarn_start[y] - 1]
+
+
+@pytest.mark.parametrize("kwargs, match", [(dict(n_x=1), "2 x 2"), (dict(l_x=L0), "l0"), (dict(nodes_per_stitch=4), "nodes_per_stitch")])
+def test_bad_geometry_is_refused(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        Jersey(**kwargs)
