@@ -55,5 +55,102 @@ def scales() -> None:
         typer.echo(f"{key:20s} {value:.6g}")
 
 
+class _StageProgress:
+    """A progress line per stage on stderr (redrawn in place on a terminal)."""
+
+    def __init__(self) -> None:
+        self.stage = None
+        self.tty = sys.stderr.isatty()
+        self.last = -1
+        self.t0 = time.perf_counter()
+
+    def __call__(self, stage: str, fraction: float) -> None:
+        pct = int(100 * min(max(fraction, 0.0), 1.0))
+        if stage != self.stage:
+            if self.stage is not None:
+                sys.stderr.write("\n" if self.tty else "")
+            self.stage, self.last, self.t0 = stage, -1, time.perf_counter()
+        if pct == self.last or (not self.tty and pct % 25 and pct != 100):
+            return
+        self.last = pct
+        bar = "#" * (pct // 5) + "." * (20 - pct // 5)
+        line = f"{stage:10s} [{bar}] {pct:3d}%  {time.perf_counter() - self.t0:6.1f} s"
+        sys.stderr.write(("\r" + line) if self.tty else line + "\n")
+        sys.stderr.flush()
+
+    def close(self) -> None:
+        if self.tty and self.stage is not None:
+            sys.stderr.write("\n")
+
+
+@app.command()
+def cut(
+    fx: float = typer.Option(None, "--fx", help="Target tension per thread f_x^ini (force control). Default 13.6 unless --lx is given."),
+    lx: float = typer.Option(None, "--lx", help="Stretch l_x/l0 (position control) instead of --fx."),
+    ly: float = typer.Option(0.25, "--ly", help="Stretch l_y/l0."),
+    mu: float = typer.Option(0.4, "--mu", help="Friction coefficient during laddering."),
+    stitches: str = typer.Option("42", "--stitches", help="Fabric size: N (N x N) or NXxNY."),
+    resolution: int = typer.Option(24, "--resolution", help="Nodes per stitch."),
+    max_time_ms: float = typer.Option(30.0, "--max-time-ms", help="Longest laddering time after the cut [ms]."),
+    out: str = typer.Option(None, "--out", help="Output folder (HDF5 + PNG); default runs/cut-<time>."),
+    json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
+) -> None:
+    """The laddering experiment: stretch at mu = 0, relax, switch friction on, cut a loop, follow the ladder."""
+    import json
+    from pathlib import Path
+
+    from pydantic import ValidationError
+
+    from knitlad.config import CutConfig, one_line, parse_stitches
+
+    try:
+        n_x, n_y = parse_stitches(stitches)
+    except ValueError as e:
+        fail(f"--stitches: {e}")
+    if fx is None and lx is None:
+        fx = 13.6
+    try:
+        cfg = CutConfig(fx=fx, lx=lx, ly=ly, mu=mu, n_x=n_x, n_y=n_y, resolution=resolution, max_time_ms=max_time_ms)
+    except ValidationError as e:
+        field, _, reason = one_line(e).partition(": ")
+        option = {"n_x": "--stitches", "n_y": "--stitches", "max_time_ms": "--max-time-ms"}.get(field, f"--{field}")
+        fail(f"{option}: {reason}" if field != "config" else reason)
+    out_dir = Path(out) if out else Path("runs") / time.strftime("cut-%Y%m%d-%H%M%S")
+    from knitlad.io.hdf5 import write_ladder_result
+    from knitlad.plots import spatio_temporal_diagram
+    from knitlad.protocol import LadderRun
+
+    progress = _StageProgress()
+    run = LadderRun(cfg.settings(), progress=progress)
+    try:
+        result = run.run()
+    except KeyboardInterrupt:
+        progress.close()
+        typer.echo("knitlad: interrupted; nothing written", err=True)
+        raise typer.Exit(130)
+    progress.close()
+    h5 = write_ladder_result(out_dir / "ladder.h5", result, run.sim.state.yarn_start)
+    png = spatio_temporal_diagram(result, out_dir / "spatio_temporal.png")
+    summary = result.summary()
+    if json_out:
+        typer.echo(json.dumps(summary, default=float))
+        return
+    typer.echo(
+        f"{n_x} x {n_y} jersey, mu = {cfg.mu}, {cfg.resolution} nodes/stitch ({result.nodes} nodes)\n"
+        f"  f_x^ini     = {result.fx_ini:.3f}\n"
+        f"  f_x^fin     = {result.fx_fin:.3f}\n"
+        f"  n_lad/n_y   = {result.n_lad_over_ny:.3f}  ({result.n_lad} cells)\n"
+        f"  v_lad/c_b   = {result.v_lad_over_cb:.3f}  (front fit over stitches {result.v_fit_stitches[0]}-{result.v_fit_stitches[1]})\n"
+        f"  l_x/l0, l_y/l0 = {result.lx_over_l0:.3f}, {result.ly_over_l0:.3f}\n"
+        f"  stop: {result.stop_reason}\n"
+        f"  wall time   = {summary['wall_s']:.1f} s (stretch {result.wall_s.get('stretch', 0):.1f} s, propagate {result.wall_s.get('propagate', 0):.1f} s)\n"
+        f"  wrote {h5} and {png}"
+    )
+
+
 def main() -> None:  # pragma: no cover - console entry point
     sys.exit(app())
+
+
+if __name__ == "__main__":  # python -m knitlad.cli
+    main()

@@ -320,3 +320,37 @@ def _initial_reference_directors(tangent: np.ndarray, edge_yarn: np.ndarray) -> 
         u -= u.dot(t) * t
         ref_u[k] = u / np.linalg.norm(u)
     return ref_u
+
+
+def cut_edge(state: RodState, edge: int) -> RodState:
+    """A new state with ``edge`` removed: its open yarn becomes two yarns at that point.
+
+    Node arrays are unchanged (same indices); the edge and the bending hinges that
+    used it disappear, so the two new ends are free.
+    """
+    ne = state.edge_a.shape[0]
+    if not 0 <= edge < ne:
+        raise IndexError(f"no edge {edge}")
+    a, b = int(state.edge_a[edge]), int(state.edge_b[edge])
+    y = int(state.node_yarn[a])
+    if b != a + 1 or np.any(state.edge_shift[edge] != 0):
+        raise ValueError("only an inner edge of an open yarn can be cut")
+    keep_e = np.ones(ne, dtype=bool)
+    keep_e[edge] = False
+    remap = np.cumsum(keep_e) - 1
+    keep_h = (state.hinge_e0 != edge) & (state.hinge_e1 != edge)
+    yarn_start = np.insert(state.yarn_start, y + 1, b)
+    node_yarn = np.repeat(np.arange(yarn_start.shape[0] - 1), np.diff(yarn_start)).astype(np.int64)
+    fields = state._asdict()
+    for name in ("edge_a", "edge_b", "edge_shift", "rest_length", "EA", "stretch_damping", "theta", "omega",
+                 "twist_inertia", "theta_held", "ref_u", "tangent"):
+        fields[name] = np.array(fields[name][keep_e], copy=True)
+    for name in ("B_over_l", "GJ_over_l", "kappa_bar", "twist_bar", "ref_twist"):
+        fields[name] = np.array(fields[name][keep_h], copy=True)
+    fields["hinge_e0"] = remap[state.hinge_e0[keep_h]].astype(np.int64)
+    fields["hinge_e1"] = remap[state.hinge_e1[keep_h]].astype(np.int64)
+    fields["yarn_start"] = yarn_start.astype(np.int64)
+    fields["node_yarn"] = node_yarn
+    for name in ("x", "v", "mass", "radius", "held", "v_prescribed", "f_ext"):
+        fields[name] = np.array(fields[name], copy=True)
+    return RodState(**fields)

@@ -39,6 +39,7 @@ class Jersey:
     material: Material = NYLON
     depth: float | None = None  # c, default 2 d
     tail: float = 0.5  # straight tail beyond the last sinker, in l_x
+    width: float = CRANE_A  # a: how far the head bulges sideways (Crane: 3/2)
 
     def __post_init__(self) -> None:
         if self.n_x < 2 or self.n_y < 2:
@@ -62,7 +63,7 @@ class Jersey:
         return (np.asarray(i) - 0.5 * (self.n_x - 1)) * self.l_x
 
     def curve(self, t: np.ndarray, row: int, H: float) -> np.ndarray:
-        x = (t + CRANE_A * np.sin(2 * t)) * self.l_x / (2 * math.pi) + self.column_x(0)
+        x = (t + self.width * np.sin(2 * t)) * self.l_x / (2 * math.pi) + self.column_x(0)
         y = row * self.l_y + H * np.cos(t)
         z = self.c * np.cos(2 * t)
         return np.column_stack([x, y, z])

@@ -1,0 +1,62 @@
+"""Validated configuration (pydantic v2, extra="forbid"): units in every field's description.
+
+Dimensionless inputs follow the paper: lengths as l/l0, tension as f_x = F_x/(n_y f0).
+"""
+
+from __future__ import annotations
+
+import re
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+
+class CutConfig(BaseModel):
+    """One laddering run (``knitlad cut``)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
+    lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
+    ly: float = Field(0.25, gt=0.2, lt=0.5, description="stretch l_y/l0 [-]")
+    mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient during laddering [-]")
+    n_x: int = Field(42, ge=4, le=200, description="stitches per course [-]")
+    n_y: int = Field(42, ge=6, le=200, description="courses [-]")
+    resolution: int = Field(24, ge=12, le=280, description="nodes per stitch (segment = l0/resolution) [-]")
+    max_time_ms: float = Field(30.0, gt=0, description="longest laddering time simulated after the cut [ms]")
+    arrest_ms: float = Field(2.0, gt=0, description="the ladder has stopped when no cell changed for this long [ms]")
+    observe_every_us: float = Field(20.0, gt=0, description="interval between front/tension samples [us]")
+    frame_every_us: float = Field(100.0, gt=0, description="interval between stored position frames [us]")
+
+    @model_validator(mode="after")
+    def one_control(self) -> "CutConfig":
+        if self.fx is not None and self.lx is not None:
+            raise ValueError("give either fx (force control) or lx (position control), not both")
+        if self.fx is None and self.lx is None:
+            raise ValueError("give fx (force control) or lx (position control)")
+        return self
+
+    def settings(self):
+        from knitlad.protocol import LadderSettings
+
+        return LadderSettings(
+            n_x=self.n_x, n_y=self.n_y, lx_over_l0=self.lx, fx_target=self.fx, ly_over_l0=self.ly, mu=self.mu,
+            nodes_per_stitch=self.resolution, max_time_s=self.max_time_ms * 1e-3, arrest_s=self.arrest_ms * 1e-3,
+            observe_every_s=self.observe_every_us * 1e-6, frame_every_s=self.frame_every_us * 1e-6,
+        )
+
+
+def parse_stitches(text: str) -> tuple[int, int]:
+    """'42' -> (42, 42); '8x10' -> (8, 10)."""
+    m = re.fullmatch(r"\s*(\d+)\s*(?:[xX]\s*(\d+))?\s*", text)
+    if not m:
+        raise ValueError(f"stitches must be N or NXxNY (e.g. 42 or 8x10), got {text!r}")
+    n_x = int(m.group(1))
+    return n_x, int(m.group(2)) if m.group(2) else n_x
+
+
+def one_line(error: ValidationError) -> str:
+    """The first validation error as 'field: reason'."""
+    e = error.errors()[0]
+    where = ".".join(str(p) for p in e.get("loc", ())) or "config"
+    msg = e.get("msg", str(error)).removeprefix("Value error, ")
+    return f"{where}: {msg}"

@@ -1,0 +1,1 @@
+"""Writers: HDF5 trajectories and summaries, written atomically."""

@@ -1,0 +1,131 @@
+"""Observables of the laddering experiment (paper: main text and Fig. 3).
+
+* tension per thread f_x = F_x / (n_y f0), F_x from the reaction forces on the
+  held ends of all courses;
+* the periodicities l_x (spacing of the heads along a course) and l_y (spacing
+  of the courses), measured away from the edges;
+* laddered cells: cell (r, i) (course r, column i) holds the loop of course r+1
+  while the head of course r at column i rises above the sinker loops of course
+  r+1 on either side of that column (the two loops overlap in y). A laddered
+  cell is a straight bar and the overlap is about -l_y. The criterion is geometric,
+  not by node index, because the yarn slides through the stitches;
+* the ladder front along a column, and v_lad as the slope of the front from
+  stitch 2 to stitch 10 (paper, Fig. 3d), normalised by c_b.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from knitlad import units
+
+
+def tension_per_thread(reactions_N: np.ndarray, left_end: np.ndarray, right_end: np.ndarray, f0: float) -> float:
+    """f_x = F_x / (n_y f0) with F_x the mean of the right-end pull and minus the left-end pull [N]."""
+    F_x = 0.5 * (reactions_N[right_end, 0].sum() - reactions_N[left_end, 0].sum())
+    return float(F_x / (len(right_end) * f0))
+
+
+def course_rows(x: np.ndarray, yarn_start: np.ndarray, rows: list[int]) -> list[np.ndarray]:
+    return [x[yarn_start[y]: yarn_start[y + 1]] for y in rows]
+
+
+def periodicities(course_positions: list[np.ndarray], column_x: np.ndarray, l_x_guess: float,
+                  margin: float = 0.25) -> tuple[float, float]:
+    """(l_x, l_y) [same unit as the positions] measured on the central courses and columns.
+
+    l_y: mean spacing of the courses' mean heights. l_x: slope of the head
+    apex x (highest node within l_x/4 of each column's nominal centre) against
+    the column index, so an offset of the nominal centres does not bias it.
+    """
+    n = len(course_positions)
+    lo, hi = int(margin * n), max(int((1 - margin) * n), int(margin * n) + 2)
+    central = course_positions[lo:hi]
+    means = np.array([c[:, 1].mean() for c in central])
+    l_y = float(np.mean(np.diff(means)))
+    n_cols = column_x.shape[0]
+    c_lo, c_hi = int(margin * n_cols), max(int((1 - margin) * n_cols), int(margin * n_cols) + 2)
+    slopes = []
+    for c in central:
+        cols, xs = [], []
+        for i in range(c_lo, c_hi):
+            near = np.flatnonzero(np.abs(c[:, 0] - column_x[i]) < 0.25 * l_x_guess)
+            if near.size:
+                cols.append(i)
+                xs.append(c[near[np.argmax(c[near, 1])], 0])
+        if len(cols) >= 2:
+            slopes.append(np.polyfit(cols, xs, 1)[0])
+    l_x = float(np.mean(slopes)) if slopes else float("nan")
+    return l_x, l_y
+
+
+def cell_overlap(course_positions: list[np.ndarray], column_x: np.ndarray, l_x: float) -> np.ndarray:
+    """Overlap (n_courses - 1, n_columns) of the head of course r over the sinkers of course r+1 [length].
+
+    ``course_positions`` run bottom to top and include the held edge course on
+    top, so every free course has a course above it. Positive: the cell holds.
+    """
+    n_rows = len(course_positions) - 1
+    n_cols = column_x.shape[0]
+    out = np.full((n_rows, n_cols), np.nan)
+    w = 0.25 * l_x
+    for r in range(n_rows):
+        below = course_positions[r]
+        above = course_positions[r + 1]
+        for i, xc in enumerate(column_x):
+            head = below[np.abs(below[:, 0] - xc) < w, 1]
+            left = above[np.abs(above[:, 0] - (xc - 0.5 * l_x)) < w, 1]
+            right = above[np.abs(above[:, 0] - (xc + 0.5 * l_x)) < w, 1]
+            # the outer side of an edge column is the course's tail, not a sinker
+            sides = [side.min() for side, inner in ((left, i > 0), (right, i < n_cols - 1)) if side.size and inner]
+            if head.size and sides:
+                out[r, i] = head.max() - max(sides)
+    return out
+
+
+def laddered_cells(overlap: np.ndarray, l_y: float, margin: float = 0.25) -> np.ndarray:
+    """Boolean map of undone cells: the head has dropped below the course above's sinkers.
+
+    An intact cell overlaps by +0.2 to +0.4 l_y, a laddered one (a straight bar)
+    by about -l_y; the threshold -``margin`` l_y keeps a vibrating intact loop
+    from flickering into the laddered state. Cells with no data count as intact.
+    """
+    return overlap < -margin * l_y
+
+
+def ladder_front(laddered: np.ndarray, column: int, start_row: int) -> tuple[int, int]:
+    """(upward, downward) extent, in stitches, of the run of laddered cells through ``start_row``.
+
+    Upward counts laddered cells from ``start_row`` + 1 up, downward from
+    ``start_row`` - 1 down, each stopping at the first intact cell.
+    """
+    col = laddered[:, column]
+    up = 0
+    r = start_row + 1
+    while r < col.shape[0] and col[r]:
+        up += 1
+        r += 1
+    down = 0
+    r = start_row - 1
+    while r >= 0 and col[r]:
+        down += 1
+        r -= 1
+    return up, down
+
+
+def laddering_velocity(times: np.ndarray, front: np.ndarray, l_y: float, first: int = 2, last: int = 10) -> float:
+    """v_lad = slope of the front from stitch ``first`` to ``last`` (paper Fig. 3d) [l_y / time unit].
+
+    ``front`` is the ladder extent (stitches) at each time; the slope is the
+    least-squares fit of front against time over the samples where
+    first <= front <= last. NaN if the front never covers that range.
+    """
+    times = np.asarray(times, dtype=float)
+    front = np.asarray(front, dtype=float)
+    if front.size == 0 or np.nanmax(front) < last:
+        return float("nan")
+    # first arrival at each stitch level: a monotone front, robust to flicker
+    levels = np.arange(first, last + 1)
+    arrival = np.array([times[np.argmax(front >= k)] for k in levels])
+    slope = np.polyfit(arrival, levels, 1)[0]
+    return float(slope * l_y)

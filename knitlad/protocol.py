@@ -1,0 +1,337 @@
+"""The laddering experiment (paper, "Simulations" and appendix): stretch, relax, cut, propagate.
+
+Stages, each driven here and measured by :mod:`knitlad.measure`:
+
+1. **stretch** at mu = 0 to the target: the knit is built at the target l_y and
+   at l_x = min(target, 0.30 l0). It is not built at the paper's 0.245 l0
+   because there the fabric is in compression (f_x < 0) and buckles out of plane,
+   and the buckled structure survives the stretch (measured: the knit tangles).
+   From there the whole fabric is stretched affinely in small increments, each
+   followed by FIRE relaxation with the held ends and edge courses fixed. With
+   mu = 0 the state is history-free, and an affine increment leaves the yarn in
+   the bulk only a local rearrangement to make (yarn drawn from its own loop)
+   instead of sliding from the held ends across the fabric. Force control
+   (target f_x^ini) continues stretching until f_x passes the target, then
+   brackets it by secant steps to within ``fx_tolerance``.
+2. **relax** to f_x steady, then measure f_x^ini, l_x, l_y.
+3. **friction on** (mu), **cut** the sinker loop (the loop pointing -y) of the
+   central course at the central column.
+4. **propagate**: free dynamics; every ``observe_every_s`` the laddered cells,
+   the ladder front and f_x are recorded. Stop when no cell has changed for
+   ``arrest_s``, when the ladder reaches an edge course, or at ``max_time_s``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from knitlad import units
+from knitlad.contact import ContactModel
+from knitlad.measure import (
+    cell_overlap,
+    course_rows,
+    ladder_front,
+    laddered_cells,
+    laddering_velocity,
+    periodicities,
+    tension_per_thread,
+)
+from knitlad.scenes.jersey import Jersey, KnitScene, build_jersey
+from knitlad.simulation import Simulation
+from knitlad.state import cut_edge
+from knitlad.units import NYLON, Material
+
+BUILD_LX = 0.30  # widest l_x/l0 at which the built knit is in tension and its loops still overlap well
+
+
+@dataclass
+class LadderSettings:
+    """Inputs of one laddering run. Lengths as l/l0, tension as f_x, SI otherwise."""
+
+    n_x: int = 42
+    n_y: int = 42
+    lx_over_l0: float | None = None  # position control ...
+    fx_target: float | None = 13.6  # ... or force control (exactly one of the two)
+    ly_over_l0: float = 0.25
+    mu: float = 0.4
+    nodes_per_stitch: int = 24
+    contact_force_f0: float = 20.0  # the contact force (in f0) at which the overlap is overlap_fraction d
+    overlap_fraction: float = 0.05
+    stretch_increment: float = 0.005  # l/l0 per affine step
+    steps_per_increment: int = 1500
+    fx_tolerance: float = 0.02
+    observe_every_s: float = 20e-6
+    arrest_s: float = 2e-3
+    max_time_s: float = 30e-3
+    frame_every_s: float = 100e-6
+    material: Material = NYLON
+
+    def __post_init__(self) -> None:
+        if (self.lx_over_l0 is None) == (self.fx_target is None):
+            raise ValueError("give exactly one of lx_over_l0 (position control) and fx_target (force control)")
+
+
+@dataclass
+class LadderResult:
+    settings: LadderSettings
+    fx_ini: float = float("nan")
+    fx_fin: float = float("nan")
+    lx_over_l0: float = float("nan")
+    ly_over_l0: float = float("nan")
+    n_lad: int = 0
+    n_lad_over_ny: float = float("nan")
+    v_lad_over_cb: float = float("nan")
+    laddering_column: int = -1
+    reached_edge: bool = False
+    stop_reason: str = ""
+    v_fit_stitches: tuple = (2, 10)
+    wall_s: dict = field(default_factory=dict)
+    times_s: list = field(default_factory=list)
+    front_up: list = field(default_factory=list)
+    front_down: list = field(default_factory=list)
+    fx_series: list = field(default_factory=list)
+    column_history: list = field(default_factory=list)  # laddered flags of the laddering column over time
+    frames: list = field(default_factory=list)
+    frame_times_s: list = field(default_factory=list)
+    final_laddered: np.ndarray | None = None
+    baseline_laddered: np.ndarray | None = None
+    nodes: int = 0
+    steps: int = 0
+
+    def summary(self) -> dict:
+        return {
+            "fx_ini": self.fx_ini,
+            "fx_fin": self.fx_fin,
+            "n_lad": self.n_lad,
+            "n_lad_over_ny": self.n_lad_over_ny,
+            "v_lad_over_cb": self.v_lad_over_cb,
+            "lx_over_l0": self.lx_over_l0,
+            "ly_over_l0": self.ly_over_l0,
+            "laddering_column": self.laddering_column,
+            "v_fit_stitches": list(self.v_fit_stitches),
+            "reached_edge": self.reached_edge,
+            "stop_reason": self.stop_reason,
+            "nodes": self.nodes,
+            "steps": self.steps,
+            "wall_s": float(sum(self.wall_s.values())),
+            **{f"wall_{k}_s": v for k, v in self.wall_s.items()},
+        }
+
+
+Progress = Callable[[str, float], None]  # (stage, fraction done)
+
+
+class LadderRun:
+    """Drives one laddering experiment; see the module docstring for the stages."""
+
+    def __init__(self, settings: LadderSettings, progress: Progress | None = None) -> None:
+        self.s = settings
+        self.progress = progress or (lambda stage, frac: None)
+        m = settings.material
+        self.lx = min(settings.lx_over_l0, BUILD_LX) if settings.lx_over_l0 is not None else BUILD_LX
+        self.ly = settings.ly_over_l0  # current box stretch, l/l0
+        geometry = Jersey(
+            n_x=settings.n_x, n_y=settings.n_y, l_x=self.lx * m.stitch_length, l_y=self.ly * m.stitch_length,
+            nodes_per_stitch=settings.nodes_per_stitch, material=m,
+        )
+        self.knit: KnitScene = build_jersey(geometry)
+        self.contact = ContactModel.for_force(
+            settings.contact_force_f0 * m.f0, m.diameter, overlap_fraction=settings.overlap_fraction, friction=0.0
+        )
+        self.sim = Simulation(self.knit.state, contact=self.contact)
+        self.result = LadderResult(settings, nodes=self.knit.state.x.shape[0])
+
+    # ------------------------------------------------------------ measurements
+    def tension(self) -> float:
+        k = self.knit
+        return tension_per_thread(self.sim.reaction_forces_N(), k.left_end, k.right_end, self.s.material.f0)
+
+    def rows(self) -> list[np.ndarray]:
+        k = self.knit
+        return course_rows(self.sim.state.x, self.sim.state.yarn_start, k.courses + [k.bars[1]])
+
+    def column_centres(self) -> np.ndarray:
+        """Head x of each column [internal]: the knit is centred, so columns sit at (i - (n_x-1)/2) l_x."""
+        l_x = self.lx * self.s.material.stitch_length / units.LENGTH
+        return (np.arange(self.s.n_x) - 0.5 * (self.s.n_x - 1)) * l_x
+
+    def laddered(self) -> np.ndarray:
+        l0 = self.s.material.stitch_length / units.LENGTH
+        overlap = cell_overlap(self.rows(), self.column_centres(), self.lx * l0)
+        return laddered_cells(overlap, self.ly * l0)
+
+    # ------------------------------------------------------------ stage 1-2
+    def _affine(self, lx_new: float, ly_new: float) -> None:
+        x = self.sim.state.x
+        x[:, 0] *= lx_new / self.lx
+        x[:, 1] *= ly_new / self.ly
+        self.lx, self.ly = lx_new, ly_new
+
+    def _relax(self, steps: int) -> None:
+        f0 = self.s.material.f0
+        self.sim.relax(force_tol_N=1e-3 * f0, max_steps=steps)
+
+    def _relax_to_steady_tension(self, rtol: float = 0.005, max_rounds: int = 20) -> float:
+        previous = self.tension()
+        for _ in range(max_rounds):
+            self._relax(self.s.steps_per_increment)
+            fx = self.tension()
+            if abs(fx - previous) <= rtol * max(abs(fx), 0.1):
+                return fx
+            previous = fx
+        return self.tension()
+
+    def stretch_to(self, lx: float, ly: float) -> None:
+        """Affine increments to (lx, ly) [l/l0], relaxing after each."""
+        n = max(1, int(math.ceil(max(abs(lx - self.lx), abs(ly - self.ly)) / self.s.stretch_increment)))
+        lx0, ly0 = self.lx, self.ly
+        for k in range(1, n + 1):
+            self._affine(lx0 + (lx - lx0) * k / n, ly0 + (ly - ly0) * k / n)
+            self._relax(self.s.steps_per_increment)
+            self.progress("stretch", k / n)
+
+    def stretch(self) -> None:
+        s = self.s
+        t0 = time.perf_counter()
+        if s.lx_over_l0 is not None:
+            self.stretch_to(s.lx_over_l0, s.ly_over_l0)
+            fx = self._relax_to_steady_tension()
+        else:
+            self.stretch_to(self.lx, s.ly_over_l0)
+            fx = self._relax_to_steady_tension()
+            # one increment at a time until f_x passes the target ...
+            a, fa = self.lx, fx
+            while fx < s.fx_target:
+                if self.lx + s.stretch_increment >= 0.95:
+                    raise RuntimeError(f"f_x = {fx:.2f} at l_x/l0 = {self.lx:.3f}: the target {s.fx_target} is out of reach")
+                a, fa = self.lx, fx
+                self.stretch_to(self.lx + s.stretch_increment, s.ly_over_l0)
+                fx = self.tension()  # one relaxation per increment while far from the target
+                if fx >= (1 - s.fx_tolerance) * s.fx_target:
+                    fx = self._relax_to_steady_tension()
+                self.progress("stretch", min(max(fx, 0.0) / s.fx_target, 1.0))
+            # ... then bisection inside the last increment, to within fx_tolerance
+            b, fb = self.lx, fx
+            for _ in range(8):
+                if abs(fb - s.fx_target) <= s.fx_tolerance * s.fx_target:
+                    break
+                mid = 0.5 * (a + b)
+                self.stretch_to(mid, s.ly_over_l0)
+                fm = self._relax_to_steady_tension()
+                if fm < s.fx_target:
+                    a, fa = mid, fm
+                else:
+                    b, fb = mid, fm
+                if abs(fm - s.fx_target) <= s.fx_tolerance * s.fx_target:
+                    break
+            fx = self.tension()
+        self.result.fx_ini = fx
+        self.result.wall_s["stretch"] = time.perf_counter() - t0
+        l0 = s.material.stitch_length / units.LENGTH
+        lx_m, ly_m = periodicities(self.rows()[:-1], self.column_centres(), self.lx * l0)
+        self.result.lx_over_l0 = lx_m / l0
+        self.result.ly_over_l0 = ly_m / l0
+
+    # ------------------------------------------------------------ stage 3-4
+    def cut_row(self) -> int:
+        return self.s.n_y // 2
+
+    def cut_column(self) -> int:
+        return self.s.n_x // 2
+
+    def cut(self) -> int:
+        """Cut the sinker loop of the central course on the -x side of the central column; returns the edge."""
+        k = self.knit
+        r, i = self.cut_row(), self.cut_column()
+        nodes = k.course_nodes(r)
+        x = self.sim.state.x[nodes]
+        l_x = self.lx * self.s.material.stitch_length / units.LENGTH
+        target = self.column_centres()[i] - 0.5 * l_x
+        near = np.flatnonzero(np.abs(x[:, 0] - target) < 0.25 * l_x)
+        apex = nodes.start + near[np.argmin(x[near, 1])]
+        edge = int(np.flatnonzero(self.sim.state.edge_a == apex)[0])
+        state = cut_edge(self.sim.state, edge)
+        sim = Simulation(state, contact=self.contact, dt_s=min(self.sim.dt_s, Simulation(state.copy(), contact=self.contact).dt_s))
+        sim.set_friction(self.s.mu)
+        self.sim = sim
+        return edge
+
+    def propagate(self) -> None:
+        s = self.s
+        t0 = time.perf_counter()
+        self.sim.set_friction(s.mu)
+        baseline = self.laddered()  # cells already flagged before the cut are not damage
+        self.cut()
+        res = self.result
+        res.baseline_laddered = baseline
+        undone = np.zeros_like(baseline)
+        r0, i0 = self.cut_row(), self.cut_column()
+        columns = [i0 - 1, i0]
+        last_change = 0.0
+        n_last = -1
+        next_frame = 0.0
+        t_start = self.sim.time_s
+        while True:
+            self.sim.run(s.observe_every_s)
+            t = self.sim.time_s - t_start
+            # an undone cell does not knit itself again: keep every cell ever undone
+            undone |= self.laddered() & ~baseline
+            lad = undone
+            fronts = [ladder_front(lad, c, r0) for c in columns]
+            best = int(np.argmax([u + dn for u, dn in fronts]))
+            res.times_s.append(t)
+            res.front_up.append(fronts[best][0])
+            res.front_down.append(fronts[best][1])
+            res.fx_series.append(self.tension())
+            res.column_history.append(lad[:, columns[best]].copy())
+            n = int(lad.sum())
+            if n != n_last:
+                n_last, last_change = n, t
+            if t >= next_frame:
+                res.frames.append(self.sim.positions_m().astype(np.float32))
+                res.frame_times_s.append(t)
+                next_frame += s.frame_every_s
+            top = lad[-1].any()
+            bottom = lad[0].any()
+            self.progress("propagate", min(t / s.max_time_s, 1.0))
+            if top or bottom:
+                res.reached_edge = True
+                res.stop_reason = "ladder reached an edge course"
+                break
+            if t - last_change >= s.arrest_s:
+                res.stop_reason = f"no cell changed for {s.arrest_s * 1e3:.1f} ms"
+                break
+            if t >= s.max_time_s:
+                res.stop_reason = "max_time_s reached"
+                break
+        res.final_laddered = lad
+        res.n_lad = int(lad.sum())
+        res.n_lad_over_ny = res.n_lad / s.n_y
+        col_counts = lad.sum(axis=0)
+        res.laddering_column = int(np.argmax(col_counts))
+        # f_x after arrest: mean over the last arrest window (the force rings after the cut)
+        times = np.array(res.times_s)
+        window = times >= times[-1] - 0.5 * s.arrest_s
+        res.fx_fin = float(np.mean(np.array(res.fx_series)[window]))
+        l_y = self.ly * s.material.stitch_length
+        # the paper fits stitches 2 to 10; a small knit offers fewer rows above the cut
+        last = min(10, s.n_y - 1 - r0)
+        first = min(2, max(last - 2, 1))
+        res.v_fit_stitches = (first, last)
+        res.v_lad_over_cb = laddering_velocity(times, np.array(res.front_up), l_y, first, last) / s.material.c_b
+        res.steps = self.sim.steps
+        res.wall_s["propagate"] = time.perf_counter() - t0
+
+    def run(self) -> LadderResult:
+        self.stretch()
+        self.propagate()
+        return self.result
+
+
+def run_ladder(settings: LadderSettings, progress: Progress | None = None) -> LadderResult:
+    return LadderRun(settings, progress).run()

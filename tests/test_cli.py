@@ -1,0 +1,53 @@
+"""The command line: bad input is refused in one line with exit code 2; `knitlad cut` end to end."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import h5py
+import pytest
+
+KNITLAD = [sys.executable, "-m", "knitlad.cli"]
+
+
+def run(*args, cwd=None):
+    return subprocess.run([*KNITLAD, *args], capture_output=True, text=True, cwd=cwd)
+
+
+@pytest.mark.parametrize(
+    "args, option",
+    [
+        (["cut", "--stitches", "3"], "--stitches"),
+        (["cut", "--stitches", "8y"], "--stitches"),
+        (["cut", "--mu", "-1"], "--mu"),
+        (["cut", "--lx", "1.2"], "--lx"),
+        (["cut", "--lx", "0.4", "--fx", "3"], "either fx"),
+        (["cut", "--resolution", "4"], "--resolution"),
+        (["demo", "--nodes", "2"], "--nodes"),
+    ],
+)
+def test_bad_options_get_one_line_and_exit_code_2(args, option):
+    p = run(*args)
+    assert p.returncode == 2
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and option in lines[0] and "Traceback" not in p.stderr
+
+
+def test_cut_runs_a_ladder_end_to_end_on_a_small_knit(tmp_path):
+    """8 x 10 stitches stretched to l_x = 0.40 l0 (f_x ~ 4.5): after the cut a ladder runs
+    and releases tension; the summary, the HDF5 file and the diagram are written."""
+    p = run("cut", "--lx", "0.40", "--stitches", "8x10", "--max-time-ms", "10", "--out", str(tmp_path), "--json")
+    assert p.returncode == 0, p.stderr
+    summary = json.loads(p.stdout.strip().splitlines()[-1])
+    for key in ("fx_ini", "fx_fin", "n_lad_over_ny", "v_lad_over_cb", "lx_over_l0", "ly_over_l0", "wall_s"):
+        assert key in summary
+    assert summary["fx_ini"] > 2.0
+    assert summary["n_lad_over_ny"] >= 0.2  # at least two cells undone
+    assert summary["fx_fin"] < summary["fx_ini"]  # the freed yarn relaxes the fabric
+    with h5py.File(tmp_path / "ladder.h5") as f:
+        assert f["frames/positions"].shape[0] >= 1
+        assert f.attrs["scale_f0_N"] == pytest.approx(0.01477, abs=1e-4)
+        assert len(f["series/front_up"]) == len(f["series/time"])
+    assert (tmp_path / "spatio_temporal.png").stat().st_size > 1000

@@ -1,0 +1,103 @@
+"""Observables on synthetic data: laddered-cell detection, the front, v_lad, tension, periodicity."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import knitlad as kl
+from knitlad.measure import (
+    cell_overlap,
+    ladder_front,
+    laddered_cells,
+    laddering_velocity,
+    periodicities,
+    tension_per_thread,
+)
+from knitlad.scenes.jersey import Jersey, build_jersey
+from knitlad.state import cut_edge
+
+L0 = kl.NYLON.stitch_length
+
+
+@pytest.fixture(scope="module")
+def knit():
+    return build_jersey(Jersey(n_x=6, n_y=6, l_x=0.3 * L0, l_y=0.25 * L0, nodes_per_stitch=24))
+
+
+def rows_of(knit, x):
+    s = knit.state
+    return [x[s.yarn_start[y]: s.yarn_start[y + 1]] for y in knit.courses + [knit.bars[1]]]
+
+
+def unit(knit):
+    g = knit.geometry
+    return g.column_x(np.arange(g.n_x)) / kl.units.LENGTH, g.l_x / kl.units.LENGTH, g.l_y / kl.units.LENGTH
+
+
+def test_an_intact_knit_has_no_laddered_cell(knit):
+    cols, lx, ly = unit(knit)
+    overlap = cell_overlap(rows_of(knit, knit.state.x), cols, lx)
+    assert np.all(overlap > 0.1 * ly)
+    assert not laddered_cells(overlap, ly).any()
+
+
+def test_a_flattened_head_is_detected_as_exactly_one_laddered_cell(knit):
+    """Pull the head of course 2 at column 3 down onto the course line: that cell, and only it."""
+    cols, lx, ly = unit(knit)
+    x = knit.state.x.copy()
+    nodes = knit.course_nodes(2)
+    course = x[nodes]
+    head = np.abs(course[:, 0] - cols[3]) < 0.45 * lx
+    course[head, 1] = np.minimum(course[head, 1], 2 * ly - 0.3 * ly)
+    x[nodes] = course
+    lad = laddered_cells(cell_overlap(rows_of(knit, x), cols, lx), ly)
+    assert lad[2, 3]
+    assert lad.sum() == 1
+
+
+def test_ladder_front_counts_the_run_through_the_cut():
+    lad = np.zeros((10, 5), dtype=bool)
+    lad[4:8, 2] = True  # cut row 4: three above, none below
+    lad[9, 2] = True  # an isolated cell beyond a gap does not extend the front
+    assert ladder_front(lad, 2, 4) == (3, 0)
+    lad[2:4, 2] = True
+    assert ladder_front(lad, 2, 4) == (3, 2)
+
+
+def test_laddering_velocity_recovers_a_constant_front_speed():
+    """A front advancing one stitch every 0.1 ms with jitter: v = l_y / 0.1 ms within 1 %."""
+    rng = np.random.default_rng(0)
+    t = np.arange(0, 2e-3, 5e-6)
+    front = np.floor(t / 1e-4 + 0.05 * rng.standard_normal(t.size)).clip(min=0)
+    v = laddering_velocity(t, front, l_y=2.5e-3)
+    assert v == pytest.approx(2.5e-3 / 1e-4, rel=0.01)
+    assert np.isnan(laddering_velocity(t[:10], front[:10], l_y=2.5e-3))  # never reaches stitch 10
+
+
+def test_tension_per_thread_averages_the_two_ends():
+    r = np.zeros((6, 3))
+    r[[0, 1], 0] = -2.0  # left ends pulled outward
+    r[[4, 5], 0] = 2.0
+    assert tension_per_thread(r, np.array([0, 1]), np.array([4, 5]), f0=0.5) == pytest.approx(4.0)
+
+
+def test_periodicities_of_the_built_knit(knit):
+    cols, lx, ly = unit(knit)
+    mlx, mly = periodicities(rows_of(knit, knit.state.x)[:-1], cols, lx)
+    assert mlx == pytest.approx(lx, rel=1e-3) and mly == pytest.approx(ly, rel=1e-3)
+
+
+def test_cut_edge_splits_a_yarn_and_frees_its_ends(knit):
+    s = knit.state
+    y = knit.courses[2]
+    start = int(s.yarn_start[y])
+    edge = int(np.flatnonzero(s.edge_a == start + 30)[0])
+    cut = cut_edge(s, edge)
+    assert cut.n_yarns == s.n_yarns + 1
+    assert cut.edge_a.shape[0] == s.edge_a.shape[0] - 1
+    assert cut.hinge_e0.shape[0] == s.hinge_e0.shape[0] - 2
+    assert cut.yarn_of(start + 31) == (y + 1, 0)
+    # no hinge bends across the cut, and every hinge still joins two consecutive edges
+    assert not np.any((cut.edge_b[cut.hinge_e0] == start + 31) & (cut.edge_a[cut.hinge_e0] == start + 30))
+    assert np.all(cut.edge_b[cut.hinge_e0] == cut.edge_a[cut.hinge_e1])
