@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
+import numba
 import numpy as np
 
 from knitlad import units
@@ -86,6 +87,7 @@ class Contacts(NamedTuple):
     exclusion: np.ndarray  # (n_yarns,) edges excluded either side along a yarn
     params: np.ndarray  # K_N, DAMP_N, K_T, DAMP_T, MU, SKIN
     stats: np.ndarray  # touching pairs, max overlap, sum f_n, sliding pairs
+    threads: np.ndarray  # (1,) blocks the broad phase is split into (Numba threads)
 
 
 def edge_topology(state: RodState) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -160,6 +162,7 @@ def make_contacts(state: RodState, model: ContactModel | None, capacity: int | N
         exclusion=exclusion,
         params=params,
         stats=np.zeros(4),
+        threads=np.array([numba.get_num_threads()], dtype=np.int64),
     )
     if previous is not None:
         m = int(previous.n_pairs[0])

@@ -81,13 +81,19 @@ class Workspace(NamedTuple):
     d2: np.ndarray
     force: np.ndarray  # (n, 3) total force on each node
     torque: np.ndarray  # (ne,) torque about each edge tangent
+    yarn_edges: np.ndarray  # (n_yarns + 1,) first edge of each yarn (edges are stored yarn by yarn)
+    yarn_hinges: np.ndarray  # (n_yarns + 1,) first hinge of each yarn
 
     @staticmethod
     def for_state(state: RodState) -> "Workspace":
         ne = state.edge_a.shape[0]
         n = state.x.shape[0]
+        yarns = np.arange(state.n_yarns + 1)
+        edge_yarn = state.node_yarn[state.edge_a]
+        hinge_yarn = edge_yarn[state.hinge_e1]
         return Workspace(
-            np.zeros((ne, 3)), np.zeros(ne), np.zeros((ne, 3)), np.zeros((ne, 3)), np.zeros((n, 3)), np.zeros(ne)
+            np.zeros((ne, 3)), np.zeros(ne), np.zeros((ne, 3)), np.zeros((ne, 3)), np.zeros((n, 3)), np.zeros(ne),
+            np.searchsorted(edge_yarn, yarns).astype(np.int64), np.searchsorted(hinge_yarn, yarns).astype(np.int64),
         )
 
 

@@ -27,11 +27,12 @@ Every edge is a capsule (a cylinder of its yarn's radius with spherical caps).
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from knitlad.kernels.vec import cross, dot
 
 NUMBA_OPTS = dict(cache=True, error_model="numpy", fastmath={"nsz", "arcp", "contract", "afn", "reassoc"})
+PARALLEL_OPTS = dict(NUMBA_OPTS, parallel=True)
 
 PARALLEL_EPS = 1e-10
 
@@ -137,28 +138,35 @@ def excluded_pair(i, j, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusio
     return gap <= exclusion[y]
 
 
-@njit(**NUMBA_OPTS)
+@njit(**PARALLEL_OPTS)
 def build_candidate_pairs(
     x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion,
-    cell_size, skin, pairs, keys,
+    cell_size, skin, pairs, keys, n_threads=1,
 ):
     """Fill ``pairs`` (cap, 2) with candidate edge pairs (i < j), sorted; return how many were found.
 
-    A return value above ``pairs.shape[0]`` means the buffer overflowed (only the
-    first ``cap`` are stored, unsorted): grow it and call again.
+    A return value above ``pairs.shape[0]`` means the buffer overflowed (the
+    buffer's content is then undefined): grow it and call again. Blocks of edges
+    are searched in parallel.
     """
     ne = edge_a.shape[0]
     cap = pairs.shape[0]
     table = 2 * ne + 1
     cells = np.empty((ne, 3), dtype=np.int64)
+    mid = np.empty((ne, 3))
+    reach = np.empty(ne)  # bounding-sphere radius of the capsule plus half the skin
     bucket_count = np.zeros(table + 1, dtype=np.int64)
+    inv = 1.0 / cell_size
     for k in range(ne):
         a = edge_a[k]
         b = edge_b[k]
-        inv = 1.0 / cell_size
-        cells[k, 0] = int(math.floor(0.5 * (x[a, 0] + x[b, 0] + edge_shift[k, 0]) * inv))
-        cells[k, 1] = int(math.floor(0.5 * (x[a, 1] + x[b, 1] + edge_shift[k, 1]) * inv))
-        cells[k, 2] = int(math.floor(0.5 * (x[a, 2] + x[b, 2] + edge_shift[k, 2]) * inv))
+        half2 = 0.0
+        for d in range(3):
+            xb = x[b, d] + edge_shift[k, d]
+            mid[k, d] = 0.5 * (x[a, d] + xb)
+            half2 += 0.25 * (xb - x[a, d]) ** 2
+            cells[k, d] = int(math.floor(mid[k, d] * inv))
+        reach[k] = math.sqrt(half2) + edge_radius[k] + 0.5 * skin
         bucket_count[_cell_hash(cells[k, 0], cells[k, 1], cells[k, 2], table) + 1] += 1
     for h in range(table):
         bucket_count[h + 1] += bucket_count[h]
@@ -168,8 +176,47 @@ def build_candidate_pairs(
         h = _cell_hash(cells[k, 0], cells[k, 1], cells[k, 2], table)
         order[fill[h]] = k
         fill[h] += 1
+    # candidates of each block of edges, found in parallel, then concatenated in order
+    n_blocks = max(1, min(n_threads, ne))
+    block_cap = cap  # blocks can be very unequal (e.g. all partners j > i on the first yarns)
+    local = np.empty((n_blocks, block_cap, 2), dtype=np.int64)
+    found = np.zeros(n_blocks, dtype=np.int64)
+    for blk in prange(n_blocks):
+        lo = blk * ne // n_blocks
+        hi = (blk + 1) * ne // n_blocks
+        found[blk] = _candidates_of_block(
+            lo, hi, x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed,
+            exclusion, skin, cells, mid, reach, bucket_count, order, table, local[blk],
+        )
     n = 0
-    for i in range(ne):
+    for blk in range(n_blocks):
+        n += found[blk]
+    if n > cap or np.any(found > block_cap):
+        return max(n, cap + 1)
+    p = 0
+    for blk in range(n_blocks):
+        for q in range(found[blk]):
+            pairs[p, 0] = local[blk, q, 0]
+            pairs[p, 1] = local[blk, q, 1]
+            keys[p] = pairs[p, 0] * ne + pairs[p, 1]
+            p += 1
+    # blocks run in edge order and each edge's partners are sorted below: keys end up sorted
+    return n
+
+
+@njit(**NUMBA_OPTS)
+def _candidates_of_block(
+    lo, hi, x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed,
+    exclusion, skin, cells, mid, reach, bucket_count, order, table, out,
+):
+    """Candidate pairs (i, j > i) for edges i in [lo, hi) into ``out``; partners of each i sorted.
+
+    Returns how many were found (may exceed ``out``'s size: then only the count is valid).
+    """
+    cap = out.shape[0]
+    n = 0
+    for i in range(lo, hi):
+        first = n
         for ox in range(-1, 2):
             for oy in range(-1, 2):
                 for oz in range(-1, 2):
@@ -181,24 +228,28 @@ def build_candidate_pairs(
                         j = order[idx]
                         if j <= i or cells[j, 0] != cx or cells[j, 1] != cy or cells[j, 2] != cz:
                             continue
+                        # bounding spheres first: most neighbours in the 27 cells are far
+                        r = reach[i] + reach[j]
+                        dm = (mid[i, 0] - mid[j, 0]) ** 2 + (mid[i, 1] - mid[j, 1]) ** 2 + (mid[i, 2] - mid[j, 2]) ** 2
+                        if dm > r * r:
+                            continue
                         if excluded_pair(i, j, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion):
                             continue
                         dist, _, _ = segment_distance(x, edge_a, edge_b, edge_shift, i, j)
                         if dist < edge_radius[i] + edge_radius[j] + skin:
                             if n < cap:
-                                pairs[n, 0] = i
-                                pairs[n, 1] = j
+                                out[n, 0] = i
+                                out[n, 1] = j
                             n += 1
-    if n <= cap:
-        for p in range(n):
-            keys[p] = pairs[p, 0] * ne + pairs[p, 1]
-        perm = np.argsort(keys[:n])
-        tmp = pairs[:n].copy()
-        ktmp = keys[:n].copy()
-        for p in range(n):
-            pairs[p, 0] = tmp[perm[p], 0]
-            pairs[p, 1] = tmp[perm[p], 1]
-            keys[p] = ktmp[perm[p]]
+        # insertion sort of this edge's partners (a handful)
+        if n <= cap:
+            for a in range(first + 1, n):
+                v = out[a, 1]
+                b = a - 1
+                while b >= first and out[b, 1] > v:
+                    out[b + 1, 1] = out[b, 1]
+                    b -= 1
+                out[b + 1, 1] = v
     return n
 
 
@@ -391,7 +442,7 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
     cell = longest + 2.0 * r_max + skin
     n = build_candidate_pairs(
         x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_yarn, c.edge_local, c.yarn_edges,
-        c.yarn_closed, c.exclusion, cell, skin, c.pairs, c.keys,
+        c.yarn_closed, c.exclusion, cell, skin, c.pairs, c.keys, c.threads[0],
     )
     if n > c.pairs.shape[0]:
         c.pairs[:n_old] = old_pairs

@@ -20,9 +20,11 @@ NUMBA_OPTS = dict(cache=True, error_model="numpy", fastmath={"nsz", "arcp", "con
 
 
 @njit(**NUMBA_OPTS)
-def edge_vectors(x, edge_a, edge_b, edge_shift, e, elen):
-    """e^k = x_b + shift - x_a and |e^k| into ``e`` (ne, 3) and ``elen`` (ne,)."""
-    for k in range(edge_a.shape[0]):
+def edge_vectors(x, edge_a, edge_b, edge_shift, e, elen, first=0, last=-1):
+    """e^k = x_b + shift - x_a and |e^k| into ``e`` (ne, 3) and ``elen`` (ne,), for edges [first, last)."""
+    if last < 0:
+        last = edge_a.shape[0]
+    for k in range(first, last):
         a = edge_a[k]
         b = edge_b[k]
         ex = x[b, 0] + edge_shift[k, 0] - x[a, 0]
@@ -35,14 +37,17 @@ def edge_vectors(x, edge_a, edge_b, edge_shift, e, elen):
 
 
 @njit(**NUMBA_OPTS)
-def stretching_forces(e, elen, v, edge_a, edge_b, rest_length, EA, damping, F):
+def stretching_forces(e, elen, v, edge_a, edge_b, rest_length, EA, damping, F, first=0, last=-1):
     """Axial spring plus internal dashpot on every edge.
 
     Energy E_s = EA (|e| - |e_bar|)^2 / (2 |e_bar|); tension
     T = EA (|e|/|e_bar| - 1) + c d|e|/dt, with c the edge's dashpot coefficient
     (Kelvin-Voigt: it damps axial vibration, never rigid motion or bending).
+    Edges [first, last) (all by default).
     """
-    for k in range(edge_a.shape[0]):
+    if last < 0:
+        last = edge_a.shape[0]
+    for k in range(first, last):
         a = edge_a[k]
         b = edge_b[k]
         inv = 1.0 / elen[k]
@@ -70,7 +75,7 @@ def stretching_energy(elen, rest_length, EA):
 
 
 @njit(**NUMBA_OPTS)
-def bending_forces(e, elen, edge_a, edge_b, hinge_e0, hinge_e1, B_over_l, F):
+def bending_forces(e, elen, edge_a, edge_b, hinge_e0, hinge_e1, B_over_l, F, first=0, last=-1):
     """Isotropic DER bending of a rod straight at rest (no material frame).
 
     E_b = sum_h B |kb_h|^2 / (2 l_h), DER08 eq. for an isotropic rod with zero
@@ -78,8 +83,11 @@ def bending_forces(e, elen, edge_a, edge_b, hinge_e0, hinge_e1, B_over_l, F):
     r = (B/l) kb, the exact gradients are
         dE/da = (2 b x r - (kb.r)(|b| a/|a| + b)) / D
         dE/db = (-2 a x r - (kb.r)(|a| b/|b| + a)) / D.
+    Hinges [first, last) (all by default).
     """
-    for h in range(hinge_e0.shape[0]):
+    if last < 0:
+        last = hinge_e0.shape[0]
+    for h in range(first, last):
         k0 = hinge_e0[h]
         k1 = hinge_e1[h]
         ax, ay, az = e[k0, 0], e[k0, 1], e[k0, 2]

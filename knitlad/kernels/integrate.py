@@ -7,7 +7,7 @@ step. ``s`` is a :class:`knitlad.state.RodState`, ``w`` a
 
 import math
 
-from numba import njit
+from numba import njit, prange
 
 from knitlad.kernels.elastic import (
     bending_energy,
@@ -23,6 +23,22 @@ from knitlad.kernels.frames import material_frames, transport_reference_frames, 
 
 # fast-math without "nnan"/"ninf", so the blow-up guard still sees NaN and infinity
 NUMBA_OPTS = dict(cache=True, error_model="numpy", fastmath={"nsz", "arcp", "contract", "afn", "reassoc"})
+PARALLEL_OPTS = dict(NUMBA_OPTS, parallel=True)
+
+
+@njit(**PARALLEL_OPTS)
+def elastic_forces_by_yarn(s, w):
+    """Stretching and isotropic bending, yarn by yarn in parallel.
+
+    A yarn's edges and hinges only touch its own nodes, so threads never write
+    the same node (edges and hinges are stored yarn by yarn: see Workspace).
+    """
+    for y in prange(w.yarn_edges.shape[0] - 1):
+        e0, e1 = w.yarn_edges[y], w.yarn_edges[y + 1]
+        edge_vectors(s.x, s.edge_a, s.edge_b, s.edge_shift, w.e, w.elen, e0, e1)
+        stretching_forces(w.e, w.elen, s.v, s.edge_a, s.edge_b, s.rest_length, s.EA, s.stretch_damping, w.force, e0, e1)
+        bending_forces(w.e, w.elen, s.edge_a, s.edge_b, s.hinge_e0, s.hinge_e1, s.B_over_l, w.force,
+                       w.yarn_hinges[y], w.yarn_hinges[y + 1])
 
 
 @njit(**NUMBA_OPTS)
@@ -45,9 +61,9 @@ def compute_forces(s, w, c, twist, drag, dt):
             for k in range(3):
                 w.force[i, k] -= drag * s.mass[i] * s.v[i, k]
     w.torque[:] = 0.0
-    edge_vectors(s.x, s.edge_a, s.edge_b, s.edge_shift, w.e, w.elen)
-    stretching_forces(w.e, w.elen, s.v, s.edge_a, s.edge_b, s.rest_length, s.EA, s.stretch_damping, w.force)
     if twist:
+        edge_vectors(s.x, s.edge_a, s.edge_b, s.edge_shift, w.e, w.elen)
+        stretching_forces(w.e, w.elen, s.v, s.edge_a, s.edge_b, s.rest_length, s.EA, s.stretch_damping, w.force)
         transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u)
         update_reference_twist(s.tangent, s.ref_u, s.hinge_e0, s.hinge_e1, s.ref_twist)
         material_frames(s.tangent, s.ref_u, s.theta, w.d1, w.d2)
@@ -56,7 +72,7 @@ def compute_forces(s, w, c, twist, drag, dt):
             s.B_over_l, s.GJ_over_l, s.kappa_bar, s.ref_twist, s.twist_bar, s.theta, w.force, w.torque,
         )
     else:
-        bending_forces(w.e, w.elen, s.edge_a, s.edge_b, s.hinge_e0, s.hinge_e1, s.B_over_l, w.force)
+        elastic_forces_by_yarn(s, w)
     if c.pairs.shape[0] > 0:
         if not refresh_contacts(s.x, s.edge_a, s.edge_b, s.edge_shift, c):
             return False
