@@ -120,6 +120,8 @@ def cut(
     from knitlad.plots import spatio_temporal_diagram
     from knitlad.protocol import LadderRun
 
+    from knitlad.simulation import SimulationBlowUp
+
     progress = _StageProgress()
     run = LadderRun(cfg.settings(), progress=progress)
     try:
@@ -128,6 +130,10 @@ def cut(
         progress.close()
         typer.echo("knitlad: interrupted; nothing written", err=True)
         raise typer.Exit(130)
+    except (RuntimeError, SimulationBlowUp) as e:  # the run failed (not bad input): one line, exit 1
+        progress.close()
+        typer.echo(f"knitlad: run failed: {e}", err=True)
+        raise typer.Exit(1)
     progress.close()
     h5 = write_ladder_result(out_dir / "ladder.h5", result, run.sim.state.yarn_start)
     png = spatio_temporal_diagram(result, out_dir / "spatio_temporal.png")

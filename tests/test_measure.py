@@ -56,13 +56,15 @@ def test_a_flattened_head_is_detected_as_exactly_one_laddered_cell(knit):
     assert lad.sum() == 1
 
 
-def test_ladder_front_counts_the_run_through_the_cut():
-    lad = np.zeros((10, 5), dtype=bool)
-    lad[4:8, 2] = True  # cut row 4: three above, none below
-    lad[9, 2] = True  # an isolated cell beyond a gap does not extend the front
+def test_ladder_front_follows_the_run_from_the_cut_across_small_gaps():
+    lad = np.zeros((14, 5), dtype=bool)
+    lad[5:8, 2] = True  # cut row 4: the cell just above still holds, then three undone
+    assert ladder_front(lad, 2, 4) == (3, 0)
+    lad[12, 2] = True  # beyond a gap of four intact cells: not part of this ladder
     assert ladder_front(lad, 2, 4) == (3, 0)
     lad[2:4, 2] = True
     assert ladder_front(lad, 2, 4) == (3, 2)
+    assert ladder_front(lad, 1, 4) == (0, 0)
 
 
 def test_laddering_velocity_recovers_a_constant_front_speed():

@@ -121,6 +121,16 @@ def owns_contact(x, edge_a, edge_b, edge_shift, i, j, s, t, edge_prev, edge_next
 
 
 @njit(**NUMBA_OPTS)
+def counted_overlap(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, i, j):
+    """(overlap, s, t) of the pair (i, j); overlap <= 0 when apart or owned by a neighbouring edge."""
+    dist, s, t = segment_distance(x, edge_a, edge_b, edge_shift, i, j)
+    overlap = edge_radius[i] + edge_radius[j] - dist
+    if overlap > 0.0 and not owns_contact(x, edge_a, edge_b, edge_shift, i, j, s, t, edge_prev, edge_next):
+        overlap = 0.0
+    return overlap, s, t
+
+
+@njit(**NUMBA_OPTS)
 def _cell_hash(cx, cy, cz, table_size):
     h = (cx * 73856093) ^ (cy * 19349663) ^ (cz * 83492791)
     return h % table_size
@@ -299,13 +309,13 @@ def contact_forces(
     for p in range(n_pairs):
         i = pairs[p, 0]
         j = pairs[p, 1]
-        dist, s, t = segment_distance(x, edge_a, edge_b, edge_shift, i, j)
-        overlap = edge_radius[i] + edge_radius[j] - dist
-        if overlap <= 0.0 or not owns_contact(x, edge_a, edge_b, edge_shift, i, j, s, t, edge_prev, edge_next):
+        overlap, s, t = counted_overlap(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, i, j)
+        if overlap <= 0.0:
             slip[p, 0] = 0.0
             slip[p, 1] = 0.0
             slip[p, 2] = 0.0
             continue
+        dist = edge_radius[i] + edge_radius[j] - overlap
         a0 = edge_a[i]
         a1 = edge_b[i]
         b0 = edge_a[j]
@@ -406,9 +416,8 @@ def contact_energy(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_n
     for p in range(n_pairs):
         i = pairs[p, 0]
         j = pairs[p, 1]
-        dist, s, t = segment_distance(x, edge_a, edge_b, edge_shift, i, j)
-        overlap = edge_radius[i] + edge_radius[j] - dist
-        if overlap > 0.0 and owns_contact(x, edge_a, edge_b, edge_shift, i, j, s, t, edge_prev, edge_next):
+        overlap, _, _ = counted_overlap(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, i, j)
+        if overlap > 0.0:
             total += 0.5 * k_n * overlap * overlap
             total += 0.5 * k_t * (slip[p, 0] ** 2 + slip[p, 1] ** 2 + slip[p, 2] ** 2)
     return total

@@ -36,6 +36,20 @@ def edge_vectors(x, edge_a, edge_b, edge_shift, e, elen, first=0, last=-1):
         elen[k] = math.sqrt(ex * ex + ey * ey + ez * ez)
 
 
+@njit(inline="always", **NUMBA_OPTS)
+def _add_hinge_forces(F, prev, centre, nxt, gax, gay, gaz, gbx, gby, gbz):
+    """Forces of a hinge energy E(e0, e1), e0 = x_c - x_p, e1 = x_n - x_c, from g_a = dE/de0, g_b = dE/de1."""
+    F[prev, 0] += gax
+    F[prev, 1] += gay
+    F[prev, 2] += gaz
+    F[centre, 0] += gbx - gax
+    F[centre, 1] += gby - gay
+    F[centre, 2] += gbz - gaz
+    F[nxt, 0] -= gbx
+    F[nxt, 1] -= gby
+    F[nxt, 2] -= gbz
+
+
 @njit(**NUMBA_OPTS)
 def stretching_forces(e, elen, v, edge_a, edge_b, rest_length, EA, damping, F, first=0, last=-1):
     """Axial spring plus internal dashpot on every edge.
@@ -110,18 +124,7 @@ def bending_forces(e, elen, edge_a, edge_b, hinge_e0, hinge_e1, B_over_l, F, fir
         gbx = (-2.0 * arx - kr * (fb * bx + ax)) * inv_D
         gby = (-2.0 * ary - kr * (fb * by + ay)) * inv_D
         gbz = (-2.0 * arz - kr * (fb * bz + az)) * inv_D
-        p = edge_a[k0]
-        c = edge_b[k0]
-        nx = edge_b[k1]
-        F[p, 0] += gax
-        F[p, 1] += gay
-        F[p, 2] += gaz
-        F[c, 0] += gbx - gax
-        F[c, 1] += gby - gay
-        F[c, 2] += gbz - gaz
-        F[nx, 0] -= gbx
-        F[nx, 1] -= gby
-        F[nx, 2] -= gbz
+        _add_hinge_forces(F, edge_a[k0], edge_b[k0], edge_b[k1], gax, gay, gaz, gbx, gby, gbz)
 
 
 @njit(**NUMBA_OPTS)
@@ -202,18 +205,7 @@ def framed_bending_twisting_forces(
         gbx = i1 * (g1 * (-kap1 * ttx - c3x) + g2 * (-kap2 * ttx + c4x) + 0.5 * gm * kbx)
         gby = i1 * (g1 * (-kap1 * tty - c3y) + g2 * (-kap2 * tty + c4y) + 0.5 * gm * kby)
         gbz = i1 * (g1 * (-kap1 * ttz - c3z) + g2 * (-kap2 * ttz + c4z) + 0.5 * gm * kbz)
-        p = edge_a[k0]
-        c = edge_b[k0]
-        nx = edge_b[k1]
-        F[p, 0] += gax
-        F[p, 1] += gay
-        F[p, 2] += gaz
-        F[c, 0] += gbx - gax
-        F[c, 1] += gby - gay
-        F[c, 2] += gbz - gaz
-        F[nx, 0] -= gbx
-        F[nx, 1] -= gby
-        F[nx, 2] -= gbz
+        _add_hinge_forces(F, edge_a[k0], edge_b[k0], edge_b[k1], gax, gay, gaz, gbx, gby, gbz)
         # torques -dE/dtheta
         kd1_0 = dot(kbx, kby, kbz, d1[k0, 0], d1[k0, 1], d1[k0, 2])
         kd2_0 = dot(kbx, kby, kbz, d2[k0, 0], d2[k0, 1], d2[k0, 2])
