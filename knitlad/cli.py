@@ -138,6 +138,12 @@ def cut(
     h5 = write_ladder_result(out_dir / "ladder.h5", result, run.sim.state.yarn_start)
     png = spatio_temporal_diagram(result, out_dir / "spatio_temporal.png")
     summary = result.summary()
+    if not result.fx_within_tolerance:
+        typer.echo(
+            f"knitlad: warning: f_x^ini = {result.fx_ini:.3f} is not within 2 % of the target {cfg.fx} "
+            "(the relaxed tension could not be matched); the run went on from there",
+            err=True,
+        )
     if json_out:
         typer.echo(json.dumps(summary, default=float))
         return

@@ -51,3 +51,11 @@ def test_cut_runs_a_ladder_end_to_end_on_a_small_knit(tmp_path):
         assert f.attrs["scale_f0_N"] == pytest.approx(0.01477, abs=1e-4)
         assert len(f["series/front_up"]) == len(f["series/time"])
     assert (tmp_path / "spatio_temporal.png").stat().st_size > 1000
+
+
+def test_a_run_that_cannot_reach_its_target_fails_in_one_line_with_exit_code_1(tmp_path):
+    """f_x = 0.05 is below the tension of the knit as built (~0.4 at l_x = 0.30 l0): position control is advised."""
+    p = run("cut", "--fx", "0.05", "--stitches", "8x10", "--out", str(tmp_path))
+    assert p.returncode == 1
+    last = p.stderr.strip().splitlines()[-1]
+    assert "run failed" in last and "--lx" in last and "Traceback" not in p.stderr
