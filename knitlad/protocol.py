@@ -162,9 +162,10 @@ class LadderRun:
         return course_rows(self.sim.state.x, self.sim.state.yarn_start, k.courses + [k.bars[1]])
 
     def column_centres(self) -> np.ndarray:
-        """Head x of each column [internal]: the knit is centred, so columns sit at (i - (n_x-1)/2) l_x."""
-        l_x = self.lx * self.s.material.stitch_length / units.LENGTH
-        return (np.arange(self.s.n_x) - 0.5 * (self.s.n_x - 1)) * l_x
+        """Head x of each column [internal]: the built columns, carried by the affine stretch."""
+        g = self.knit.geometry
+        scale = self.lx * self.s.material.stitch_length / g.l_x
+        return g.column_x(np.arange(g.n_x)) * scale / units.LENGTH
 
     def laddered(self) -> np.ndarray:
         l0 = self.s.material.stitch_length / units.LENGTH
@@ -195,11 +196,11 @@ class LadderRun:
             self._relax(self.s.steps_per_increment)
             readings.append(self.tension())
             if len(readings) >= 3:
-                f0, f1, f2 = readings[-3:]
-                curvature = f2 - 2 * f1 + f0
-                limit = f2 - (f2 - f1) ** 2 / curvature if abs(curvature) > 1e-12 else f2
-                if abs(f2 - limit) <= rtol * max(abs(limit), 0.1) and abs(f2 - f1) <= 4 * rtol * max(abs(f2), 0.1):
-                    return f2
+                older, old, new = readings[-3:]
+                curvature = new - 2 * old + older
+                limit = new - (new - old) ** 2 / curvature if abs(curvature) > 1e-12 else new
+                if abs(new - limit) <= rtol * max(abs(limit), 0.1) and abs(new - old) <= 4 * rtol * max(abs(new), 0.1):
+                    return new
         return readings[-1]
 
     def stretch_to(self, lx: float, ly: float, report: bool = False) -> None:
