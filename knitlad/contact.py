@@ -120,7 +120,6 @@ def make_contacts(state: RodState, model: ContactModel | None, capacity: int | N
     parameters are copied so the friction history and a changed mu survive the
     growth; the new buffer is rebuilt at the next step.
     """
-    n = state.x.shape[0]
     ne = state.edge_a.shape[0]
     edge_yarn, edge_local, yarn_edges, yarn_closed = edge_topology(state)
     edge_radius = 0.5 * (state.radius[state.edge_a] + state.radius[state.edge_b])

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 import time
 
-from knitlad import units
 from knitlad.scenes.rod import Cantilever
 from knitlad.simulation import Simulation
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from knitlad import units
 
 
 def tension_per_thread(reactions_N: np.ndarray, left_end: np.ndarray, right_end: np.ndarray, f0: float) -> float:

@@ -1,60 +1,15 @@
-"""Topology of yarn curves: the Gauss linking number of two closed polygons.
+"""Topology of yarn curves: how often a loop pierces the surface spanning another.
 
-Used to prove the jersey topology (each loop of row n+1 passes through the
-loop of row n) and to detect laddered cells (the two no longer link).
+A loop of course r+1 is pulled through the head of course r: as a U through a
+ring, it pierces the ring's spanning surface twice with opposite signs, so the
+two closed curves are *not* linked (a Gauss linking number is 0 for every local
+closure, which is why it is not used here). Used to prove the jersey topology.
 """
-
-import math
 
 import numpy as np
 from numba import njit
 
 from knitlad.kernels.vec import cross, dot
-
-
-@njit(cache=True)
-def _solid_angle(p1, p2, p3, p4):
-    """Signed solid angle of segment p1p2 seen against segment p3p4 (Klenin & Langowski 2000)."""
-    r13 = p3 - p1
-    r14 = p4 - p1
-    r23 = p3 - p2
-    r24 = p4 - p2
-    n = np.empty((4, 3))
-    for k, (a, b) in enumerate(((r13, r14), (r14, r24), (r24, r23), (r23, r13))):
-        cx, cy, cz = cross(a[0], a[1], a[2], b[0], b[1], b[2])
-        nn = math.sqrt(cx * cx + cy * cy + cz * cz)
-        if nn < 1e-300:
-            return 0.0
-        n[k, 0] = cx / nn
-        n[k, 1] = cy / nn
-        n[k, 2] = cz / nn
-    omega = 0.0
-    for k in range(4):
-        c = dot(n[k, 0], n[k, 1], n[k, 2], n[(k + 1) % 4, 0], n[(k + 1) % 4, 1], n[(k + 1) % 4, 2])
-        c = min(1.0, max(-1.0, c))
-        omega += math.asin(c)
-    r34 = p4 - p3
-    r12 = p2 - p1
-    sx, sy, sz = cross(r34[0], r34[1], r34[2], r12[0], r12[1], r12[2])
-    s = dot(sx, sy, sz, r13[0], r13[1], r13[2])
-    return omega if s > 0 else -omega
-
-
-@njit(cache=True)
-def linking_number(curve1, curve2):
-    """Gauss linking number of two closed polygons (m, 3) and (k, 3) (last point joins the first).
-
-    An integer (up to round-off) when the curves do not intersect.
-    """
-    total = 0.0
-    m = curve1.shape[0]
-    k = curve2.shape[0]
-    for i in range(m):
-        p1 = curve1[i]
-        p2 = curve1[(i + 1) % m]
-        for j in range(k):
-            total += _solid_angle(p1, p2, curve2[j], curve2[(j + 1) % k])
-    return total / (4.0 * math.pi)
 
 
 @njit(cache=True)

@@ -8,9 +8,7 @@ import pytest
 import knitlad as kl
 from knitlad.contact import ContactModel, make_contacts
 from knitlad.kernels.contact import segment_closest_points
-from knitlad.kernels.integrate import compute_forces
 from knitlad.scenes.weave import plain_weave
-from knitlad.state import Workspace
 
 D = kl.NYLON.diameter
 

@@ -90,7 +90,7 @@ def test_slider_pulled_slowly_to_just_below_mu_N_still_sticks():
 def test_slider_slides_above_mu_N_with_the_hand_computed_acceleration(mu):
     pull = 1.5 * mu * PRESS
     data, M, sim = run_slider(mu=mu, pull=pull)
-    t, x, vx = data[:, 0], data[:, 1], data[:, 4]
+    t, vx = data[:, 0], data[:, 4]
     late = t > 0.5 * t[-1]  # past the start-up transient
     accel = np.polyfit(t[late], vx[late], 1)[0]
     expected = (pull - mu * PRESS) / M
