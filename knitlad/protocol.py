@@ -31,7 +31,7 @@ from typing import Callable
 import numpy as np
 
 from knitlad import units
-from knitlad.contact import ContactModel
+from knitlad.contact import ContactModel, contact_time_step
 from knitlad.measure import (
     cell_overlap,
     course_rows,
@@ -44,6 +44,7 @@ from knitlad.measure import (
 from knitlad.scenes.jersey import Jersey, KnitScene, build_jersey
 from knitlad.simulation import Simulation
 from knitlad.state import cut_edge
+from knitlad.timestep import DEFAULT_SAFETY, critical_time_steps
 from knitlad.units import NYLON, Material
 
 BUILD_LX = 0.30  # widest l_x/l0 at which the built knit is in tension and its loops still overlap well
@@ -312,7 +313,9 @@ class LadderRun:
         apex = nodes.start + near[np.argmin(x[near, 1])]
         edge = int(np.flatnonzero(self.sim.state.edge_a == apex)[0])
         state = cut_edge(self.sim.state, edge)
-        sim = Simulation(state, contact=self.contact, dt_s=min(self.sim.dt_s, Simulation(state.copy(), contact=self.contact).dt_s))
+        # the cut frees two end nodes: keep the smaller of the old and the new stable step
+        limit = critical_time_steps(state, False, contact_time_step(state, self.contact)).combined * units.TIME
+        sim = Simulation(state, contact=self.contact, dt_s=min(self.sim.dt_s, DEFAULT_SAFETY * limit))
         sim.set_friction(self.s.mu)
         self.sim = sim
         return edge
