@@ -160,6 +160,90 @@ def cut(
     )
 
 
+@app.command()
+def sweep(
+    config: str = typer.Argument(..., help="Sweep config (YAML); see configs/ and knitlad.sweep."),
+    out: str = typer.Option(None, "--out", help="Output folder; default runs/<config name>."),
+    executor: str = typer.Option("pool", "--executor", help="pool (processes on this machine) or dask."),
+    scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address (default: a local cluster)."),
+    workers: int = typer.Option(None, "--workers", help="Parallel jobs (default: all cores), one Numba thread each."),
+    force: bool = typer.Option(False, "--force", help="Rerun jobs that already have a result."),
+    retry_failed: bool = typer.Option(False, "--retry-failed", help="Rerun jobs recorded as failed."),
+    dry_run: bool = typer.Option(False, "--dry-run", help="Validate and list the jobs, run nothing."),
+) -> None:
+    """Run a sweep: one job per point of the config, in a process pool or on a Dask cluster.
+
+    Finished jobs are skipped when the command is run again; the summary table
+    (summary.csv) always matches the job files, also after a crash or Ctrl-C.
+    """
+    from pathlib import Path
+
+    from knitlad.sweep import SweepError, load_sweep
+
+    if executor not in ("pool", "dask"):
+        fail(f"--executor: must be pool or dask, got {executor!r}")
+    if scheduler and executor != "dask":
+        fail("--scheduler: only with --executor dask")
+    if workers is not None and workers < 1:
+        fail(f"--workers: must be >= 1, got {workers}")
+    if executor == "dask":
+        try:
+            import distributed  # noqa: F401
+        except ImportError:
+            fail("--executor dask: needs the optional extra (pip install 'knitlad[dask]')")
+    try:
+        cfg, jobs = load_sweep(config)
+    except SweepError as e:
+        fail(str(e))
+    out_dir = Path(out) if out else Path("runs") / Path(config).stem
+    if dry_run:
+        for job in jobs:
+            typer.echo(f"{job.id}  " + " ".join(f"{k}={job.params[k]}" for k in cfg.sweep.axes))
+        typer.echo(f"{len(jobs)} jobs")
+        return
+    from knitlad.runner import run_sweep
+
+    typer.echo(f"{len(jobs)} jobs -> {out_dir} ({executor})", err=True)
+    outcome = run_sweep(jobs, out_dir, executor=executor, workers=workers, scheduler=scheduler, force=force,
+                        retry_failed=retry_failed, config_text=Path(config).read_text())
+    summary = out_dir / "summary.csv"
+    if outcome.interrupted:
+        typer.echo(f"knitlad: interrupted; {outcome.ran} jobs finished this time, summary in {summary}; "
+                   "run the same command again to go on", err=True)
+        raise typer.Exit(130)
+    typer.echo(f"{outcome.ran} jobs run ({outcome.failed} failed), {outcome.skipped} already done; summary: {summary}")
+    if outcome.failed:
+        for row in outcome.rows.values():
+            if row["status"] == "failed":
+                typer.echo(f"  failed {row['job_id']}: {row['error']}", err=True)
+        raise typer.Exit(1)
+
+
+@app.command()
+def plot(
+    folder: str = typer.Argument(..., help="A sweep folder (with summary.csv) written by knitlad sweep."),
+    diagrams: bool = typer.Option(True, "--diagrams/--no-diagrams", help="Also draw each job's spatio-temporal diagram."),
+) -> None:
+    """PNG figures of a sweep: n_lad/n_y, f_x^fin and v_lad/c_b against f_x^ini, and the spatio-temporal diagrams."""
+    from pathlib import Path
+
+    from knitlad.io.summary import read_summary
+    from knitlad.plots import spatio_temporal_from_file, summary_plots
+
+    try:
+        df = read_summary(folder)
+    except FileNotFoundError as e:
+        fail(str(e))
+    if not (df["status"] == "ok").any():
+        fail(f"{folder}: no finished job to plot yet")
+    fig_dir = Path(folder) / "plots"
+    paths = summary_plots(df, fig_dir)
+    if diagrams:
+        for job in df.loc[df["status"] == "ok", "job_id"]:
+            paths.append(spatio_temporal_from_file(Path(folder) / "jobs" / f"{job}.h5", fig_dir / f"{job}.png"))
+    typer.echo(f"wrote {len(paths)} figures in {fig_dir}")
+
+
 def main() -> None:  # pragma: no cover - console entry point
     sys.exit(app())
 

@@ -1,4 +1,8 @@
-"""Figures: the spatio-temporal diagram of a ladder (paper, Fig. 3b,d and Fig. 7)."""
+"""Figures: the spatio-temporal diagram of a ladder (paper, Fig. 3b,d and Fig. 7) and a sweep's
+summary plots (n_lad/n_y, f_x^fin and v_lad/c_b against f_x^ini: Fig. 3e, 3f, 5a).
+
+Every figure is written atomically (temporary file, then rename).
+"""
 
 from __future__ import annotations
 
@@ -8,33 +12,101 @@ from pathlib import Path
 import numpy as np
 
 
-def spatio_temporal_diagram(result, path: str | Path) -> Path:
-    """Laddered cells of the laddering column against time, with the front and the v_lad fit."""
+def _pyplot():
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    return plt
+
+
+def _save(fig, path: Path) -> Path:
+    tmp = path.with_name(path.name + ".tmp.png")
+    fig.savefig(tmp)
+    _pyplot().close(fig)
+    os.replace(tmp, path)
+    return path
+
+
+def draw_spatio_temporal(times_s, front_up, front_down, column_history, cut_row: int, title: str, path) -> Path:
+    """Laddered cells of the laddering column (grey) against time, with the two fronts."""
+    plt = _pyplot()
     path = Path(path)
-    t_ms = np.array(result.times_s) * 1e3
+    t_ms = np.asarray(times_s) * 1e3
     fig, ax = plt.subplots(figsize=(5, 3.5), dpi=120)
-    if result.column_history:
-        cells = np.array(result.column_history, dtype=float).T
+    if len(column_history):
+        cells = np.asarray(column_history, dtype=float).T
         ax.imshow(cells, origin="lower", aspect="auto", cmap="Greys", vmin=0, vmax=1.5,
                   extent=(t_ms[0], t_ms[-1], -0.5, cells.shape[0] - 0.5) if t_ms.size > 1 else None)
-    r0 = result.settings.n_y // 2
-    ax.plot(t_ms, r0 + np.array(result.front_up), color="tab:red", lw=1.2, label="front (up)")
-    ax.plot(t_ms, r0 - np.array(result.front_down), color="tab:blue", lw=1.2, label="front (down)")
-    ax.axhline(r0, color="k", lw=0.5, ls=":")
+    ax.plot(t_ms, cut_row + np.asarray(front_up), color="tab:red", lw=1.2, label="front (up)")
+    ax.plot(t_ms, cut_row - np.asarray(front_down), color="tab:blue", lw=1.2, label="front (down)")
+    ax.axhline(cut_row, color="k", lw=0.5, ls=":")
     ax.set_xlabel("time since the cut [ms]")
     ax.set_ylabel("course (stitch) index")
-    v = result.v_lad_over_cb
-    title = f"f_x^ini = {result.fx_ini:.2f}, v_lad/c_b = {v:.3f}" if np.isfinite(v) else f"f_x^ini = {result.fx_ini:.2f}"
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7, loc="upper left")
     fig.tight_layout()
-    tmp = path.with_name(path.name + ".tmp.png")
-    fig.savefig(tmp)
-    plt.close(fig)
-    os.replace(tmp, path)
-    return path
+    return _save(fig, path)
+
+
+def _title(fx_ini: float, v: float) -> str:
+    return f"f_x^ini = {fx_ini:.2f}, v_lad/c_b = {v:.3f}" if np.isfinite(v) else f"f_x^ini = {fx_ini:.2f}"
+
+
+def spatio_temporal_diagram(result, path: str | Path) -> Path:
+    """The diagram of a :class:`knitlad.protocol.LadderResult`."""
+    return draw_spatio_temporal(result.times_s, result.front_up, result.front_down, result.column_history,
+                                result.settings.n_y // 2, _title(result.fx_ini, result.v_lad_over_cb), path)
+
+
+def spatio_temporal_from_file(h5_path: str | Path, path: str | Path) -> Path:
+    """The diagram of a run stored by :func:`knitlad.io.hdf5.write_ladder_result`."""
+    import json
+
+    import h5py
+
+    with h5py.File(h5_path, "r") as f:
+        s = f["series"]
+        settings = json.loads(f.attrs["settings_json"])
+        hist = s["laddering_column_cells"][()] if "laddering_column_cells" in s else []
+        return draw_spatio_temporal(s["time"][()], s["front_up"][()], s["front_down"][()], hist,
+                                    settings["n_y"] // 2, _title(float(f.attrs["fx_ini"]), float(f.attrs["v_lad_over_cb"])),
+                                    path)
+
+
+SUMMARY_PLOTS = {
+    # file name: (y column, y label, paper figure)
+    "damage_vs_fx.png": ("n_lad_over_ny", "n_lad / n_y", "Fig. 3e"),
+    "fx_fin_vs_fx_ini.png": ("fx_fin", "f_x^fin", "Fig. 3f"),
+    "velocity_vs_fx.png": ("v_lad_over_cb", "v_lad / c_b", "Fig. 5a"),
+}
+
+
+def summary_plots(df, out_dir: str | Path) -> list[Path]:
+    """One PNG per entry of SUMMARY_PLOTS: finished jobs, one series per (l_y/l0, mu) pair."""
+    plt = _pyplot()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    ok = df[df["status"] == "ok"]
+    keys = [k for k in ("ly", "mu", "resolution") if k in ok and ok[k].nunique() > 1] or [None]
+    groups = ok.groupby(keys if keys != [None] else (lambda _: ""), sort=True)
+    paths = []
+    for name, (column, label, figure) in SUMMARY_PLOTS.items():
+        fig, ax = plt.subplots(figsize=(4.5, 3.4), dpi=120)
+        for key, g in groups:
+            g = g.sort_values("fx_ini")
+            key = key if isinstance(key, tuple) else (key,)
+            legend = ", ".join(f"{k} = {v}" for k, v in zip(keys, key) if k is not None) or None
+            ax.plot(g["fx_ini"], g[column], "o-", ms=4, label=legend)
+        if column == "fx_fin":
+            lim = float(np.nanmax(ok["fx_ini"])) if len(ok) else 1.0
+            ax.plot([0, lim], [0, lim], "k:", lw=0.8, label="f_x^fin = f_x^ini")
+        ax.set_xlabel("f_x^ini")
+        ax.set_ylabel(label)
+        ax.set_title(f"{label} against f_x^ini (paper {figure})", fontsize=9)
+        if ax.get_legend_handles_labels()[1]:
+            ax.legend(fontsize=7)
+        fig.tight_layout()
+        paths.append(_save(fig, out / name))
+    return paths

@@ -36,15 +36,22 @@ def _jsonable(obj):
     return obj
 
 
-def write_ladder_result(path: str | Path, result, yarn_start: np.ndarray, compression: str | None = "gzip") -> Path:
-    """Write one run to ``path`` atomically; returns the path."""
+def _set_attrs(f: h5py.File, attrs: dict) -> None:
+    for key, value in attrs.items():
+        f.attrs[key] = json.dumps(value) if isinstance(value, (list, dict)) else ("" if value is None else value)
+
+
+def write_ladder_result(
+    path: str | Path, result, yarn_start: np.ndarray, compression: str | None = "gzip", attrs: dict | None = None
+) -> Path:
+    """Write one run to ``path`` atomically; ``attrs`` adds file attributes (a sweep's job record)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".tmp")
     settings = result.settings
     with h5py.File(tmp, "w") as f:
-        for key, value in result.summary().items():
-            f.attrs[key] = json.dumps(value) if isinstance(value, (list, dict)) else value
+        _set_attrs(f, result.summary())
+        _set_attrs(f, attrs or {})
         f.attrs["knitlad_version"] = __version__
         f.attrs["settings_json"] = json.dumps(_jsonable(settings), default=str)
         for key, value in Scales(settings.material).as_attributes().items():
@@ -65,3 +72,33 @@ def write_ladder_result(path: str | Path, result, yarn_start: np.ndarray, compre
         f.create_dataset("topology/yarn_start", data=yarn_start)
     os.replace(tmp, path)
     return path
+
+
+def write_record(path: str | Path, attrs: dict) -> Path:
+    """A file holding attributes only (a failed sweep job: its config, status and error), atomically."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    with h5py.File(tmp, "w") as f:
+        _set_attrs(f, attrs)
+        f.attrs["knitlad_version"] = __version__
+    os.replace(tmp, path)
+    return path
+
+
+def read_attrs(path: str | Path) -> dict:
+    """The file attributes as plain Python values (JSON-encoded lists and dicts decoded)."""
+    out = {}
+    with h5py.File(path, "r") as f:
+        for key, value in f.attrs.items():
+            if isinstance(value, bytes):
+                value = value.decode()
+            if isinstance(value, str) and value[:1] in "[{":
+                try:
+                    value = json.loads(value)
+                except ValueError:
+                    pass
+            elif isinstance(value, np.generic):
+                value = value.item()
+            out[key] = value
+    return out

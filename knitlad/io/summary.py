@@ -1,0 +1,51 @@
+"""The sweep summary table (pandas): one row per job, written atomically as CSV (and Parquet).
+
+Columns: ``job_id``, ``scene``, the job's inputs (the fields of its scene config,
+in the config's units), ``status`` (pending, ok, failed), ``error``, then the
+results of :meth:`knitlad.protocol.LadderResult.summary` (f_x^ini, f_x^fin,
+n_lad/n_y, v_lad/c_b, measured l_x/l0 and l_y/l0, wall times, ...).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pandas as pd
+
+SUMMARY_KEYS = (
+    "fx_ini", "fx_fin", "n_lad", "n_lad_over_ny", "v_lad_over_cb", "lx_over_l0", "ly_over_l0",
+    "box_lx_over_l0", "fx_within_tolerance", "reached_edge", "stop_reason", "laddering_column",
+    "v_fit_stitches", "nodes", "steps", "relax_steps", "wall_s", "wall_stretch_s", "wall_propagate_s", "job_wall_s",
+)
+TIMING_COLUMNS = ("wall_s", "job_wall_s", "wall_stretch_s", "wall_propagate_s")
+
+
+def summary_frame(rows: list[dict]) -> pd.DataFrame:
+    return pd.DataFrame(rows)
+
+
+def write_summary(out_dir: str | Path, rows: list[dict]) -> Path:
+    """``out_dir/summary.csv`` (and ``summary.parquet`` if pyarrow is there), each by rename."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    df = summary_frame(rows)
+    path = out / "summary.csv"
+    tmp = out / "summary.csv.tmp"
+    df.to_csv(tmp, index=False)
+    os.replace(tmp, path)
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        return path
+    tmp = out / "summary.parquet.tmp"
+    df.to_parquet(tmp, index=False)
+    os.replace(tmp, out / "summary.parquet")
+    return path
+
+
+def read_summary(out_dir: str | Path) -> pd.DataFrame:
+    path = Path(out_dir) / "summary.csv"
+    if not path.exists():
+        raise FileNotFoundError(f"{path} not found (is {out_dir} a sweep folder?)")
+    return pd.read_csv(path)

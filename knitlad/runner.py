@@ -1,0 +1,321 @@
+"""Running sweep jobs: one job in a worker, many in a process pool or on a Dask cluster.
+
+Layout of a sweep folder::
+
+    DIR/jobs/<id>.h5     one file per job (its resolved config, status, error, results)
+    DIR/summary.csv      one row per job of the config (pending, ok or failed)
+    DIR/summary.parquet  the same, when pyarrow is installed
+    DIR/sweep.yaml       the config that was run
+
+A job's file appears only when the job has finished (atomic rename), so the
+folder never holds a half-written result: after a crash or Ctrl-C, rerunning the
+same command runs only the jobs without a file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import sys
+import time
+import traceback
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass, field
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Callable
+
+from knitlad import __version__
+from knitlad.io.hdf5 import read_attrs, write_ladder_result, write_record
+from knitlad.io.summary import SUMMARY_KEYS, write_summary
+from knitlad.sweep import Job
+
+
+def job_path(jobs_dir: str | Path, job: Job) -> Path:
+    return Path(jobs_dir) / f"{job.id}.h5"
+
+
+def _record(job: Job, status: str, error: str = "", wall_s: float = float("nan")) -> dict:
+    return {
+        "job_id": job.id,
+        "status": status,
+        "error": error,
+        "job_json": job.model_dump_json(),
+        "knitlad_version": __version__,
+        "job_wall_s": wall_s,
+    }
+
+
+def run_job(job: Job, jobs_dir: str, threads: int | None = 1) -> dict:
+    """Run one job and write its file; returns its summary row. Never raises for a failed run.
+
+    ``threads``: Numba threads for this job (1 in a pool: the pool is the parallelism).
+    """
+    import numba
+
+    if threads:
+        numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    path = job_path(jobs_dir, job)
+    t0 = time.perf_counter()
+    try:
+        from knitlad.protocol import LadderRun
+
+        run = LadderRun(job.scene_config().settings())
+        result = run.run()
+    except KeyboardInterrupt:
+        raise
+    except Exception as e:  # noqa: BLE001 - any failure of one job is recorded and the sweep goes on
+        message = f"{type(e).__name__}: {e}".splitlines()[0]
+        record = _record(job, "failed", message, time.perf_counter() - t0)
+        record["traceback"] = traceback.format_exc()
+        write_record(path, record)
+        return summary_row(job, record)
+    if not job.output.frames:
+        result.frames, result.frame_times_s = [], []
+    compression = None if job.output.compression == "none" else job.output.compression
+    record = _record(job, "ok", "", time.perf_counter() - t0)
+    write_ladder_result(path, result, run.sim.state.yarn_start, compression=compression, attrs=record)
+    return summary_row(job, {**result.summary(), **record})
+
+
+def summary_row(job: Job, attrs: dict | None) -> dict:
+    """One table row: the job's inputs, then its status and results."""
+    row = {"job_id": job.id, "scene": job.scene, **job.params}
+    if attrs is None:
+        return {**row, "status": "pending", "error": ""}
+    row["status"] = attrs.get("status", "ok")
+    row["error"] = attrs.get("error", "")
+    for key in SUMMARY_KEYS:
+        value = attrs.get(key, float("nan"))
+        row[key] = json.dumps(value) if isinstance(value, (list, dict)) else value
+    return row
+
+
+def finished_row(jobs_dir: str | Path, job: Job) -> dict | None:
+    """The row of a job that has a file, else None (an unreadable file counts as not run)."""
+    path = job_path(jobs_dir, job)
+    if not path.exists():
+        return None
+    try:
+        return summary_row(job, read_attrs(path))
+    except OSError:
+        return None
+
+
+# ---------------------------------------------------------------------- driver
+@dataclass
+class SweepOutcome:
+    rows: dict[str, dict] = field(default_factory=dict)  # job id -> row, in config order
+    ran: int = 0
+    failed: int = 0
+    skipped: int = 0
+    interrupted: bool = False
+
+
+class SweepProgress:
+    """One line on stderr: jobs done, failed, skipped and the ETA (redrawn in place on a terminal)."""
+
+    def __init__(self, total: int, skipped: int, stream=None) -> None:
+        self.total, self.skipped, self.done, self.failed = total, skipped, 0, 0
+        self.stream = stream or sys.stderr
+        self.tty = self.stream.isatty()
+        self.t0 = time.perf_counter()
+        self.draw()
+
+    def update(self, status: str) -> None:
+        self.done += 1
+        self.failed += status != "ok"
+        self.draw()
+
+    def draw(self) -> None:
+        todo = self.total - self.skipped
+        elapsed = time.perf_counter() - self.t0
+        eta = elapsed / self.done * (todo - self.done) if self.done else math.nan
+        frac = self.done / todo if todo else 1.0
+        bar = "#" * int(20 * frac) + "." * (20 - int(20 * frac))
+        eta_s = f"ETA {eta:6.0f} s" if math.isfinite(eta) else "ETA      ? s"
+        line = (f"sweep [{bar}] {self.done}/{todo} jobs, {self.failed} failed"
+                f"{f', {self.skipped} already done' if self.skipped else ''}  {elapsed:6.0f} s  {eta_s}")
+        self.stream.write(("\r" + line) if self.tty else line + "\n")
+        self.stream.flush()
+
+    def close(self) -> None:
+        if self.tty:
+            self.stream.write("\n")
+
+
+def _ignore_sigint() -> None:
+    # Ctrl-C goes to the whole process group: the parent alone decides what to keep
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def compile_kernels() -> None:
+    """Compile (or load from Numba's cache) every kernel a laddering job uses, on a tiny knit.
+
+    Run once in the parent before a pool starts, so that on a fresh clone the
+    workers load the cache instead of each compiling the same kernels.
+    """
+    from knitlad.protocol import LadderRun, LadderSettings
+
+    s = LadderSettings(n_x=4, n_y=6, lx_over_l0=0.30, fx_target=None, nodes_per_stitch=12,
+                       steps_per_increment=5, max_time_s=5e-6, observe_every_s=5e-6, arrest_s=5e-6)
+    LadderRun(s).run()
+
+
+Runner = Callable[[Job, str, int], dict]
+
+
+def run_sweep(
+    jobs: list[Job],
+    out_dir: str | Path,
+    executor: str = "pool",
+    workers: int | None = None,
+    scheduler: str | None = None,
+    force: bool = False,
+    retry_failed: bool = False,
+    progress: bool = True,
+    runner: Runner = run_job,
+    config_text: str | None = None,
+) -> SweepOutcome:
+    """Run the jobs that have no file yet (all with ``force``; failed ones too with ``retry_failed``).
+
+    The summary is rewritten after every finished job and once more at the end,
+    also after Ctrl-C (then ``interrupted`` is set and the unfinished jobs stay pending).
+    """
+    out = Path(out_dir)
+    jobs_dir = out / "jobs"
+    jobs_dir.mkdir(parents=True, exist_ok=True)
+    for stale in jobs_dir.glob("*.tmp"):  # left by a job killed while writing
+        stale.unlink()
+    if config_text is not None:
+        tmp = out / "sweep.yaml.tmp"
+        tmp.write_text(config_text)
+        os.replace(tmp, out / "sweep.yaml")
+    outcome = SweepOutcome()
+    todo = []
+    for job in jobs:
+        row = None if force else finished_row(jobs_dir, job)
+        if row is not None and (row["status"] == "ok" or not retry_failed):
+            outcome.rows[job.id] = row
+            outcome.skipped += 1
+        else:
+            outcome.rows[job.id] = summary_row(job, None)
+            todo.append(job)
+    write_summary(out, list(outcome.rows.values()))
+    bar = SweepProgress(len(jobs), outcome.skipped) if progress else None
+
+    def finish(job: Job, row: dict) -> None:
+        outcome.rows[job.id] = row
+        outcome.ran += 1
+        outcome.failed += row["status"] != "ok"
+        write_summary(out, list(outcome.rows.values()))
+        if bar:
+            bar.update(row["status"])
+
+    try:
+        if todo:
+            if executor == "dask":
+                _run_dask(todo, jobs_dir, workers, scheduler, runner, finish)
+            else:
+                _run_pool(todo, jobs_dir, workers, runner, finish)
+    except KeyboardInterrupt:
+        outcome.interrupted = True
+    finally:
+        for stale in jobs_dir.glob("*.tmp"):
+            stale.unlink(missing_ok=True)
+        write_summary(out, list(outcome.rows.values()))
+        if bar:
+            bar.close()
+    return outcome
+
+
+def _failed_row(jobs_dir: Path, job: Job, message: str) -> dict:
+    """Record a job whose worker died (killed, out of memory, segfault)."""
+    record = _record(job, "failed", message)
+    write_record(job_path(jobs_dir, job), record)
+    return summary_row(job, record)
+
+
+def _run_pool(todo: list[Job], jobs_dir: Path, workers: int | None, runner: Runner, finish) -> None:
+    """At most ``workers`` jobs in flight, so that when a worker dies the jobs it may have
+    been running are known: they are recorded as failed and a new pool takes the rest."""
+    workers = max(1, min(workers or os.cpu_count() or 1, len(todo)))
+    if workers > 1 and runner is run_job:
+        compile_kernels()
+    queue = list(reversed(todo))
+    ctx = get_context("spawn")  # a fresh interpreter per worker: no forked Numba thread pools
+    while queue:
+        pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_ignore_sigint)
+        running = {}
+        try:
+            while queue or running:
+                while queue and len(running) < workers:
+                    job = queue.pop()
+                    running[pool.submit(runner, job, str(jobs_dir), 1)] = job
+                done, _ = wait(running, return_when=FIRST_COMPLETED)
+                broken = False
+                for fut in done:
+                    job = running.pop(fut)
+                    try:
+                        finish(job, fut.result())
+                    except BrokenProcessPool:
+                        broken = True
+                        finish(job, _failed_row(jobs_dir, job, "worker process died (killed, out of memory or crashed)"))
+                if broken:
+                    for fut, job in running.items():
+                        finish(job, _failed_row(jobs_dir, job, "worker process died (killed, out of memory or crashed)"))
+                    running.clear()
+                    break
+        except BaseException:
+            _stop_pool(pool)
+            raise
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _stop_pool(pool: ProcessPoolExecutor) -> None:
+    """Stop the workers now (Ctrl-C): they ignore SIGINT, so terminate them."""
+    if hasattr(pool, "terminate_workers"):  # Python >= 3.14
+        pool.terminate_workers()
+        return
+    for p in list(getattr(pool, "_processes", {}).values()):
+        p.terminate()
+    pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _run_dask(todo: list[Job], jobs_dir: Path, workers: int | None, scheduler: str | None, runner: Runner, finish) -> None:
+    """The same jobs on a Dask cluster at ``scheduler`` (or a local one). ``DIR`` must be on a
+    file system the workers share (as on a Slurm cluster with dask-jobqueue)."""
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        raise RuntimeError("--executor dask needs the optional extra: pip install 'knitlad[dask]'") from None
+    if len(todo) > 1 and runner is run_job:
+        compile_kernels()  # the workers then load Numba's on-disk cache
+    cluster = None
+    if scheduler:
+        client = Client(scheduler)
+    else:
+        n = max(1, min(workers or os.cpu_count() or 1, len(todo)))
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+        client = Client(cluster)
+    futures = {}
+    try:
+        futures = {client.submit(runner, job, str(jobs_dir.resolve()), 1, key=f"knitlad-{job.id}", pure=False): job
+                   for job in todo}
+        for fut in as_completed(futures):
+            job = futures[fut]
+            try:
+                row = fut.result()
+            except Exception as e:  # noqa: BLE001 - a worker died (KilledWorker) or the task failed outside run_job
+                row = _failed_row(jobs_dir, job, f"{type(e).__name__}: {e}".splitlines()[0])
+            finish(job, row)
+    except BaseException:
+        client.cancel(list(futures))
+        raise
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

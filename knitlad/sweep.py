@@ -1,0 +1,226 @@
+"""Parameter sweeps: a YAML config, validated, expanded into jobs with stable ids, run in a pool.
+
+A sweep config (``knitlad sweep config.yaml --out DIR``)::
+
+    scene: ladder            # the laddering experiment of `knitlad cut`
+    fixed:                   # every job: the options of `knitlad cut`, same units
+      n_x: 8
+      n_y: 10
+      resolution: 16
+    sweep:
+      expand: grid           # grid: every combination; zip: the i-th values together
+      axes:
+        fx: [4, 8, 13.6]                          # a list ...
+        ly: {start: 0.25, stop: 0.30, num: 2}     # ... or a range (end included)
+    output:
+      frame_every_us: 100
+      compression: gzip
+
+Each job is the fully resolved scene config; its id is a hash of that config, so
+the same inputs always give the same id, and a finished job is found again by
+its file ``DIR/jobs/<id>.h5``. The summary table is rebuilt from those files,
+so it is always consistent with what is on disk, whatever interrupted the sweep.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from knitlad.config import CutConfig
+
+SCENES: dict[str, type[BaseModel]] = {"ladder": CutConfig}
+COMPRESSIONS = ("gzip", "lzf", "none")
+
+
+class SweepError(ValueError):
+    """A config that cannot be run: the message is one line, 'key: reason'."""
+
+
+class Range(BaseModel):
+    """Evenly spaced values from start to stop (both included): num of them, or every step."""
+
+    model_config = ConfigDict(extra="forbid")
+    start: float = Field(description="first value, in the axis' unit")
+    stop: float = Field(description="last value, in the axis' unit (included)")
+    num: int | None = Field(None, ge=1, le=10_000, description="number of values [-]")
+    step: float | None = Field(None, gt=0, description="spacing, in the axis' unit")
+
+    @model_validator(mode="after")
+    def one_spacing(self) -> "Range":
+        if (self.num is None) == (self.step is None):
+            raise ValueError("give num or step (one of them)")
+        if self.stop < self.start:
+            raise ValueError("stop must be >= start")
+        return self
+
+    def values(self) -> list[float]:
+        if self.num is not None:
+            n = self.num
+        else:
+            n = int(math.floor((self.stop - self.start) / self.step + 1e-9)) + 1
+        if n == 1:
+            return [self.start]
+        h = (self.stop - self.start) / (n - 1) if self.num is not None else self.step
+        return [round(self.start + k * h, 12) for k in range(n)]
+
+
+class Sweep(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    expand: Literal["grid", "zip"] = Field("grid", description="grid: all combinations; zip: i-th values together")
+    axes: dict[str, list[Any] | Range] = Field(description="swept fields of the scene config, each a list or a range")
+
+    @field_validator("axes", mode="before")
+    @classmethod
+    def ranges(cls, axes):
+        """A mapping is a Range: report its own error rather than 'not a list'."""
+        if not isinstance(axes, dict):
+            return axes
+        out = {}
+        for name, values in axes.items():
+            if isinstance(values, dict):
+                try:
+                    values = Range.model_validate(values)
+                except ValidationError as e:
+                    raise ValueError(f"{name}: {_first_error(e).replace('config: ', '')}") from None
+            elif not isinstance(values, list):
+                raise ValueError(f"{name}: give a list of values or a range {{start, stop, num or step}}, got {values!r}")
+            out[name] = values
+        return out
+
+    @field_validator("axes")
+    @classmethod
+    def not_empty(cls, axes: dict) -> dict:
+        if not axes:
+            raise ValueError("empty sweep: give at least one axis")
+        for name, values in axes.items():
+            if isinstance(values, list) and not values:
+                raise ValueError(f"axis {name!r} has no values")
+        return axes
+
+    def values(self) -> dict[str, list]:
+        return {k: v.values() if isinstance(v, Range) else list(v) for k, v in self.axes.items()}
+
+
+class Output(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    frame_every_us: float = Field(100.0, gt=0, description="interval between stored position frames [us]")
+    frames: bool = Field(True, description="store position frames at all (they dominate the file size)")
+    compression: Literal["gzip", "lzf", "none"] = Field("gzip", description="HDF5 compression of the frames")
+
+
+class SweepConfig(BaseModel):
+    """A whole sweep file (see the module docstring)."""
+
+    model_config = ConfigDict(extra="forbid")
+    scene: Literal["ladder"] = Field("ladder", description="what each job runs: ladder = `knitlad cut`")
+    fixed: dict[str, Any] = Field(default_factory=dict, description="scene fields common to all jobs (scene units)")
+    sweep: Sweep = Field(description="the swept axes and how they combine")
+    output: Output = Field(default_factory=Output, description="what each job writes")
+
+
+class Job(BaseModel):
+    """One fully resolved run; ``id`` is a hash of everything that determines its output."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    scene: str
+    params: dict[str, Any]
+    output: Output
+
+    @property
+    def id(self) -> str:
+        return job_id(self.scene, self.params, self.output)
+
+    def scene_config(self) -> BaseModel:
+        return SCENES[self.scene].model_validate(self.params)
+
+
+def job_id(scene: str, params: dict, output: Output) -> str:
+    blob = json.dumps({"scene": scene, "params": params, "output": output.model_dump()}, sort_keys=True)
+    return hashlib.sha256(blob.encode()).hexdigest()[:16]
+
+
+# --------------------------------------------------------------------- loading
+def _where(loc: tuple) -> str:
+    return ".".join(str(p) for p in loc if not (isinstance(p, str) and p in ("list[any]", "Range"))) or "config"
+
+
+def _first_error(error: ValidationError, prefix: tuple = ()) -> str:
+    e = error.errors()[0]
+    return f"{_where(prefix + tuple(e.get('loc', ())))}: {e.get('msg', str(error)).removeprefix('Value error, ')}"
+
+
+def load_sweep(path: str | Path) -> tuple[SweepConfig, list[Job]]:
+    """Read, validate and expand a sweep file; every problem raises SweepError('key: reason')."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as e:
+        raise SweepError(f"{path}: cannot read ({e.strerror or e})") from None
+    try:
+        raw = yaml.safe_load(text)
+    except yaml.YAMLError as e:
+        mark = getattr(e, "problem_mark", None)
+        where = f"line {mark.line + 1}" if mark is not None else "YAML"
+        raise SweepError(f"{path}: {where}: not valid YAML ({getattr(e, 'problem', None) or e})") from None
+    if not isinstance(raw, dict):
+        raise SweepError(f"{path}: the file must be a mapping with keys scene, fixed, sweep, output")
+    try:
+        cfg = SweepConfig.model_validate(raw)
+    except ValidationError as e:
+        raise SweepError(_first_error(e)) from None
+    return cfg, expand(cfg)
+
+
+def expand(cfg: SweepConfig) -> list[Job]:
+    """All jobs of a sweep, each validated by its scene's config (errors name the YAML key)."""
+    model = SCENES[cfg.scene]
+    fields = set(model.model_fields)
+    for key in cfg.fixed:
+        if key not in fields:
+            raise SweepError(f"fixed.{key}: not a field of scene {cfg.scene!r} (fields: {', '.join(sorted(fields))})")
+    axes = cfg.sweep.values()
+    for key in axes:
+        if key not in fields:
+            raise SweepError(f"sweep.axes.{key}: not a field of scene {cfg.scene!r} (fields: {', '.join(sorted(fields))})")
+        if key in cfg.fixed:
+            raise SweepError(f"sweep.axes.{key}: also given in fixed; give it in one place")
+    names = list(axes)
+    if cfg.sweep.expand == "zip":
+        lengths = {k: len(v) for k, v in axes.items()}
+        if len(set(lengths.values())) > 1:
+            raise SweepError(f"sweep.axes: zip needs axes of equal length, got {lengths}")
+        index_sets = [tuple(i for _ in names) for i in range(len(axes[names[0]]))]
+    else:
+        index_sets = list(itertools.product(*(range(len(axes[k])) for k in names)))
+    extras = {}
+    if "frame_every_us" in fields:
+        extras["frame_every_us"] = cfg.output.frame_every_us
+    jobs, seen = [], set()
+    for idx in index_sets:
+        params = {**cfg.fixed, **extras, **{k: axes[k][i] for k, i in zip(names, idx)}}
+        try:
+            resolved = model.model_validate(params)
+        except ValidationError as e:
+            err = e.errors()[0]
+            field = err["loc"][0] if err.get("loc") else None
+            if field in axes:
+                where = f"sweep.axes.{field}[{idx[names.index(field)]}]"
+            elif field in cfg.fixed:
+                where = f"fixed.{field}"
+            else:
+                where = "fixed"  # a rule across fields (e.g. neither fx nor lx given)
+            raise SweepError(f"{where}: {err.get('msg', str(e)).removeprefix('Value error, ')}") from None
+        job = Job(scene=cfg.scene, params=resolved.model_dump(), output=cfg.output)
+        if job.id in seen:
+            raise SweepError("sweep.axes: two jobs are identical (a value repeats)")
+        seen.add(job.id)
+        jobs.append(job)
+    return jobs

@@ -1,0 +1,189 @@
+"""Sweeps: config validation (one line naming the YAML key, exit 2, nothing started), job ids,
+the smoke sweep through the CLI (pool and Dask give the same table), resume, failures, Ctrl-C."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import yaml
+
+from knitlad.io.hdf5 import read_attrs
+from knitlad.io.summary import TIMING_COLUMNS, read_summary
+from knitlad.runner import run_sweep
+from knitlad.sweep import Job, SweepError, load_sweep
+
+ROOT = Path(__file__).resolve().parents[1]
+KNITLAD = [sys.executable, "-m", "knitlad.cli"]
+TINY = {"n_x": 6, "n_y": 8, "resolution": 16, "max_time_ms": 3, "arrest_ms": 1}
+
+
+def knitlad(*args, **kw):
+    return subprocess.run([*KNITLAD, *args], capture_output=True, text=True, cwd=ROOT, **kw)
+
+
+def write_config(path: Path, cfg: dict) -> Path:
+    path.write_text(yaml.safe_dump(cfg))
+    return path
+
+
+# ------------------------------------------------------------------ validation
+@pytest.mark.parametrize(
+    "cfg, where",
+    [
+        ({"fixed": TINY, "sweep": {"axes": {"lx": [0.38, 1.2]}}}, "sweep.axes.lx[1]"),
+        ({"fixed": {**TINY, "lx": 0.4}, "sweep": {"axes": {"mu": [0.4, -0.1]}}}, "sweep.axes.mu[1]"),
+        ({"fixed": {**TINY, "colour": "red"}, "sweep": {"axes": {"lx": [0.38]}}}, "fixed.colour"),
+        ({"fixed": TINY, "sweep": {"axes": {"lx": [0.38]}}, "extra": 1}, "extra"),
+        ({"fixed": TINY, "sweep": {"axes": {}}}, "empty sweep"),
+        ({"fixed": TINY, "sweep": {"axes": {"lx": []}}}, "no values"),
+        ({"fixed": TINY, "sweep": {"axes": {"lx": [0.3, 0.4], "mu": [0.4]}, "expand": "zip"}}, "equal length"),
+        ({"fixed": TINY, "sweep": {"axes": {"lx": {"start": 0.3, "stop": 0.4}}}}, "num or step"),
+        ({"fixed": TINY, "sweep": {"axes": {"mu": [0.4]}}}, "fx (force control) or lx"),
+        ({"fixed": {**TINY, "lx": 0.4}, "sweep": {"axes": {"lx": [0.38]}}}, "also given in fixed"),
+        ({"fixed": {**TINY, "lx": 0.4}, "sweep": {"axes": {"mu": [0.4, 0.4]}}}, "identical"),
+        ({"fixed": {**TINY, "lx": 0.4}, "sweep": {"axes": {"mu": [0.4]}}, "output": {"compression": "zip"}},
+         "output.compression"),
+    ],
+)
+def test_a_bad_config_is_refused_naming_its_key(tmp_path, cfg, where):
+    path = write_config(tmp_path / "bad.yaml", cfg)
+    with pytest.raises(SweepError, match=r".") as e:
+        load_sweep(path)
+    assert where in str(e.value) and "\n" not in str(e.value)
+
+
+def test_the_cli_refuses_bad_input_in_one_line_with_exit_2_and_starts_nothing(tmp_path):
+    bad = write_config(tmp_path / "bad.yaml", {"fixed": TINY, "sweep": {"axes": {"lx": [0.38, 1.2]}}})
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("sweep: {axes: {lx: [0.3}\n")
+    for args in ([str(bad)], [str(broken)], [str(tmp_path / "missing.yaml")],
+                 [str(bad), "--executor", "slurm"], [str(bad), "--workers", "0"]):
+        p = knitlad("sweep", *args, "--out", str(tmp_path / "out"))
+        assert p.returncode == 2, (args, p.stderr)
+        lines = p.stderr.strip().splitlines()
+        assert len(lines) == 1 and "Traceback" not in p.stderr, p.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_grid_zip_and_ranges_expand_to_the_right_jobs_with_stable_ids(tmp_path):
+    base = {"fixed": {**TINY, "ly": 0.25},
+            "sweep": {"axes": {"lx": {"start": 0.30, "stop": 0.40, "step": 0.05}, "mu": [0.0, 0.4]}}}
+    _, grid = load_sweep(write_config(tmp_path / "a.yaml", base))
+    assert [(j.params["lx"], j.params["mu"]) for j in grid] == [
+        (0.3, 0.0), (0.3, 0.4), (0.35, 0.0), (0.35, 0.4), (0.4, 0.0), (0.4, 0.4)]
+    _, again = load_sweep(write_config(tmp_path / "b.yaml", base))
+    assert [j.id for j in again] == [j.id for j in grid]
+    assert len({j.id for j in grid}) == 6
+    zipped = {**base, "sweep": {"expand": "zip", "axes": {"lx": [0.3, 0.4], "mu": [0.0, 0.4]}}}
+    _, zjobs = load_sweep(write_config(tmp_path / "c.yaml", zipped))
+    assert [(j.params["lx"], j.params["mu"]) for j in zjobs] == [(0.3, 0.0), (0.4, 0.4)]
+    # the id follows the resolved config: a default spelled out is the same job, a changed value is not
+    assert zjobs[0].id == grid[0].id
+    _, other = load_sweep(write_config(tmp_path / "d.yaml", {**base, "fixed": {**TINY, "ly": 0.26}}))
+    assert not {j.id for j in other} & {j.id for j in grid}
+
+
+# ------------------------------------------------------------------ smoke sweep
+@pytest.fixture(scope="module")
+def smoke(tmp_path_factory):
+    """configs/smoke.yaml through the CLI, as CI runs it."""
+    out = tmp_path_factory.mktemp("smoke")
+    p = knitlad("sweep", "configs/smoke.yaml", "--out", str(out))
+    assert p.returncode == 0, p.stderr
+    return out
+
+
+def test_smoke_sweep_writes_a_summary_of_ladders_and_one_file_per_job(smoke):
+    df = read_summary(smoke)
+    _, jobs = load_sweep(ROOT / "configs" / "smoke.yaml")
+    assert list(df["job_id"]) == [j.id for j in jobs]
+    assert (df["status"] == "ok").all()
+    assert (df["n_lad_over_ny"] > 0).all()  # the cut loop ladders at these tensions
+    assert (df["fx_fin"] < df["fx_ini"]).all()  # and the laddered knit carries less
+    for job in jobs:
+        attrs = read_attrs(smoke / "jobs" / f"{job.id}.h5")
+        assert attrs["status"] == "ok" and attrs["job_id"] == job.id
+        assert Job.model_validate(attrs["job_json"]).id == job.id  # enough to rerun it exactly
+        assert attrs["scale_f0_N"] > 0 and attrs["knitlad_version"]
+
+
+def test_rerunning_skips_finished_jobs_and_force_reruns_them(smoke):
+    files = sorted((smoke / "jobs").glob("*.h5"))
+    stamps = [f.stat().st_mtime_ns for f in files]
+    p = knitlad("sweep", "configs/smoke.yaml", "--out", str(smoke))
+    assert p.returncode == 0 and "0 jobs run" in p.stdout and f"{len(files)} already done" in p.stdout
+    assert [f.stat().st_mtime_ns for f in files] == stamps
+
+
+def test_dask_on_a_local_cluster_gives_the_same_summary_as_the_pool(smoke, tmp_path):
+    pytest.importorskip("distributed")
+    p = knitlad("sweep", "configs/smoke.yaml", "--out", str(tmp_path), "--executor", "dask")
+    assert p.returncode == 0, p.stderr
+    pool = read_summary(smoke).drop(columns=list(TIMING_COLUMNS))
+    dask = read_summary(tmp_path).drop(columns=list(TIMING_COLUMNS))
+    pd.testing.assert_frame_equal(pool, dask)
+
+
+def test_plot_draws_the_summary_figures_and_the_diagrams(smoke):
+    p = knitlad("plot", str(smoke))
+    assert p.returncode == 0, p.stderr
+    for name in ("damage_vs_fx.png", "fx_fin_vs_fx_ini.png", "velocity_vs_fx.png"):
+        assert (smoke / "plots" / name).stat().st_size > 1000
+    assert len(list((smoke / "plots").glob("*.png"))) == 3 + len(read_summary(smoke))
+
+
+# ------------------------------------------------------------------ failures
+def test_a_failing_job_is_recorded_and_the_others_go_on(tmp_path):
+    """f_x = 0.05 is below the built knit's tension: that job fails (RuntimeError), the other runs."""
+    cfg = write_config(tmp_path / "f.yaml", {"fixed": TINY, "sweep": {"axes": {"fx": [0.05, 1.5]}}})
+    p = knitlad("sweep", str(cfg), "--out", str(tmp_path / "out"), "--workers", "1")
+    assert p.returncode == 1
+    df = read_summary(tmp_path / "out")
+    assert list(df["status"]) == ["failed", "ok"]
+    assert "RuntimeError" in df["error"][0] and "--lx" in df["error"][0]
+    assert "failed" in p.stderr and "Traceback" not in p.stderr
+
+
+def test_a_dead_worker_fails_only_its_job_and_the_pool_is_restarted(tmp_path):
+    cfg = {"fixed": {**TINY, "lx": 0.4}, "sweep": {"axes": {"mu": [0.1, 0.0, 0.2, 0.3]}}}
+    _, jobs = load_sweep(write_config(tmp_path / "c.yaml", cfg))
+    from tests.sweep_helpers import fake_runner
+
+    outcome = run_sweep(jobs, tmp_path / "out", workers=1, runner=fake_runner, progress=False)
+    df = read_summary(tmp_path / "out")
+    assert list(df["status"]) == ["ok", "failed", "ok", "ok"]
+    assert "worker process died" in df["error"][1]
+    assert outcome.ran == 4 and outcome.failed == 1
+    # resume: nothing left to do unless failed jobs are retried
+    again = run_sweep(jobs, tmp_path / "out", workers=1, runner=fake_runner, progress=False)
+    assert again.ran == 0 and again.skipped == 4
+
+
+def test_ctrl_c_keeps_finished_jobs_and_a_consistent_summary_and_the_rerun_goes_on(tmp_path):
+    cfg = write_config(tmp_path / "c.yaml", {"fixed": {**TINY, "lx": 0.38}, "sweep": {"axes": {"mu": [0.1, 0.2, 0.3]}}})
+    out = tmp_path / "out"
+    proc = subprocess.Popen([*KNITLAD, "sweep", str(cfg), "--out", str(out), "--workers", "1"], cwd=ROOT,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    deadline = time.time() + 240
+    while time.time() < deadline and not list((out / "jobs").glob("*.h5")):
+        time.sleep(0.2)
+    assert list((out / "jobs").glob("*.h5")), "no job finished in time"
+    os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "interrupted" in err and "Traceback" not in err
+    df = read_summary(out)
+    done = set(df.loc[df["status"] == "ok", "job_id"])
+    assert 1 <= len(done) < 3 and set(df["status"]) <= {"ok", "pending"}
+    assert {f.stem for f in (out / "jobs").glob("*.h5")} == done
+    assert not list((out / "jobs").glob("*.tmp"))
+    p = knitlad("sweep", str(cfg), "--out", str(out))
+    assert p.returncode == 0 and f"{len(done)} already done" in p.stdout
+    assert (read_summary(out)["status"] == "ok").all()
