@@ -160,6 +160,54 @@ def cut(
     )
 
 
+def _validated(model, option_names: dict | None = None, **values):
+    """Build a pydantic config from CLI values; a bad one is one line naming the option, exit 2."""
+    from pydantic import ValidationError
+
+    from knitlad.config import one_line
+
+    try:
+        return model(**values)
+    except ValidationError as e:
+        field, _, reason = one_line(e).partition(": ")
+        option = (option_names or {}).get(field, "--" + field.replace("_", "-"))
+        fail(f"{option}: {reason}" if field != "config" else reason)
+
+
+@app.command()
+def loop(
+    fx: float = typer.Option(8.0, "--fx", help="Tension per thread f_x pulling the loop's ends."),
+    mu: float = typer.Option(0.4, "--mu", help="Friction coefficient after the release."),
+    lx: float = typer.Option(0.30, "--lx", help="Column width l_x/l0 (<= 0.34: the loops must overlap)."),
+    ly: float = typer.Option(0.25, "--ly", help="Row spacing l_y/l0."),
+    resolution: int = typer.Option(36, "--resolution", help="Nodes per stitch."),
+    max_time_ms: float = typer.Option(1.0, "--max-time-ms", help="Longest time after the release [ms]."),
+    json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
+) -> None:
+    """Single-loop model (paper Fig. 5b): a loop under tension f_x lets go of the row above once the row below is removed."""
+    import json
+
+    from knitlad.config import LoopConfig
+    from knitlad.loop_model import LoopRun
+
+    cfg = _validated(LoopConfig, fx=fx, mu=mu, lx=lx, ly=ly, resolution=resolution, max_time_ms=max_time_ms)
+    try:
+        result = LoopRun(cfg.settings()).run()
+    except RuntimeError as e:
+        typer.echo(f"knitlad: run failed: {e}", err=True)
+        raise typer.Exit(1)
+    summary = result.summary()
+    if json_out:
+        typer.echo(json.dumps(summary, default=float))
+        return
+    if result.released:
+        typer.echo(f"single loop, f_x = {cfg.fx}, mu = {cfg.mu}: released after tau = {result.tau_s * 1e6:.1f} us, "
+                   f"v_lad/c_b = {result.v_lad_over_cb:.3f} (wall {summary['wall_s']:.2f} s)")
+    else:
+        typer.echo(f"single loop, f_x = {cfg.fx}, mu = {cfg.mu}: still hooked after {cfg.max_time_ms} ms "
+                   f"(v_lad = 0; wall {summary['wall_s']:.2f} s)")
+
+
 @app.command()
 def sweep(
     config: str = typer.Argument(..., help="Sweep config (YAML); see configs/ and knitlad.sweep."),
@@ -239,7 +287,8 @@ def plot(
     fig_dir = Path(folder) / "plots"
     paths = summary_plots(df, fig_dir)
     if diagrams:
-        for job in df.loc[df["status"] == "ok", "job_id"]:
+        ladders = (df["status"] == "ok") & (df["scene"] == "ladder")
+        for job in df.loc[ladders, "job_id"]:
             paths.append(spatio_temporal_from_file(Path(folder) / "jobs" / f"{job}.h5", fig_dir / f"{job}.png"))
     typer.echo(f"wrote {len(paths)} figures in {fig_dir}")
 

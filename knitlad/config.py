@@ -45,6 +45,25 @@ class CutConfig(BaseModel):
         )
 
 
+class LoopConfig(BaseModel):
+    """One single-loop run (``knitlad loop``, paper Fig. 5b,c)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    fx: float = Field(8.0, gt=0, le=40, description="tension per thread pulling the loop's ends, f_x = F/f0 [-]")
+    mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient after the release [-]")
+    lx: float = Field(0.30, gt=0.2, le=0.34, description="column width l_x/l0 [-] (wider, the loops no longer overlap)")
+    ly: float = Field(0.25, gt=0.2, lt=0.35, description="row spacing l_y/l0 [-]")
+    resolution: int = Field(36, ge=12, le=280, description="nodes per stitch [-]")
+    max_time_ms: float = Field(1.0, gt=0, le=100, description="longest time simulated after the release [ms]")
+
+    def settings(self):
+        from knitlad.loop_model import LoopSettings
+
+        return LoopSettings(fx=self.fx, mu=self.mu, lx_over_l0=self.lx, ly_over_l0=self.ly,
+                            nodes_per_stitch=self.resolution, max_time_s=self.max_time_ms * 1e-3)
+
+
 def parse_stitches(text: str) -> tuple[int, int]:
     """'42' -> (42, 42); '8x10' -> (8, 10)."""
     m = re.fullmatch(r"\s*(\d+)\s*(?:[xX]\s*(\d+))?\s*", text)

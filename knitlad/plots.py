@@ -83,15 +83,38 @@ SUMMARY_PLOTS = {
 }
 
 
+def loop_velocity_plot(df, path: str | Path) -> Path:
+    """Single-loop sweeps (paper Fig. 5c): v_lad/c_b against f_x, one series per mu, and 0.34 sqrt(f_x)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(4.5, 3.4), dpi=120)
+    for mu, g in df.groupby("mu", sort=True):
+        g = g.sort_values("fx")
+        ax.plot(g["fx"], g["v_lad_over_cb"], "o-", ms=4, label=f"mu = {mu}")
+    f = np.linspace(0, float(df["fx"].max()), 100)
+    ax.plot(f, 0.34 * np.sqrt(f), "k--", lw=0.8, label="0.34 sqrt(f_x) (paper, mu = 0)")
+    ax.set_xlabel("f_x")
+    ax.set_ylabel("v_lad / c_b")
+    ax.set_title("single loop: v_lad/c_b against f_x (paper Fig. 5c)", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return _save(fig, Path(path))
+
+
 def summary_plots(df, out_dir: str | Path) -> list[Path]:
-    """One PNG per entry of SUMMARY_PLOTS: finished jobs, one series per (l_y/l0, mu) pair."""
+    """One PNG per entry of SUMMARY_PLOTS (laddering jobs: one series per (l_y/l0, mu) pair),
+    and the single-loop velocity plot for loop jobs."""
     plt = _pyplot()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     ok = df[df["status"] == "ok"]
+    paths = []
+    if "scene" in ok and (ok["scene"] == "loop").any():
+        paths.append(loop_velocity_plot(ok[ok["scene"] == "loop"], out / "loop_velocity_vs_fx.png"))
+        ok = ok[ok["scene"] != "loop"]
+    if not len(ok):
+        return paths
     keys = [k for k in ("ly", "mu", "resolution") if k in ok and ok[k].nunique() > 1] or [None]
     groups = ok.groupby(keys if keys != [None] else (lambda _: ""), sort=True)
-    paths = []
     for name, (column, label, figure) in SUMMARY_PLOTS.items():
         fig, ax = plt.subplots(figsize=(4.5, 3.4), dpi=120)
         for key, g in groups:

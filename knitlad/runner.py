@@ -30,7 +30,7 @@ from typing import Callable
 
 from knitlad import __version__
 from knitlad.io.hdf5 import read_attrs, write_ladder_result, write_record
-from knitlad.io.summary import SUMMARY_KEYS, write_summary
+from knitlad.io.summary import SCENE_SUMMARY_KEYS, write_summary
 from knitlad.sweep import Job
 
 
@@ -61,10 +61,7 @@ def run_job(job: Job, jobs_dir: str, threads: int | None = 1) -> dict:
     path = job_path(jobs_dir, job)
     t0 = time.perf_counter()
     try:
-        from knitlad.protocol import LadderRun
-
-        run = LadderRun(job.scene_config().settings())
-        result = run.run()
+        summary, write = SCENE_RUNNERS[job.scene](job)
     except KeyboardInterrupt:
         raise
     except Exception as e:  # noqa: BLE001 - any failure of one job is recorded and the sweep goes on
@@ -73,12 +70,46 @@ def run_job(job: Job, jobs_dir: str, threads: int | None = 1) -> dict:
         record["traceback"] = traceback.format_exc()
         write_record(path, record)
         return summary_row(job, record)
+    record = _record(job, "ok", "", time.perf_counter() - t0)
+    write(path, record)
+    return summary_row(job, {**summary, **record})
+
+
+def _run_ladder(job: Job):
+    """The laddering experiment; returns its summary and a writer of its HDF5 file."""
+    from knitlad.protocol import LadderRun
+
+    run = LadderRun(job.scene_config().settings())
+    result = run.run()
     if not job.output.frames:
         result.frames, result.frame_times_s = [], []
     compression = None if job.output.compression == "none" else job.output.compression
-    record = _record(job, "ok", "", time.perf_counter() - t0)
-    write_ladder_result(path, result, run.sim.state.yarn_start, compression=compression, attrs=record)
-    return summary_row(job, {**result.summary(), **record})
+
+    def write(path: Path, record: dict) -> None:
+        write_ladder_result(path, result, run.sim.state.yarn_start, compression=compression, attrs=record)
+
+    return result.summary(), write
+
+
+def _run_loop(job: Job):
+    """The single-loop model: a file of attributes (its summary, settings and scales)."""
+    import dataclasses
+
+    from knitlad.loop_model import LoopRun
+    from knitlad.units import Scales
+
+    result = LoopRun(job.scene_config().settings()).run()
+    summary = result.summary()
+    settings = {k: v for k, v in dataclasses.asdict(result.settings).items() if k != "material"}
+    scales = {f"scale_{k}": v for k, v in Scales(result.settings.material).as_attributes().items()}
+
+    def write(path: Path, record: dict) -> None:
+        write_record(path, {**summary, **record, "settings_json": json.dumps(settings), **scales})
+
+    return summary, write
+
+
+SCENE_RUNNERS = {"ladder": _run_ladder, "loop": _run_loop}
 
 
 def summary_row(job: Job, attrs: dict | None) -> dict:
@@ -88,7 +119,7 @@ def summary_row(job: Job, attrs: dict | None) -> dict:
         return {**row, "status": "pending", "error": ""}
     row["status"] = attrs.get("status", "ok")
     row["error"] = attrs.get("error", "")
-    for key in SUMMARY_KEYS:
+    for key in SCENE_SUMMARY_KEYS[job.scene]:
         value = attrs.get(key, float("nan"))
         row[key] = json.dumps(value) if isinstance(value, (list, dict)) else value
     return row

@@ -7,7 +7,10 @@ arguments speak SI; the state itself is in internal units (:mod:`knitlad.units`)
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 from typing import Callable
+
+import numba
 
 import numpy as np
 
@@ -22,12 +25,29 @@ from knitlad.kernels.integrate import (
     potential_energy,
     verlet_steps,
 )
+from knitlad.kernels.contact import refresh_contacts, touching_pairs_between
 from knitlad.state import RodState, Workspace
 from knitlad.timestep import DEFAULT_SAFETY, TimeStepLimits, critical_time_steps
 
 
 class SimulationBlowUp(RuntimeError):
     """The state became non-finite or a node outran the axial wave speed."""
+
+
+@contextmanager
+def numba_threads(n: int):
+    """Run the enclosed kernels on ``n`` Numba threads, then restore the previous count.
+
+    A scene of a few hundred nodes runs 30x faster on one thread than on two when
+    the other core is busy (measured: the single-loop run, 0.15 s against 7.5 s),
+    because the threads of the parallel kernels wait for each other every step.
+    """
+    before = numba.get_num_threads()
+    numba.set_num_threads(max(1, min(n, numba.config.NUMBA_NUM_THREADS)))
+    try:
+        yield
+    finally:
+        numba.set_num_threads(before)
 
 
 class UnstableTimeStep(ValueError):
@@ -119,6 +139,17 @@ class Simulation:
             "sliding": int(st[3]),
             "candidates": int(self.contacts.n_pairs[0]),
         }
+
+    def touching_pairs(self, yarn_a: int, yarn_b: int) -> int:
+        """Pairs of edges of yarns ``yarn_a`` and ``yarn_b`` touching at the current positions."""
+        if self.contact_model is None:
+            return 0
+        s = self.state
+        while not refresh_contacts(s.x, s.edge_a, s.edge_b, s.edge_shift, self.contacts):
+            self._grow_contacts()
+        c = self.contacts
+        return int(touching_pairs_between(s.x, s.edge_a, s.edge_b, s.edge_shift, c.edge_radius, c.edge_prev,
+                                          c.edge_next, c.edge_yarn, c.pairs, c.n_pairs[0], yarn_a, yarn_b))
 
     def _axial_wave_speed(self) -> float:
         s = self.state

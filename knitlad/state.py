@@ -33,6 +33,8 @@ class RodState(NamedTuple):
     f_ext: np.ndarray  # (n, 3) constant external force
     node_yarn: np.ndarray  # (n,) int64 yarn of each node
     yarn_start: np.ndarray  # (n_yarns + 1,) int64 offsets
+    rail_node: np.ndarray  # (k,) int64 nodes that may only slide along a line ...
+    rail_axis: np.ndarray  # (k, 3) ... the unit direction of that line
     # edges (ne,)
     edge_a: np.ndarray
     edge_b: np.ndarray
@@ -105,6 +107,7 @@ class _Yarn:
     period: np.ndarray  # (3,) metres, shift of the closing edge
     natural_curvature: str
     held: dict[int, np.ndarray] = field(default_factory=dict)  # node -> velocity (m/s)
+    rails: dict[int, np.ndarray] = field(default_factory=dict)  # node -> unit axis it slides along
     forces: dict[int, np.ndarray] = field(default_factory=dict)  # node -> force (N)
     twist_held: set[int] = field(default_factory=set)
 
@@ -175,6 +178,19 @@ class Scene:
         y = self._yarn(yarn)
         for node in nodes:
             y.held[self._node_index(y, node)] = np.asarray(velocity, dtype=float)
+
+    def slide(self, yarn: int, nodes: Sequence[int], axis: Sequence[float]) -> None:
+        """Let ``nodes`` move only along ``axis`` through their initial position (a frictionless rail).
+
+        The force on such a node is projected on the axis; its velocity stays along it.
+        """
+        y = self._yarn(yarn)
+        a = np.asarray(axis, dtype=float)
+        norm = float(np.linalg.norm(a))
+        if a.shape != (3,) or not norm > 0:
+            raise ValueError(f"axis must be a non-zero 3-vector, got {axis!r}")
+        for node in nodes:
+            y.rails[self._node_index(y, node)] = a / norm
 
     def hold_twist(self, yarn: int, edges: Sequence[int]) -> None:
         """Clamp the twist angle of ``edges`` (a clamped end: hold 2 nodes and edge 0)."""
@@ -286,9 +302,14 @@ class Scene:
         v_prescribed = np.zeros((n, 3))
         f_ext = np.zeros((n, 3))
         theta_held = np.zeros(ne, dtype=bool)
+        rail_node, rail_axis = [], []
         first_edge = 0
         for iy, y in enumerate(self._yarns):
             s = int(yarn_start[iy])
+            for j, axis in sorted(y.rails.items()):
+                if j not in y.held:
+                    rail_node.append(s + j)
+                    rail_axis.append(axis)
             for j, vel in y.held.items():
                 held[s + j] = True
                 v_prescribed[s + j] = vel / units.VELOCITY
@@ -302,6 +323,7 @@ class Scene:
         return RodState(
             x=x, v=np.zeros((n, 3)), mass=mass, radius=radius, held=held, v_prescribed=v_prescribed,
             f_ext=f_ext, node_yarn=node_yarn, yarn_start=yarn_start,
+            rail_node=np.array(rail_node, dtype=np.int64), rail_axis=np.array(rail_axis, dtype=float).reshape(-1, 3),
             edge_a=edge_a, edge_b=edge_b, edge_shift=edge_shift, rest_length=rest_length, EA=EA,
             stretch_damping=stretch_damping, theta=theta, omega=np.zeros(ne), twist_inertia=twist_inertia,
             theta_held=theta_held, ref_u=ref_u, tangent=tangent,
@@ -357,6 +379,6 @@ def cut_edge(state: RodState, edge: int) -> RodState:
     fields["hinge_e1"] = remap[state.hinge_e1[keep_h]].astype(np.int64)
     fields["yarn_start"] = yarn_start.astype(np.int64)
     fields["node_yarn"] = node_yarn
-    for name in ("x", "v", "mass", "radius", "held", "v_prescribed", "f_ext"):
+    for name in ("x", "v", "mass", "radius", "held", "v_prescribed", "f_ext", "rail_node", "rail_axis"):
         fields[name] = np.array(fields[name], copy=True)
     return RodState(**fields)

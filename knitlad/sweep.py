@@ -2,7 +2,7 @@
 
 A sweep config (``knitlad sweep config.yaml --out DIR``)::
 
-    scene: ladder            # the laddering experiment of `knitlad cut`
+    scene: ladder            # the laddering experiment of `knitlad cut` (or loop: `knitlad loop`)
     fixed:                   # every job: the options of `knitlad cut`, same units
       n_x: 8
       n_y: 10
@@ -34,9 +34,9 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from knitlad.config import CutConfig
+from knitlad.config import CutConfig, LoopConfig
 
-SCENES: dict[str, type[BaseModel]] = {"ladder": CutConfig}
+SCENES: dict[str, type[BaseModel]] = {"ladder": CutConfig, "loop": LoopConfig}
 COMPRESSIONS = ("gzip", "lzf", "none")
 
 
@@ -120,7 +120,8 @@ class SweepConfig(BaseModel):
     """A whole sweep file (see the module docstring)."""
 
     model_config = ConfigDict(extra="forbid")
-    scene: Literal["ladder"] = Field("ladder", description="what each job runs: ladder = `knitlad cut`")
+    scene: Literal["ladder", "loop"] = Field(
+        "ladder", description="what each job runs: ladder = `knitlad cut`, loop = `knitlad loop`")
     fixed: dict[str, Any] = Field(default_factory=dict, description="scene fields common to all jobs (scene units)")
     sweep: Sweep = Field(description="the swept axes and how they combine")
     output: Output = Field(default_factory=Output, description="what each job writes")

@@ -26,6 +26,9 @@ def run(*args, cwd=None):
         (["cut", "--lx", "0.4", "--fx", "3"], "either fx"),
         (["cut", "--resolution", "4"], "--resolution"),
         (["demo", "--nodes", "2"], "--nodes"),
+        (["loop", "--mu", "-0.1"], "--mu"),
+        (["loop", "--lx", "0.39"], "--lx"),
+        (["loop", "--max-time-ms", "0"], "--max-time-ms"),
     ],
 )
 def test_bad_options_get_one_line_and_exit_code_2(args, option):
@@ -59,3 +62,11 @@ def test_a_run_that_cannot_reach_its_target_fails_in_one_line_with_exit_code_1(t
     assert p.returncode == 1
     last = p.stderr.strip().splitlines()[-1]
     assert "run failed" in last and "--lx" in last and "Traceback" not in p.stderr
+
+
+def test_loop_prints_the_release_as_json():
+    p = run("loop", "--fx", "4", "--mu", "0.4", "--json")
+    assert p.returncode == 0, p.stderr
+    s = json.loads(p.stdout.strip().splitlines()[-1])
+    assert s["released"] and s["v_lad_over_cb"] > 0 and 0 < s["tau_s"] < 1e-3
+    assert s["v_lad_over_cb"] == pytest.approx(0.25 * 9.74e-3 / s["tau_s"] / 30.58, rel=2e-3)  # l_y / tau / c_b

@@ -82,7 +82,7 @@ def test_edge_courses_are_held_and_courses_are_held_at_their_ends(knit):
         assert held.tolist() == [0, s.yarn_start[y + 1] - s.yarn_start[y] - 1]
 
 
-@pytest.mark.parametrize("kwargs, match", [(dict(n_x=1), "2 x 2"), (dict(l_x=L0), "l0"), (dict(nodes_per_stitch=4), "nodes_per_stitch")])
+@pytest.mark.parametrize("kwargs, match", [(dict(n_x=0), "1 x 1"), (dict(l_x=L0), "l0"), (dict(nodes_per_stitch=4), "nodes_per_stitch")])
 def test_bad_geometry_is_refused(kwargs, match):
     with pytest.raises(ValueError, match=match):
         Jersey(**kwargs)

@@ -59,3 +59,24 @@ def test_hold_out_of_range_is_refused():
     y = scene.add_yarn(line(4))
     with pytest.raises(IndexError):
         scene.hold(y, [4])
+
+
+def test_a_node_on_a_rail_moves_only_along_it():
+    """Scene.slide: a rod end pulled obliquely slides along its rail (x) and keeps y and z."""
+    import knitlad as kl
+
+    n = 11
+    pts = np.zeros((n, 3))
+    pts[:, 0] = np.linspace(0.0, 0.01, n)
+    scene = kl.Scene(kl.NYLON)
+    y = scene.add_yarn(pts)
+    scene.hold(y, [0])
+    scene.slide(y, [n - 1], (1.0, 0.0, 0.0))
+    scene.apply_force(y, n - 1, (1e-3, 1e-3, -1e-3))
+    sim = kl.Simulation(scene.build())
+    sim.run(2e-4)
+    tip = sim.positions_m()[-1]
+    assert tip[0] > 0.01  # pulled out along the rail (the rod stretches)
+    assert abs(tip[1]) < 1e-15 and abs(tip[2]) < 1e-15
+    with pytest.raises(ValueError, match="axis"):
+        scene.slide(y, [1], (0.0, 0.0, 0.0))

@@ -187,3 +187,14 @@ def test_ctrl_c_keeps_finished_jobs_and_a_consistent_summary_and_the_rerun_goes_
     p = knitlad("sweep", str(cfg), "--out", str(out))
     assert p.returncode == 0 and f"{len(done)} already done" in p.stdout
     assert (read_summary(out)["status"] == "ok").all()
+
+
+def test_a_single_loop_sweep_tabulates_velocity_against_tension_and_friction(tmp_path):
+    cfg = write_config(tmp_path / "loop.yaml", {"scene": "loop", "sweep": {"axes": {"mu": [0.0, 0.8], "fx": [4.0]}}})
+    p = knitlad("sweep", str(cfg), "--out", str(tmp_path / "out"), "--workers", "1")
+    assert p.returncode == 0, p.stderr
+    df = read_summary(tmp_path / "out")
+    assert list(df["status"]) == ["ok", "ok"] and df["released"].all()
+    assert df["v_lad_over_cb"][0] > df["v_lad_over_cb"][1]  # friction slows the release
+    p = knitlad("plot", str(tmp_path / "out"))
+    assert p.returncode == 0 and (tmp_path / "out" / "plots" / "loop_velocity_vs_fx.png").stat().st_size > 1000

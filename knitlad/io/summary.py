@@ -18,6 +18,9 @@ SUMMARY_KEYS = (
     "box_lx_over_l0", "fx_within_tolerance", "reached_edge", "stop_reason", "laddering_column",
     "v_fit_stitches", "nodes", "steps", "relax_steps", "wall_s", "wall_stretch_s", "wall_propagate_s", "job_wall_s",
 )
+LOOP_SUMMARY_KEYS = ("tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before",
+                     "steps", "nodes", "wall_s", "job_wall_s")
+SCENE_SUMMARY_KEYS = {"ladder": SUMMARY_KEYS, "loop": LOOP_SUMMARY_KEYS}
 TIMING_COLUMNS = ("wall_s", "job_wall_s", "wall_stretch_s", "wall_propagate_s")
 
 

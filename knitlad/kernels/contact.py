@@ -465,3 +465,22 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
     c.x_ref[:] = x
     c.status[0] = 0
     return True
+
+
+@njit(**NUMBA_OPTS)
+def touching_pairs_between(
+    x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, edge_yarn, pairs, n_pairs, yarn_a, yarn_b,
+):
+    """Number of counted touching pairs (overlap > 0) between an edge of ``yarn_a`` and one of ``yarn_b``."""
+    n = 0
+    for p in range(n_pairs):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        ya = edge_yarn[i]
+        yb = edge_yarn[j]
+        if not ((ya == yarn_a and yb == yarn_b) or (ya == yarn_b and yb == yarn_a)):
+            continue
+        overlap, _, _ = counted_overlap(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, i, j)
+        if overlap > 0.0:
+            n += 1
+    return n

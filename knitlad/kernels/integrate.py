@@ -82,7 +82,19 @@ def compute_forces(s, w, c, twist, drag, dt):
             c.pairs, c.n_pairs[0], c.slip,
             p[0], p[1], p[2], p[3], p[4], dt, w.force, c.stats,
         )
+    rail_forces(s.rail_node, s.rail_axis, w.force)
     return True
+
+
+@njit(**NUMBA_OPTS)
+def rail_forces(rail_node, rail_axis, force):
+    """Keep only the component along its rail of the force on each rail node (the rail
+    takes the rest), so a node starting at rest on its rail moves along it."""
+    for r in range(rail_node.shape[0]):
+        i = rail_node[r]
+        f = force[i, 0] * rail_axis[r, 0] + force[i, 1] * rail_axis[r, 1] + force[i, 2] * rail_axis[r, 2]
+        for k in range(3):
+            force[i, k] = f * rail_axis[r, k]
 
 
 @njit(**NUMBA_OPTS)

@@ -42,8 +42,8 @@ class Jersey:
     width: float = CRANE_A  # a: how far the head bulges sideways (Crane: 3/2)
 
     def __post_init__(self) -> None:
-        if self.n_x < 2 or self.n_y < 2:
-            raise ValueError(f"the knit needs at least 2 x 2 stitches, got {self.n_x} x {self.n_y}")
+        if self.n_x < 1 or self.n_y < 1:
+            raise ValueError(f"the knit needs at least 1 x 1 stitches, got {self.n_x} x {self.n_y}")
         if self.nodes_per_stitch < 8:
             raise ValueError(f"nodes_per_stitch must be >= 8, got {self.nodes_per_stitch}")
         l0 = self.material.stitch_length

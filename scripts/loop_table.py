@@ -1,0 +1,38 @@
+"""The single-loop model's velocity table (paper, Fig. 5c): v_lad/c_b against f_x for mu = 0, 0.4, 0.8.
+
+    python scripts/loop_table.py [--fx 1 2 4 8 12 16 20] [--mu 0 0.4 0.8] [--max-time-ms 1]
+
+Prints one row per (mu, f_x) beside the paper's inertial law 0.34 sqrt(f_x), and
+the wall time of each run (the issue's speed goal: one run under 10 s).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+from knitlad.loop_model import LoopRun, LoopSettings
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--fx", type=float, nargs="+", default=[1, 2, 4, 8, 12, 16, 20])
+    p.add_argument("--mu", type=float, nargs="+", default=[0.0, 0.4, 0.8])
+    p.add_argument("--max-time-ms", type=float, default=1.0)
+    p.add_argument("--resolution", type=int, default=36)
+    args = p.parse_args()
+    LoopRun(LoopSettings(fx=4.0, mu=0.0, max_time_s=1e-5)).run()  # compile outside the timings
+    print(f"{'mu':>4s} {'f_x':>5s} {'v_lad/c_b':>9s} {'0.34 sqrt f':>11s} {'tau [us]':>9s} {'released':>8s} {'wall s':>7s}")
+    for mu in args.mu:
+        for fx in args.fx:
+            t = time.perf_counter()
+            r = LoopRun(LoopSettings(fx=fx, mu=mu, max_time_s=args.max_time_ms * 1e-3,
+                                     nodes_per_stitch=args.resolution)).run()
+            wall = time.perf_counter() - t
+            print(f"{mu:4.1f} {fx:5.1f} {r.v_lad_over_cb:9.3f} {0.34 * math.sqrt(fx):11.3f} {r.tau_s * 1e6:9.1f} "
+                  f"{str(r.released):>8s} {wall:7.2f}", flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,60 @@
+"""The single-loop model (paper Fig. 5b,c): the loop holds while the lower row is there, lets
+go once it is removed, faster under more tension and slower with more friction; the release
+time is converged in the resolution. The paper's inertial law 0.34 sqrt(f_x) is *not*
+reproduced (pinned below as a known deviation)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from knitlad.loop_model import LoopRun, LoopSettings
+from knitlad.topology import piercings
+
+
+def release(fx: float, mu: float, resolution: int = 36):
+    r = LoopRun(LoopSettings(fx=fx, mu=mu, nodes_per_stitch=resolution)).run()
+    assert r.released, f"f_x = {fx}, mu = {mu}: the loop did not let go"
+    return r
+
+
+def test_the_loop_stays_hooked_while_the_lower_row_is_there():
+    run = LoopRun(LoopSettings(fx=4.0, mu=0.0))
+    run.relax()
+    s, sc = run.sim.state, run.scene
+    loop = slice(int(s.yarn_start[sc.loop]), int(s.yarn_start[sc.loop + 1]))
+    upper = slice(int(s.yarn_start[sc.upper]), int(s.yarn_start[sc.upper + 1]))
+    lower = slice(int(s.yarn_start[sc.lower]), int(s.yarn_start[sc.lower + 1]))
+    assert run.result.relax_converged
+    assert piercings(s.x[loop], s.x[upper]) == (2, 0)  # the upper row threads the loop
+    assert piercings(s.x[lower], s.x[loop]) == (2, 0)  # the loop threads the lower row
+    run.sim.run(200e-6)  # at mu = 0 nothing but the lower row holds the loop against f_x
+    assert piercings(s.x[loop], s.x[upper]) == (2, 0)
+    # the pulled ends stayed on their rails (y, z unchanged)
+    for end in (loop.start, loop.stop - 1):
+        assert abs(run.sim.state.v[end, 1]) < 1e-12 and abs(run.sim.state.v[end, 2]) < 1e-12
+
+
+def test_the_release_time_is_converged_in_the_resolution():
+    """36 against 48 nodes per stitch: within 5 % (measured 0.6 % to 2.7 % for f_x = 2 to 16)."""
+    coarse, fine = release(4.0, 0.0, 36), release(4.0, 0.0, 48)
+    assert coarse.tau_s == pytest.approx(fine.tau_s, rel=0.05)
+
+
+def test_more_tension_releases_faster():
+    v2, v8 = release(2.0, 0.0).v_lad_over_cb, release(8.0, 0.0).v_lad_over_cb
+    assert v8 > 1.2 * v2  # measured 1.63x
+
+
+def test_friction_slows_the_release():
+    """Paper Fig. 5c: the lower the friction, the higher the velocity (f_x = 4: measured 0.977, 0.890, 0.861)."""
+    v = [release(4.0, mu).v_lad_over_cb for mu in (0.0, 0.4, 0.8)]
+    assert v[0] > v[1] > v[2]
+
+
+@pytest.mark.xfail(strict=True, reason="known deviation: the model's v_lad/c_b at mu = 0 is 0.98 at f_x = 4, "
+                   "44 % above the paper's 0.34 sqrt(f_x) = 0.68 (the held upper row and the loop's own "
+                   "bending recoil); see the README, single-loop model")
+def test_inertial_law_of_the_paper_at_mu_0():
+    assert release(4.0, 0.0).v_lad_over_cb == pytest.approx(0.34 * math.sqrt(4.0), rel=0.15)
