@@ -209,6 +209,76 @@ def loop(
 
 
 @app.command()
+def stitch(
+    lx: float = typer.Option(0.35, "--lx", help="Cell width l_x/l0."),
+    ly: float = typer.Option(0.25, "--ly", help="Cell height l_y/l0."),
+    resolution: int = typer.Option(36, "--resolution", help="Nodes per stitch."),
+    d_over_l0: float = typer.Option(1 / 70, "--d-over-l0", help="Yarn diameter over stitch length."),
+    json_out: bool = typer.Option(False, "--json", help='Print {"fx": ..., "fy": ...} and the rest as JSON.'),
+) -> None:
+    """Periodised jersey stitch: tensions per thread f_x, f_y at imposed (l_x, l_y), relaxed at mu = 0."""
+    import json
+
+    from knitlad.config import StitchConfig
+    from knitlad.stitch_model import StitchRun
+
+    cfg = _validated(StitchConfig, {"d_over_l0": "--d-over-l0"}, lx=lx, ly=ly, resolution=resolution,
+                     d_over_l0=d_over_l0)
+    settings = cfg.settings()
+    try:
+        result = StitchRun(settings).run()
+    except ValueError as e:
+        typer.echo(f"knitlad: run failed: {e}", err=True)
+        raise typer.Exit(1)
+    if json_out:
+        typer.echo(json.dumps(result.summary(), default=float))
+        return
+    m = settings.material
+    typer.echo(f"periodised stitch at l_x/l0 = {cfg.lx}, l_y/l0 = {cfg.ly} (d/l0 = {m.diameter / m.stitch_length:.4g}, "
+               f"{cfg.resolution} nodes/stitch): f_x = {result.fx:.4f}, f_y = {result.fy:.4f}"
+               f"{'' if result.converged else ' (relaxation NOT converged)'}  [{result.wall_s:.2f} s]")
+
+
+@app.command()
+def diagram(
+    ly: list[float] = typer.Option(None, "--ly", help="l_y/l0 values (repeat the option); default 0.20 to 0.30."),
+    d_over_l0: float = typer.Option(1 / 70, "--d-over-l0", help="Yarn diameter over stitch length."),
+    resolution: int = typer.Option(36, "--resolution", help="Nodes per stitch."),
+    out: str = typer.Option("runs/diagram", "--out", help="Folder for fx0_curve.csv and fx0_curve.png."),
+) -> None:
+    """The f_x = 0 curve of the periodised stitch in the (l_x/l0, l_y/l0) plane (paper, configuration diagram)."""
+    from pathlib import Path
+
+    import pandas as pd
+
+    from knitlad.config import StitchConfig
+    from knitlad.plots import zero_tension_curve_plot
+    from knitlad.stitch_model import zero_tension_lx
+
+    values = ly or [0.20, 0.22, 0.24, 0.26, 0.28, 0.30]
+    for v in values:
+        _validated(StitchConfig, {"d_over_l0": "--d-over-l0"}, ly=v, resolution=resolution, d_over_l0=d_over_l0)
+    material = StitchConfig(d_over_l0=d_over_l0).settings().material
+    rows = []
+    for v in values:
+        try:
+            lx0 = zero_tension_lx(v, nodes_per_stitch=resolution, material=material)
+        except ValueError as e:
+            typer.echo(f"knitlad: {e}", err=True)
+            lx0 = float("nan")
+        rows.append({"ly_over_l0": v, "lx_over_l0_at_fx0": lx0})
+        typer.echo(f"l_y/l0 = {v:.3f}: f_x = 0 at l_x/l0 = {lx0:.4f}")
+    out_dir = Path(out)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    df = pd.DataFrame(rows)
+    tmp = out_dir / "fx0_curve.csv.tmp"
+    df.to_csv(tmp, index=False)
+    tmp.replace(out_dir / "fx0_curve.csv")
+    png = zero_tension_curve_plot(df, d_over_l0, out_dir / "fx0_curve.png")
+    typer.echo(f"wrote {out_dir / 'fx0_curve.csv'} and {png}")
+
+
+@app.command()
 def sweep(
     config: str = typer.Argument(..., help="Sweep config (YAML); see configs/ and knitlad.sweep."),
     out: str = typer.Option(None, "--out", help="Output folder; default runs/<config name>."),

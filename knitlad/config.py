@@ -64,6 +64,34 @@ class LoopConfig(BaseModel):
                             nodes_per_stitch=self.resolution, max_time_s=self.max_time_ms * 1e-3)
 
 
+class StitchConfig(BaseModel):
+    """One periodised stitch (``knitlad stitch``): tensions at imposed (l_x, l_y)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    lx: float = Field(0.35, gt=0.2, lt=0.6, description="cell width l_x/l0 [-]")
+    ly: float = Field(0.25, gt=0.15, lt=0.4, description="cell height l_y/l0 [-]")
+    resolution: int = Field(36, ge=12, le=280, description="nodes per stitch [-]")
+    d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description="yarn diameter over stitch length d/l0 [-]")
+
+    def settings(self):
+        from knitlad.stitch_model import StitchSettings
+
+        return StitchSettings(lx_over_l0=self.lx, ly_over_l0=self.ly, nodes_per_stitch=self.resolution,
+                              material=material_for(self.d_over_l0))
+
+
+def material_for(d_over_l0: float):
+    """The paper's Nylon with the diameter set by d/l0 (l0 = 9.74 mm kept)."""
+    import dataclasses
+
+    from knitlad.units import NYLON
+
+    if abs(d_over_l0 - NYLON.diameter / NYLON.stitch_length) < 1e-12 or abs(d_over_l0 - 1 / 70) < 1e-12:
+        return NYLON
+    return dataclasses.replace(NYLON, diameter=d_over_l0 * NYLON.stitch_length)
+
+
 def parse_stitches(text: str) -> tuple[int, int]:
     """'42' -> (42, 42); '8x10' -> (8, 10)."""
     m = re.fullmatch(r"\s*(\d+)\s*(?:[xX]\s*(\d+))?\s*", text)

@@ -80,11 +80,12 @@ class Contacts(NamedTuple):
     edge_radius: np.ndarray
     edge_prev: np.ndarray  # previous edge along the yarn, -1 at an open end
     edge_next: np.ndarray  # next edge along the yarn, -1 at an open end
-    edge_yarn: np.ndarray
-    edge_local: np.ndarray
+    edge_yarn: np.ndarray  # physical yarn (see contact_topology)
+    edge_local: np.ndarray  # arc index along the physical yarn
     yarn_edges: np.ndarray
-    yarn_closed: np.ndarray
+    yarn_closed: np.ndarray  # arc indices wrap (rings)
     exclusion: np.ndarray  # (n_yarns,) edges excluded either side along a yarn
+    edge_image: np.ndarray  # (ne,) bool: edge of a periodic image (image-image pairs are skipped)
     params: np.ndarray  # K_N, DAMP_N, K_T, DAMP_T, MU, SKIN
     stats: np.ndarray  # touching pairs, max overlap, sum f_n, sliding pairs
     threads: np.ndarray  # (1,) blocks the broad phase is split into (Numba threads)
@@ -102,14 +103,72 @@ def edge_topology(state: RodState) -> tuple[np.ndarray, np.ndarray, np.ndarray, 
     return edge_yarn.astype(np.int64), edge_local.astype(np.int64), yarn_edges, yarn_closed
 
 
-def edge_neighbours(edge_local, yarn_edges, yarn_closed, edge_yarn) -> tuple[np.ndarray, np.ndarray]:
-    """Previous and next edge of each edge along its yarn (cyclic on closed yarns, -1 at open ends)."""
-    k = np.arange(edge_local.shape[0])
-    n = yarn_edges[edge_yarn]
-    closed = yarn_closed[edge_yarn]
-    prev = np.where(edge_local > 0, k - 1, np.where(closed, k + n - 1, -1))
-    nxt = np.where(edge_local < n - 1, k + 1, np.where(closed, k - n + 1, -1))
-    return prev.astype(np.int64), nxt.astype(np.int64)
+def contact_topology(state: RodState):
+    """What the contact kernels need to know about the yarns, periodic images included.
+
+    Returns (edge_yarn, edge_arc, yarn_edges, yarn_wraps, edge_prev, edge_next, edge_image):
+
+    * ``edge_yarn``: the *physical* yarn of each edge. An image of a yarn
+      periodised along its own period P by k P is the same physical yarn k
+      periods further along, so its edges carry the master's id and the arc
+      index local + k n_edges: the same-yarn exclusion then also works across
+      the seam. Other images (another course, say) are yarns of their own.
+    * ``yarn_wraps``: arc indices wrap around (true rings only; a periodised
+      yarn continues into its images instead).
+    * ``edge_prev``/``edge_next``: the neighbouring edge along the yarn, into
+      the next image across a periodised yarn's seam, -1 at an open end or
+      where that image is not in the scene.
+    * ``edge_image``: the edge belongs to a periodic image.
+    """
+    edge_yarn, edge_local, yarn_edges, yarn_closed = edge_topology(state)
+    n_yarns = state.n_yarns
+    first_edge = np.concatenate([[0], np.cumsum(yarn_edges)[:-1]]).astype(np.int64)
+    last_edge = first_edge + yarn_edges - 1
+    period = np.zeros((n_yarns, 3))
+    period[yarn_closed] = state.edge_shift[last_edge[yarn_closed]]
+    periodised = yarn_closed & np.any(period != 0, axis=1)
+    master = np.arange(n_yarns)
+    shift = np.zeros((n_yarns, 3))
+    is_image = np.zeros(n_yarns, dtype=bool)
+    if state.image_node.size:
+        first_node = state.yarn_start[:-1]
+        where = {int(n): g for g, n in enumerate(state.image_node)}
+        for y in range(n_yarns):
+            g = where.get(int(first_node[y]))
+            if g is not None:
+                is_image[y] = True
+                master[y] = state.node_yarn[state.image_master[g]]
+                shift[y] = state.image_shift[g]
+    key = {}  # (master, lattice shift) -> yarn
+    for y in range(n_yarns):
+        key[(int(master[y]), tuple(np.round(shift[y], 9)))] = y
+    physical = np.arange(n_yarns)
+    arc_offset = np.zeros(n_yarns, dtype=np.int64)
+    for y in np.flatnonzero(is_image):
+        m = master[y]
+        if periodised[m]:
+            P = period[m]
+            k = float(shift[y] @ P / (P @ P))
+            if abs(k - round(k)) < 1e-9 and np.allclose(shift[y], round(k) * P, atol=1e-9 * np.linalg.norm(P)):
+                physical[y] = m
+                arc_offset[y] = int(round(k)) * yarn_edges[m]
+    e = np.arange(edge_yarn.shape[0])
+    out_yarn = physical[edge_yarn].astype(np.int64)
+    edge_arc = (edge_local + arc_offset[edge_yarn]).astype(np.int64)
+    wraps = yarn_closed & ~periodised
+    prev = np.where(edge_local > 0, e - 1, -1).astype(np.int64)
+    nxt = np.where(edge_local < yarn_edges[edge_yarn] - 1, e + 1, -1).astype(np.int64)
+    for y in range(n_yarns):
+        m = master[y]
+        if wraps[m]:
+            prev[first_edge[y]] = last_edge[y]
+            nxt[last_edge[y]] = first_edge[y]
+        elif periodised[m]:
+            before = key.get((int(m), tuple(np.round(shift[y] - period[m], 9))))
+            after = key.get((int(m), tuple(np.round(shift[y] + period[m], 9))))
+            prev[first_edge[y]] = last_edge[before] if before is not None else -1
+            nxt[last_edge[y]] = first_edge[after] if after is not None else -1
+    return out_yarn, edge_arc, yarn_edges, wraps, prev, nxt, is_image[edge_yarn]
 
 
 def make_contacts(state: RodState, model: ContactModel | None, capacity: int | None = None,
@@ -121,9 +180,8 @@ def make_contacts(state: RodState, model: ContactModel | None, capacity: int | N
     growth; the new buffer is rebuilt at the next step.
     """
     ne = state.edge_a.shape[0]
-    edge_yarn, edge_local, yarn_edges, yarn_closed = edge_topology(state)
+    edge_yarn, edge_local, yarn_edges, yarn_closed, edge_prev, edge_next, edge_image = contact_topology(state)
     edge_radius = 0.5 * (state.radius[state.edge_a] + state.radius[state.edge_b])
-    edge_prev, edge_next = edge_neighbours(edge_local, yarn_edges, yarn_closed, edge_yarn)
     if model is None:
         cap = 0
         params = np.zeros(6)
@@ -141,8 +199,10 @@ def make_contacts(state: RodState, model: ContactModel | None, capacity: int | N
             skin,
         ])
         # exclusion: edges within `exclusion_diameters` d of arc, and always the adjacent edge
-        seg = np.bincount(edge_yarn, weights=state.rest_length, minlength=state.n_yarns) / np.maximum(yarn_edges, 1)
-        d_yarn = 2.0 * np.bincount(edge_yarn, weights=edge_radius, minlength=state.n_yarns) / np.maximum(yarn_edges, 1)
+        # (per state yarn: an image is a copy of its master, whose id it carries as its physical yarn)
+        own_yarn = state.node_yarn[state.edge_a]
+        seg = np.bincount(own_yarn, weights=state.rest_length, minlength=state.n_yarns) / np.maximum(yarn_edges, 1)
+        d_yarn = 2.0 * np.bincount(own_yarn, weights=edge_radius, minlength=state.n_yarns) / np.maximum(yarn_edges, 1)
         exclusion = np.maximum(1, np.ceil(model.exclusion_diameters * d_yarn / seg)).astype(np.int64)
     contacts = Contacts(
         pairs=np.zeros((cap, 2), dtype=np.int64),
@@ -159,6 +219,7 @@ def make_contacts(state: RodState, model: ContactModel | None, capacity: int | N
         yarn_edges=yarn_edges,
         yarn_closed=yarn_closed,
         exclusion=exclusion,
+        edge_image=edge_image,
         params=params,
         stats=np.zeros(4),
         threads=np.array([numba.get_num_threads()], dtype=np.int64),

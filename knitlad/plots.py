@@ -100,6 +100,19 @@ def loop_velocity_plot(df, path: str | Path) -> Path:
     return _save(fig, Path(path))
 
 
+def zero_tension_curve_plot(df, d_over_l0: float, path: str | Path) -> Path:
+    """The f_x = 0 curve of the periodised stitch: l_y/l0 against l_x/l0 (f_x > 0 to its right)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(4.2, 3.6), dpi=120)
+    ax.plot(df["lx_over_l0_at_fx0"], df["ly_over_l0"], "k-o", ms=3, label=f"f_x = 0, d/l0 = {d_over_l0:.4g}")
+    ax.set_xlabel("l_x / l0")
+    ax.set_ylabel("l_y / l0")
+    ax.set_title("periodised stitch: f_x > 0 right of the curve", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return _save(fig, Path(path))
+
+
 def summary_plots(df, out_dir: str | Path) -> list[Path]:
     """One PNG per entry of SUMMARY_PLOTS (laddering jobs: one series per (l_y/l0, mu) pair),
     and the single-loop velocity plot for loop jobs."""
@@ -111,6 +124,8 @@ def summary_plots(df, out_dir: str | Path) -> list[Path]:
     if "scene" in ok and (ok["scene"] == "loop").any():
         paths.append(loop_velocity_plot(ok[ok["scene"] == "loop"], out / "loop_velocity_vs_fx.png"))
         ok = ok[ok["scene"] != "loop"]
+    if "scene" in ok:
+        ok = ok[ok["scene"] == "ladder"]  # stitch sweeps: the table says it all
     if not len(ok):
         return paths
     keys = [k for k in ("ly", "mu", "resolution") if k in ok and ok[k].nunique() > 1] or [None]

@@ -91,14 +91,12 @@ def _run_ladder(job: Job):
     return result.summary(), write
 
 
-def _run_loop(job: Job):
-    """The single-loop model: a file of attributes (its summary, settings and scales)."""
+def _attributes_only(result, job: Job):
+    """A reduced model's summary, and a writer of a file of attributes (summary, settings, scales)."""
     import dataclasses
 
-    from knitlad.loop_model import LoopRun
     from knitlad.units import Scales
 
-    result = LoopRun(job.scene_config().settings()).run()
     summary = result.summary()
     settings = {k: v for k, v in dataclasses.asdict(result.settings).items() if k != "material"}
     scales = {f"scale_{k}": v for k, v in Scales(result.settings.material).as_attributes().items()}
@@ -109,7 +107,19 @@ def _run_loop(job: Job):
     return summary, write
 
 
-SCENE_RUNNERS = {"ladder": _run_ladder, "loop": _run_loop}
+def _run_loop(job: Job):
+    from knitlad.loop_model import LoopRun
+
+    return _attributes_only(LoopRun(job.scene_config().settings()).run(), job)
+
+
+def _run_stitch(job: Job):
+    from knitlad.stitch_model import StitchRun
+
+    return _attributes_only(StitchRun(job.scene_config().settings()).run(), job)
+
+
+SCENE_RUNNERS = {"ladder": _run_ladder, "loop": _run_loop, "stitch": _run_stitch}
 
 
 def summary_row(job: Job, attrs: dict | None) -> dict:

@@ -17,6 +17,7 @@ import numpy as np
 from knitlad import units
 from knitlad.contact import MU, ContactModel, Contacts, contact_time_step, make_contacts
 from knitlad.kernels.integrate import (
+    follow_images,
     compute_forces,
     fire_relax,
     first_bad_node,
@@ -140,14 +141,21 @@ class Simulation:
             "candidates": int(self.contacts.n_pairs[0]),
         }
 
+    def fresh_contacts(self) -> Contacts:
+        """The contact buffers with a candidate list valid at the current positions."""
+        s = self.state
+        follow_images(s.x, s.v, s.image_node, s.image_master, s.image_shift)
+        if self.contact_model is None:
+            return self.contacts  # empty buffers: nothing to refresh
+        while not refresh_contacts(s.x, s.edge_a, s.edge_b, s.edge_shift, self.contacts):
+            self._grow_contacts()
+        return self.contacts
+
     def touching_pairs(self, yarn_a: int, yarn_b: int) -> int:
         """Pairs of edges of yarns ``yarn_a`` and ``yarn_b`` touching at the current positions."""
         if self.contact_model is None:
             return 0
-        s = self.state
-        while not refresh_contacts(s.x, s.edge_a, s.edge_b, s.edge_shift, self.contacts):
-            self._grow_contacts()
-        c = self.contacts
+        s, c = self.state, self.fresh_contacts()
         return int(touching_pairs_between(s.x, s.edge_a, s.edge_b, s.edge_shift, c.edge_radius, c.edge_prev,
                                           c.edge_next, c.edge_yarn, c.pairs, c.n_pairs[0], yarn_a, yarn_b))
 

@@ -35,6 +35,9 @@ class RodState(NamedTuple):
     yarn_start: np.ndarray  # (n_yarns + 1,) int64 offsets
     rail_node: np.ndarray  # (k,) int64 nodes that may only slide along a line ...
     rail_axis: np.ndarray  # (k, 3) ... the unit direction of that line
+    image_node: np.ndarray  # (g,) int64 nodes of periodic images: held copies that follow ...
+    image_master: np.ndarray  # (g,) int64 ... their master node ...
+    image_shift: np.ndarray  # (g, 3) ... shifted by a lattice vector: x[image] = x[master] + shift
     # edges (ne,)
     edge_a: np.ndarray
     edge_b: np.ndarray
@@ -108,6 +111,7 @@ class _Yarn:
     natural_curvature: str
     held: dict[int, np.ndarray] = field(default_factory=dict)  # node -> velocity (m/s)
     rails: dict[int, np.ndarray] = field(default_factory=dict)  # node -> unit axis it slides along
+    image_of: tuple[int, np.ndarray] | None = None  # (master yarn, lattice shift [m]) for a periodic image
     forces: dict[int, np.ndarray] = field(default_factory=dict)  # node -> force (N)
     twist_held: set[int] = field(default_factory=set)
 
@@ -191,6 +195,27 @@ class Scene:
             raise ValueError(f"axis must be a non-zero 3-vector, got {axis!r}")
         for node in nodes:
             y.rails[self._node_index(y, node)] = a / norm
+
+    def add_image(self, yarn: int, shift: Sequence[float]) -> int:
+        """A periodic image of ``yarn`` shifted by the lattice vector ``shift`` [m]; returns its index.
+
+        The image is a held copy whose nodes follow the master's at every force
+        evaluation; the forces on it are discarded. Contact between a yarn and
+        images (never between two images) makes a cell periodic: each real node
+        feels its neighbours in all the surrounding cells.
+        """
+        master = self._yarn(yarn)
+        if master.image_of is not None:
+            raise ValueError("an image of an image: give the master yarn")
+        shift = np.asarray(shift, dtype=float)
+        if shift.shape != (3,) or not np.any(shift):
+            raise ValueError(f"shift must be a non-zero 3-vector, got {shift!r}")
+        y = _Yarn(master.points + shift, master.material, master.closed, master.period.copy(),
+                  master.natural_curvature)
+        y.held = {j: np.zeros(3) for j in range(master.points.shape[0])}
+        y.image_of = (yarn, shift)
+        self._yarns.append(y)
+        return len(self._yarns) - 1
 
     def hold_twist(self, yarn: int, edges: Sequence[int]) -> None:
         """Clamp the twist angle of ``edges`` (a clamped end: hold 2 nodes and edge 0)."""
@@ -303,9 +328,16 @@ class Scene:
         f_ext = np.zeros((n, 3))
         theta_held = np.zeros(ne, dtype=bool)
         rail_node, rail_axis = [], []
+        image_node, image_master, image_shift = [], [], []
         first_edge = 0
         for iy, y in enumerate(self._yarns):
             s = int(yarn_start[iy])
+            if y.image_of is not None:
+                m, shift = y.image_of
+                k = y.points.shape[0]
+                image_node.extend(range(s, s + k))
+                image_master.extend(range(int(yarn_start[m]), int(yarn_start[m]) + k))
+                image_shift.extend([shift / units.LENGTH] * k)
             for j, axis in sorted(y.rails.items()):
                 if j not in y.held:
                     rail_node.append(s + j)
@@ -324,6 +356,8 @@ class Scene:
             x=x, v=np.zeros((n, 3)), mass=mass, radius=radius, held=held, v_prescribed=v_prescribed,
             f_ext=f_ext, node_yarn=node_yarn, yarn_start=yarn_start,
             rail_node=np.array(rail_node, dtype=np.int64), rail_axis=np.array(rail_axis, dtype=float).reshape(-1, 3),
+            image_node=np.array(image_node, dtype=np.int64), image_master=np.array(image_master, dtype=np.int64),
+            image_shift=np.array(image_shift, dtype=float).reshape(-1, 3),
             edge_a=edge_a, edge_b=edge_b, edge_shift=edge_shift, rest_length=rest_length, EA=EA,
             stretch_damping=stretch_damping, theta=theta, omega=np.zeros(ne), twist_inertia=twist_inertia,
             theta_held=theta_held, ref_u=ref_u, tangent=tangent,
@@ -379,6 +413,7 @@ def cut_edge(state: RodState, edge: int) -> RodState:
     fields["hinge_e1"] = remap[state.hinge_e1[keep_h]].astype(np.int64)
     fields["yarn_start"] = yarn_start.astype(np.int64)
     fields["node_yarn"] = node_yarn
-    for name in ("x", "v", "mass", "radius", "held", "v_prescribed", "f_ext", "rail_node", "rail_axis"):
+    for name in ("x", "v", "mass", "radius", "held", "v_prescribed", "f_ext", "rail_node", "rail_axis",
+                 "image_node", "image_master", "image_shift"):
         fields[name] = np.array(fields[name], copy=True)
     return RodState(**fields)

@@ -34,9 +34,9 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from knitlad.config import CutConfig, LoopConfig
+from knitlad.config import CutConfig, LoopConfig, StitchConfig
 
-SCENES: dict[str, type[BaseModel]] = {"ladder": CutConfig, "loop": LoopConfig}
+SCENES: dict[str, type[BaseModel]] = {"ladder": CutConfig, "loop": LoopConfig, "stitch": StitchConfig}
 COMPRESSIONS = ("gzip", "lzf", "none")
 
 
@@ -120,8 +120,9 @@ class SweepConfig(BaseModel):
     """A whole sweep file (see the module docstring)."""
 
     model_config = ConfigDict(extra="forbid")
-    scene: Literal["ladder", "loop"] = Field(
-        "ladder", description="what each job runs: ladder = `knitlad cut`, loop = `knitlad loop`")
+    scene: Literal["ladder", "loop", "stitch"] = Field(
+        "ladder", description="what each job runs: ladder = `knitlad cut`, loop = `knitlad loop`, "
+        "stitch = `knitlad stitch`")
     fixed: dict[str, Any] = Field(default_factory=dict, description="scene fields common to all jobs (scene units)")
     sweep: Sweep = Field(description="the swept axes and how they combine")
     output: Output = Field(default_factory=Output, description="what each job writes")

@@ -198,3 +198,13 @@ def test_a_single_loop_sweep_tabulates_velocity_against_tension_and_friction(tmp
     assert df["v_lad_over_cb"][0] > df["v_lad_over_cb"][1]  # friction slows the release
     p = knitlad("plot", str(tmp_path / "out"))
     assert p.returncode == 0 and (tmp_path / "out" / "plots" / "loop_velocity_vs_fx.png").stat().st_size > 1000
+
+
+def test_a_stitch_sweep_maps_the_tension_sign(tmp_path):
+    cfg = write_config(tmp_path / "s.yaml", {"scene": "stitch", "fixed": {"ly": 0.25},
+                                             "sweep": {"axes": {"lx": [0.30, 0.40]}}})
+    _, jobs = load_sweep(cfg)
+    run_sweep(jobs, tmp_path / "out", workers=1, progress=False)
+    df = read_summary(tmp_path / "out")
+    assert list(df["status"]) == ["ok", "ok"]
+    assert df["fx"][0] < 0 < df["fx"][1]  # compressed at 0.30 l0, stretched at 0.40 l0 (l_y = 0.25 l0)

@@ -151,7 +151,7 @@ def excluded_pair(i, j, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusio
 @njit(**PARALLEL_OPTS)
 def build_candidate_pairs(
     x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion,
-    cell_size, skin, pairs, keys, n_threads=1,
+    edge_image, cell_size, skin, pairs, keys, n_threads=1,
 ):
     """Fill ``pairs`` (cap, 2) with candidate edge pairs (i < j), sorted; return how many were found.
 
@@ -196,7 +196,7 @@ def build_candidate_pairs(
         hi = (blk + 1) * ne // n_blocks
         found[blk] = _candidates_of_block(
             lo, hi, x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed,
-            exclusion, skin, cells, mid, reach, bucket_count, order, table, local[blk],
+            exclusion, edge_image, skin, cells, mid, reach, bucket_count, order, table, local[blk],
         )
     n = 0
     for blk in range(n_blocks):
@@ -217,9 +217,12 @@ def build_candidate_pairs(
 @njit(**NUMBA_OPTS)
 def _candidates_of_block(
     lo, hi, x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed,
-    exclusion, skin, cells, mid, reach, bucket_count, order, table, out,
+    exclusion, edge_image, skin, cells, mid, reach, bucket_count, order, table, out,
 ):
     """Candidate pairs (i, j > i) for edges i in [lo, hi) into ``out``; partners of each i sorted.
+
+    Two edges of periodic images never pair: the image of that pair is already a
+    pair of a real edge with an image.
 
     Returns how many were found (may exceed ``out``'s size: then only the count is valid).
     """
@@ -237,6 +240,8 @@ def _candidates_of_block(
                     for idx in range(bucket_count[h], bucket_count[h + 1]):
                         j = order[idx]
                         if j <= i or cells[j, 0] != cx or cells[j, 1] != cy or cells[j, 2] != cz:
+                            continue
+                        if edge_image[i] and edge_image[j]:
                             continue
                         # bounding spheres first: most neighbours in the 27 cells are far
                         r = reach[i] + reach[j]
@@ -451,7 +456,7 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
     cell = longest + 2.0 * r_max + skin
     n = build_candidate_pairs(
         x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_yarn, c.edge_local, c.yarn_edges,
-        c.yarn_closed, c.exclusion, cell, skin, c.pairs, c.keys, c.threads[0],
+        c.yarn_closed, c.exclusion, c.edge_image, cell, skin, c.pairs, c.keys, c.threads[0],
     )
     if n > c.pairs.shape[0]:
         c.pairs[:n_old] = old_pairs

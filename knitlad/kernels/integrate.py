@@ -51,6 +51,7 @@ def compute_forces(s, w, c, twist, drag, dt):
     only while relaxing. ``dt``: the step over which contact slip accumulates.
     Returns False if the contact buffer overflowed (forces incomplete).
     """
+    follow_images(s.x, s.v, s.image_node, s.image_master, s.image_shift)
     for i in range(s.x.shape[0]):
         for k in range(3):
             w.force[i, k] = s.f_ext[i, k]
@@ -87,6 +88,17 @@ def compute_forces(s, w, c, twist, drag, dt):
 
 
 @njit(**NUMBA_OPTS)
+def follow_images(x, v, image_node, image_master, image_shift):
+    """Put every periodic-image node at its master's position plus its lattice shift, with its velocity."""
+    for g in range(image_node.shape[0]):
+        i = image_node[g]
+        m = image_master[g]
+        for k in range(3):
+            x[i, k] = x[m, k] + image_shift[g, k]
+            v[i, k] = v[m, k]
+
+
+@njit(**NUMBA_OPTS)
 def rail_forces(rail_node, rail_axis, force):
     """Keep only the component along its rail of the force on each rail node (the rail
     takes the rest), so a node starting at rest on its rail moves along it."""
@@ -100,6 +112,7 @@ def rail_forces(rail_node, rail_axis, force):
 @njit(**NUMBA_OPTS)
 def potential_energy(s, w, c, twist):
     """(stretching, bending, twisting, contact, external) energies [uJ] at the current state."""
+    follow_images(s.x, s.v, s.image_node, s.image_master, s.image_shift)
     edge_vectors(s.x, s.edge_a, s.edge_b, s.edge_shift, w.e, w.elen)
     es = stretching_energy(w.elen, s.rest_length, s.EA)
     if twist:

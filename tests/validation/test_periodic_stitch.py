@@ -1,0 +1,79 @@
+"""Periodic images and the periodised stitch: tensions as derivatives of the cell energy,
+checked on cases with an analytic answer, then the stitch's f_x = 0 point."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import knitlad as kl
+from knitlad import units
+from knitlad.contact import ContactModel
+from knitlad.scenes.stitch import PeriodicStitch
+from knitlad.stitch_model import cell_tensions, stitch_tensions, zero_tension_lx
+
+M = kl.NYLON
+D = M.diameter
+
+
+def straight_cell(n: int, length: float, rest_length: float, ly: float, images_y: int = 1, contact=None):
+    """A straight yarn along x, periodised over ``length`` [m], held at rest length ``rest_length``,
+    with images along x (the same yarn) and along y at spacing ``ly``."""
+    scene = kl.Scene(M)
+    pts = np.zeros((n, 3))
+    pts[:, 0] = np.arange(n) * rest_length / n
+    y = scene.add_yarn(pts, closed=True, period=(rest_length, 0.0, 0.0))
+    for i in (-1, 0, 1):
+        for j in range(-images_y, images_y + 1):
+            if i or j:
+                scene.add_image(y, (i * rest_length, j * ly, 0.0))
+    state = scene.build()
+    cell = PeriodicStitch(None, state, y, rest_length / units.LENGTH, ly / units.LENGTH)
+    cell.set_cell(length / units.LENGTH, ly / units.LENGTH)
+    return cell, kl.Simulation(state, contact=contact)
+
+
+def test_images_follow_their_master():
+    cell, sim = straight_cell(20, 5e-3, 5e-3, 1e-3, contact=None)
+    sim.state.v[:20, 1] = 1e-3  # the real yarn drifts along y
+    sim.run(1e-4)
+    s = sim.state
+    np.testing.assert_allclose(s.x[s.image_node], s.x[s.image_master] + s.image_shift, atol=1e-12)
+
+
+def test_a_yarn_does_not_touch_its_own_continuation_across_the_seam():
+    """The image along x continues the yarn: its first edge is the neighbour of the last edge."""
+    cell, sim = straight_cell(20, 5e-3, 5e-3, 1.0e-3, contact=ContactModel.for_force(0.3, D))
+    sim.step(1)
+    assert sim.contact_stats()["touching"] == 0
+
+
+def test_the_axial_tension_of_a_stretched_periodic_yarn_is_EA_times_strain():
+    cell, sim = straight_cell(20, 5.05e-3, 5e-3, 1e-3, contact=None)
+    fx, fy = cell_tensions(sim, cell, M.f0)
+    expected = M.young_modulus * M.area * 0.01 / M.f0  # EA x strain, in f0
+    assert fx == pytest.approx(expected, rel=1e-4)
+    assert abs(fy) < 1e-6 * expected
+
+
+def test_pressing_a_yarn_against_its_images_gives_the_penalty_force():
+    """Courses at spacing l_y < d: every real edge overlaps the one above and below by d - l_y;
+    E_cell = n_edges k (d - l_y)^2 / 2 (each image contact counted half), F_y = -n_edges k (d - l_y)."""
+    n, ly = 20, 0.9 * D
+    model = ContactModel.for_force(0.3, D)
+    cell, sim = straight_cell(n, 5e-3, 5e-3, ly, contact=model)
+    fx, fy = cell_tensions(sim, cell, M.f0)
+    expected = -n * model.stiffness * (D - ly) / M.f0
+    assert fy == pytest.approx(expected, rel=1e-3)
+    assert abs(fx) < 1e-6 * abs(expected)
+
+
+def test_the_stitch_changes_from_compression_to_tension_across_the_zero_curve():
+    tensions = [stitch_tensions(lx, 0.25).fx for lx in (0.30, 0.35, 0.40)]
+    assert tensions[0] < 0 < tensions[1] < tensions[2]  # measured -1.40, 1.56, 17.4
+
+
+def test_the_zero_tension_point_is_converged_in_the_resolution():
+    """l_x/l0 at f_x = 0 for l_y/l0 = 0.25: 0.3366 (36 nodes/stitch) and 0.3345 (48); 24 gives 0.3304."""
+    assert zero_tension_lx(0.25, nodes_per_stitch=36) == pytest.approx(zero_tension_lx(0.25, nodes_per_stitch=48),
+                                                                        abs=0.005)
