@@ -75,6 +75,8 @@ def spatio_temporal_from_file(h5_path: str | Path, path: str | Path) -> Path:
                                     path)
 
 
+PAPER_DER_VELOCITY = ((1.58, 0.176), (15.67, 1.05))  # 42 x 42, mu = 0.4, l_y/l0 = 0.25 (paper, Fig. 7)
+
 SUMMARY_PLOTS = {
     # file name: (y column, y label, paper figure)
     "damage_vs_fx.png": ("n_lad_over_ny", "n_lad / n_y", "Fig. 3e"),
@@ -89,13 +91,22 @@ def loop_velocity_plot(df, path: str | Path) -> Path:
     fig, ax = plt.subplots(figsize=(4.5, 3.4), dpi=120)
     for mu, g in df.groupby("mu", sort=True):
         g = g.sort_values("fx")
-        ax.plot(g["fx"], g["v_lad_over_cb"], "o-", ms=4, label=f"mu = {mu}")
+        released = g["released"].astype(bool)
+        line, = ax.plot(g["fx"][released], g["v_lad_over_cb"][released], "o-", ms=4, label=f"mu = {mu}")
+        if (~released).any():  # still hooked at the end of the run: v_lad = 0, not part of the curve
+            ax.plot(g["fx"][~released], 0 * g["fx"][~released], "x", color=line.get_color())
     f = np.linspace(0, float(df["fx"].max()), 100)
     ax.plot(f, 0.34 * np.sqrt(f), "k--", lw=0.8, label="0.34 sqrt(f_x) (paper, mu = 0)")
-    ax.set_xlabel("f_x")
-    ax.set_ylabel("v_lad / c_b")
-    ax.set_title("single loop: v_lad/c_b against f_x (paper Fig. 5c)", fontsize=9)
-    ax.legend(fontsize=7)
+    return _labelled(fig, ax, "f_x", "v_lad / c_b", "single loop: v_lad/c_b against f_x (paper Fig. 5c)", path)
+
+
+def _labelled(fig, ax, xlabel: str, ylabel: str, title: str, path: str | Path) -> Path:
+    """Axis labels, title and legend (if anything is labelled), then save."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=9)
+    if ax.get_legend_handles_labels()[1]:
+        ax.legend(fontsize=7)
     fig.tight_layout()
     return _save(fig, Path(path))
 
@@ -105,12 +116,7 @@ def zero_tension_curve_plot(df, d_over_l0: float, path: str | Path) -> Path:
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(4.2, 3.6), dpi=120)
     ax.plot(df["lx_over_l0_at_fx0"], df["ly_over_l0"], "k-o", ms=3, label=f"f_x = 0, d/l0 = {d_over_l0:.4g}")
-    ax.set_xlabel("l_x / l0")
-    ax.set_ylabel("l_y / l0")
-    ax.set_title("periodised stitch: f_x > 0 right of the curve", fontsize=9)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    return _save(fig, Path(path))
+    return _labelled(fig, ax, "l_x / l0", "l_y / l0", "periodised stitch: f_x > 0 right of the curve", path)
 
 
 def summary_plots(df, out_dir: str | Path) -> list[Path]:
@@ -135,16 +141,13 @@ def summary_plots(df, out_dir: str | Path) -> list[Path]:
         for key, g in groups:
             g = g.sort_values("fx_ini")
             key = key if isinstance(key, tuple) else (key,)
-            legend = ", ".join(f"{k} = {v}" for k, v in zip(keys, key) if k is not None) or None
+            legend = ", ".join(f"{k} = {v}" for k, v in zip(keys, key) if k is not None) or "knitlad"
             ax.plot(g["fx_ini"], g[column], "o-", ms=4, label=legend)
+        if column == "v_lad_over_cb":
+            px, py = zip(*PAPER_DER_VELOCITY)
+            ax.plot(px, py, "k+", ms=8, label="paper, DER 42 x 42")
         if column == "fx_fin":
             lim = float(np.nanmax(ok["fx_ini"])) if len(ok) else 1.0
             ax.plot([0, lim], [0, lim], "k:", lw=0.8, label="f_x^fin = f_x^ini")
-        ax.set_xlabel("f_x^ini")
-        ax.set_ylabel(label)
-        ax.set_title(f"{label} against f_x^ini (paper {figure})", fontsize=9)
-        if ax.get_legend_handles_labels()[1]:
-            ax.legend(fontsize=7)
-        fig.tight_layout()
-        paths.append(_save(fig, out / name))
+        paths.append(_labelled(fig, ax, "f_x^ini", label, f"{label} against f_x^ini (paper {figure})", out / name))
     return paths
