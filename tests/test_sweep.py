@@ -170,7 +170,9 @@ def test_ctrl_c_keeps_finished_jobs_and_a_consistent_summary_and_the_rerun_goes_
     cfg = write_config(tmp_path / "c.yaml", {"fixed": {**TINY, "lx": 0.38}, "sweep": {"axes": {"mu": [0.1, 0.2, 0.3]}}})
     out = tmp_path / "out"
     proc = subprocess.Popen([*KNITLAD, "sweep", str(cfg), "--out", str(out), "--workers", "1"], cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            # a job started in the background (nohup, &) inherits SIGINT ignored: undo that
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.time() + 240
     while time.time() < deadline and not list((out / "jobs").glob("*.h5")):
         time.sleep(0.2)
