@@ -3,8 +3,8 @@
 Stages, each driven here and measured by :mod:`knitlad.measure`:
 
 1. **stretch** at mu = 0 to the target: the knit is built at the target l_y and
-   at l_x = min(target, 0.30 l0). It is not built at the paper's 0.245 l0
-   because there the fabric is in compression (f_x < 0) and buckles out of plane,
+   at l_x = min(target, 0.30 l0) (narrower for l_y > 0.25 l0: :func:`build_width`).
+   It is not built at the paper's 0.245 l0 because there the fabric is in compression (f_x < 0) and buckles out of plane,
    and the buckled structure survives the stretch (measured: the knit tangles).
    From there the whole fabric is stretched affinely in small increments, each
    followed by FIRE relaxation with the held ends and edge courses fixed. With
@@ -48,6 +48,27 @@ from knitlad.timestep import DEFAULT_SAFETY, critical_time_steps
 from knitlad.units import NYLON, Material
 
 BUILD_LX = 0.30  # widest l_x/l0 at which the built knit is in tension and its loops still overlap well
+
+
+def build_width(ly_over_l0: float, material: Material, nodes_per_stitch: int = 36) -> float:
+    """l_x/l0 at which to build the knit for this l_y: BUILD_LX, or narrower where the
+    periodised stitch's f_x = 0 curve lies left of it (l_y/l0 > 0.25), less 0.01.
+
+    At l_y/l0 = 0.302 a knit built at 0.30 l0 has loops that overlap the next
+    course by 0.12 d only: it comes apart while being stretched (seen: f_x never
+    reached 13.6 up to l_x/l0 = 0.945). At the stitch's f_x = 0 width (0.263 l0
+    there) they overlap by 2.5 d and the knit is neither pulled nor compressed;
+    0.01 narrower leaves room for force control below the tension the finite knit
+    carries there (6 x 8 stitches, 16 nodes/stitch: f_x = 8 at the f_x = 0 width).
+    """
+    if ly_over_l0 <= 0.25:
+        return BUILD_LX  # the f_x = 0 width is above 0.30 l0 here (0.337 at l_y/l0 = 0.25)
+    from knitlad.stitch_model import zero_tension_lx
+
+    try:
+        return min(BUILD_LX, zero_tension_lx(ly_over_l0, material=material, nodes_per_stitch=nodes_per_stitch) - 0.01)
+    except ValueError:
+        return BUILD_LX
 
 
 @dataclass
@@ -140,7 +161,8 @@ class LadderRun:
         self.s = settings
         self.progress = progress or (lambda stage, frac: None)
         m = settings.material
-        self.lx = min(settings.lx_over_l0, BUILD_LX) if settings.lx_over_l0 is not None else BUILD_LX
+        self.build_lx = build_width(settings.ly_over_l0, m, settings.nodes_per_stitch)
+        self.lx = min(settings.lx_over_l0, self.build_lx) if settings.lx_over_l0 is not None else self.build_lx
         self.ly = settings.ly_over_l0  # current box stretch, l/l0
         geometry = Jersey(
             n_x=settings.n_x, n_y=settings.n_y, l_x=self.lx * m.stitch_length, l_y=self.ly * m.stitch_length,
@@ -236,7 +258,7 @@ class LadderRun:
         if fa > (1 + tol) * target:
             # the cheap phase overshot: bracket from below by stepping back (not below the build width)
             b, fb = a, fa
-            a = max(BUILD_LX, self.lx - 4 * s.stretch_increment)
+            a = max(self.build_lx, self.lx - 4 * s.stretch_increment)
             if a < self.lx - 1e-9:
                 self.stretch_to(a, s.ly_over_l0)
                 fa = self._relax_to_steady_tension()

@@ -1,0 +1,28 @@
+"""The laddering protocol's choices that measurements made: where the knit is built."""
+
+from __future__ import annotations
+
+import pytest
+
+from knitlad.protocol import BUILD_LX, LadderRun, LadderSettings, build_width
+from knitlad.units import NYLON
+
+
+def test_tall_cells_are_built_narrower_so_that_the_loops_interlock():
+    """At l_y/l0 = 0.302, Crane loops built at 0.30 l0 overlap the next course by 0.12 d only and the
+    knit comes apart; at the stitch's f_x = 0 width they overlap by more than 2 d."""
+    assert build_width(0.25, NYLON) == BUILD_LX
+    lx = build_width(0.302, NYLON)
+    assert 0.24 < lx < 0.29
+    run = LadderRun(LadderSettings(n_x=4, n_y=6, fx_target=None, lx_over_l0=0.35, ly_over_l0=0.302))
+    l0, d = NYLON.stitch_length, NYLON.diameter
+    overlap = 2 * run.knit.H - 0.302 * l0
+    assert overlap > 2 * d
+
+
+@pytest.mark.parametrize("ly", [0.302])
+def test_force_control_reaches_its_target_in_a_tall_knit(ly):
+    run = LadderRun(LadderSettings(n_x=6, n_y=8, fx_target=4.0, ly_over_l0=ly, nodes_per_stitch=16))
+    run.stretch()
+    assert run.result.fx_within_tolerance
+    assert run.result.fx_ini == pytest.approx(4.0, rel=0.02)
