@@ -119,7 +119,6 @@ def cut(
     from knitlad.io.hdf5 import write_ladder_result
     from knitlad.plots import spatio_temporal_diagram
     from knitlad.protocol import LadderRun
-
     from knitlad.simulation import SimulationBlowUp
 
     progress = _StageProgress()

@@ -18,7 +18,6 @@ from __future__ import annotations
 import numpy as np
 
 
-
 def tension_per_thread(reactions_N: np.ndarray, left_end: np.ndarray, right_end: np.ndarray, f0: float) -> float:
     """f_x = F_x / (n_y f0) with F_x the mean of the right-end pull and minus the left-end pull [N]."""
     F_x = 0.5 * (reactions_N[right_end, 0].sum() - reactions_N[left_end, 0].sum())

@@ -11,22 +11,21 @@ from contextlib import contextmanager
 from typing import Callable
 
 import numba
-
 import numpy as np
 
 from knitlad import units
 from knitlad.contact import MU, ContactModel, Contacts, contact_time_step, make_contacts
+from knitlad.kernels.contact import refresh_contacts, touching_pairs_between
 from knitlad.kernels.integrate import (
-    follow_images,
     compute_forces,
     fire_relax,
     first_bad_node,
+    follow_images,
     half_kick,
     kinetic_energy,
     potential_energy,
     verlet_steps,
 )
-from knitlad.kernels.contact import refresh_contacts, touching_pairs_between
 from knitlad.state import RodState, Workspace
 from knitlad.timestep import DEFAULT_SAFETY, TimeStepLimits, critical_time_steps
 

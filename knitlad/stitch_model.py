@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -73,7 +73,6 @@ class StitchRun:
     def __init__(self, settings: StitchSettings) -> None:
         self.s = settings
         m = settings.material
-        l0 = m.stitch_length
         self.ly = min(settings.ly_over_l0, BUILD_LY)
         self.lx, geometry = self._build_geometry()
         self.cell: PeriodicStitch = build_periodic_stitch(geometry)

@@ -9,6 +9,7 @@ import math
 
 from numba import njit, prange
 
+from knitlad.kernels.contact import contact_energy, contact_forces, refresh_contacts
 from knitlad.kernels.elastic import (
     bending_energy,
     bending_forces,
@@ -18,7 +19,6 @@ from knitlad.kernels.elastic import (
     stretching_energy,
     stretching_forces,
 )
-from knitlad.kernels.contact import contact_energy, contact_forces, refresh_contacts
 from knitlad.kernels.frames import material_frames, transport_reference_frames, update_reference_twist
 
 # fast-math without "nnan"/"ninf", so the blow-up guard still sees NaN and infinity

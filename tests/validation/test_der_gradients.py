@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import knitlad as kl
-from knitlad.kernels.integrate import compute_forces, potential_energy
 from knitlad.contact import make_contacts
+from knitlad.kernels.integrate import compute_forces, potential_energy
 from knitlad.state import Workspace
 
 

@@ -7,8 +7,8 @@ import math
 import numpy as np
 
 import knitlad as kl
-from knitlad.kernels.integrate import compute_forces
 from knitlad.contact import make_contacts
+from knitlad.kernels.integrate import compute_forces
 from knitlad.state import Workspace
 
 B = kl.NYLON.bending_stiffness
