@@ -19,6 +19,7 @@ import math
 import os
 import signal
 import sys
+import threading
 import time
 import traceback
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -188,9 +189,30 @@ class SweepProgress:
             self.stream.write("\n")
 
 
-def _ignore_sigint() -> None:
-    # Ctrl-C goes to the whole process group: the parent alone decides what to keep
+def _init_worker() -> None:
+    """Pool worker set-up: leave Ctrl-C to the parent, and die with it.
+
+    Ctrl-C goes to the whole process group: the parent alone decides what to
+    keep. If the parent is killed outright (SIGKILL, OOM killer), Linux sends the
+    worker SIGTERM (PR_SET_PDEATHSIG) instead of leaving it to compute on as an
+    orphan (seen: orphans finishing stale jobs an hour later).
+    """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # 1 = PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            pass
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM (kill, a batch system ending the job): handled as Ctrl-C."""
+
+
+def _on_sigterm(signum, frame):
+    raise _Terminated()
 
 
 def compile_kernels() -> None:
@@ -224,7 +246,8 @@ def run_sweep(
     """Run the jobs that have no file yet (all with ``force``; failed ones too with ``retry_failed``).
 
     The summary is rewritten after every finished job and once more at the end,
-    also after Ctrl-C (then ``interrupted`` is set and the unfinished jobs stay pending).
+    also after Ctrl-C or SIGTERM (then ``interrupted`` is set, the workers are
+    stopped and the unfinished jobs stay pending).
     """
     out = Path(out_dir)
     jobs_dir = out / "jobs"
@@ -256,6 +279,10 @@ def run_sweep(
         if bar:
             bar.update(row["status"])
 
+    previous = signal.getsignal(signal.SIGTERM)
+    main_thread = threading.current_thread() is threading.main_thread()
+    if main_thread:
+        signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         if todo:
             if executor == "dask":
@@ -270,6 +297,8 @@ def run_sweep(
         write_summary(out, list(outcome.rows.values()))
         if bar:
             bar.close()
+        if main_thread:
+            signal.signal(signal.SIGTERM, previous)
     return outcome
 
 
@@ -289,7 +318,7 @@ def _run_pool(todo: list[Job], jobs_dir: Path, workers: int | None, runner: Runn
     queue = list(reversed(todo))
     ctx = get_context("spawn")  # a fresh interpreter per worker: no forked Numba thread pools
     while queue:
-        pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_ignore_sigint)
+        pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker)
         running = {}
         try:
             while queue or running:

@@ -166,7 +166,9 @@ def test_a_dead_worker_fails_only_its_job_and_the_pool_is_restarted(tmp_path):
     assert again.ran == 0 and again.skipped == 4
 
 
-def test_ctrl_c_keeps_finished_jobs_and_a_consistent_summary_and_the_rerun_goes_on(tmp_path):
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_ctrl_c_keeps_finished_jobs_and_a_consistent_summary_and_the_rerun_goes_on(tmp_path, sig):
+    """Ctrl-C (SIGINT to the process group) and kill (SIGTERM to the parent): the same clean stop."""
     cfg = write_config(tmp_path / "c.yaml", {"fixed": {**TINY, "lx": 0.38}, "sweep": {"axes": {"mu": [0.1, 0.2, 0.3]}}})
     out = tmp_path / "out"
     proc = subprocess.Popen([*KNITLAD, "sweep", str(cfg), "--out", str(out), "--workers", "1"], cwd=ROOT,
@@ -177,7 +179,13 @@ def test_ctrl_c_keeps_finished_jobs_and_a_consistent_summary_and_the_rerun_goes_
     while time.time() < deadline and not list((out / "jobs").glob("*.h5")):
         time.sleep(0.2)
     assert list((out / "jobs").glob("*.h5")), "no job finished in time"
-    os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
+    children = subprocess.run(["pgrep", "-P", str(proc.pid)], capture_output=True, text=True).stdout.split()
+    workers = [c for c in children if b"spawn_main" in Path(f"/proc/{c}/cmdline").read_bytes()]
+    assert workers, "no pool worker found"
+    if sig == signal.SIGINT:
+        os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
+    else:
+        os.kill(proc.pid, signal.SIGTERM)  # as kill or a batch system: the parent only
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
     assert "interrupted" in err and "Traceback" not in err
@@ -186,6 +194,9 @@ def test_ctrl_c_keeps_finished_jobs_and_a_consistent_summary_and_the_rerun_goes_
     assert 1 <= len(done) < 3 and set(df["status"]) <= {"ok", "pending"}
     assert {f.stem for f in (out / "jobs").glob("*.h5")} == done
     assert not list((out / "jobs").glob("*.tmp"))
+    time.sleep(1.0)
+    alive = [w for w in workers if Path(f"/proc/{w}").exists()]
+    assert not alive, "a worker outlived the sweep"
     p = knitlad("sweep", str(cfg), "--out", str(out))
     assert p.returncode == 0 and f"{len(done)} already done" in p.stdout
     assert (read_summary(out)["status"] == "ok").all()
