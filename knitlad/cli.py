@@ -90,7 +90,8 @@ def cut(
     ly: float = typer.Option(0.25, "--ly", help="Stretch l_y/l0."),
     mu: float = typer.Option(0.4, "--mu", help="Friction coefficient during laddering."),
     stitches: str = typer.Option("42", "--stitches", help="Fabric size: N (N x N) or NXxNY."),
-    resolution: int = typer.Option(24, "--resolution", help="Nodes per stitch."),
+    preset: str = typer.Option("default", "--preset", help="Accuracy preset: fast, default or accurate (docs/accuracy.md); sets the resolution."),
+    resolution: int = typer.Option(None, "--resolution", help="Nodes per stitch (default: the preset's, 16/24/36)."),
     max_time_ms: float = typer.Option(30.0, "--max-time-ms", help="Longest laddering time after the cut [ms]."),
     out: str = typer.Option(None, "--out", help="Output folder (HDF5 + PNG); default runs/cut-<time>."),
     json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
@@ -110,7 +111,8 @@ def cut(
     if fx is None and lx is None:
         fx = 13.6
     try:
-        cfg = CutConfig(fx=fx, lx=lx, ly=ly, mu=mu, n_x=n_x, n_y=n_y, resolution=resolution, max_time_ms=max_time_ms)
+        cfg = CutConfig(fx=fx, lx=lx, ly=ly, mu=mu, n_x=n_x, n_y=n_y, resolution=resolution, preset=preset,
+                        max_time_ms=max_time_ms)
     except ValidationError as e:
         field, _, reason = one_line(e).partition(": ")
         option = {"n_x": "--stitches", "n_y": "--stitches", "max_time_ms": "--max-time-ms"}.get(field, f"--{field}")
@@ -179,7 +181,8 @@ def loop(
     mu: float = typer.Option(0.4, "--mu", help="Friction coefficient after the release."),
     lx: float = typer.Option(0.30, "--lx", help="Column width l_x/l0 (<= 0.34: the loops must overlap)."),
     ly: float = typer.Option(0.25, "--ly", help="Row spacing l_y/l0."),
-    resolution: int = typer.Option(36, "--resolution", help="Nodes per stitch."),
+    preset: str = typer.Option("default", "--preset", help="Accuracy preset: fast, default or accurate (docs/accuracy.md); sets the resolution."),
+    resolution: int = typer.Option(None, "--resolution", help="Nodes per stitch (default: the preset's, 24/36/48)."),
     max_time_ms: float = typer.Option(1.0, "--max-time-ms", help="Longest time after the release [ms]."),
     json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
 ) -> None:
@@ -189,7 +192,8 @@ def loop(
     from knitlad.config import LoopConfig
     from knitlad.loop_model import LoopRun
 
-    cfg = _validated(LoopConfig, fx=fx, mu=mu, lx=lx, ly=ly, resolution=resolution, max_time_ms=max_time_ms)
+    cfg = _validated(LoopConfig, fx=fx, mu=mu, lx=lx, ly=ly, resolution=resolution, preset=preset,
+                     max_time_ms=max_time_ms)
     try:
         result = LoopRun(cfg.settings()).run()
     except RuntimeError as e:

@@ -87,7 +87,7 @@ class Contacts(NamedTuple):
     exclusion: np.ndarray  # (n_yarns,) edges excluded either side along a yarn
     edge_image: np.ndarray  # (ne,) bool: edge of a periodic image (image-image pairs are skipped)
     params: np.ndarray  # K_N, DAMP_N, K_T, DAMP_T, MU, SKIN
-    stats: np.ndarray  # touching pairs, max overlap, sum f_n, sliding pairs
+    stats: np.ndarray  # touching pairs, max overlap, sum f_n, sliding pairs (last evaluation); peak overlap since reset
     threads: np.ndarray  # (1,) blocks the broad phase is split into (Numba threads)
 
 
@@ -221,7 +221,7 @@ def make_contacts(state: RodState, model: ContactModel | None, capacity: int | N
         exclusion=exclusion,
         edge_image=edge_image,
         params=params,
-        stats=np.zeros(4),
+        stats=np.zeros(5),
         threads=np.array([numba.get_num_threads()], dtype=np.int64),
     )
     if previous is not None:
@@ -231,6 +231,7 @@ def make_contacts(state: RodState, model: ContactModel | None, capacity: int | N
         contacts.slip[:m] = previous.slip[:m]
         contacts.n_pairs[0] = m
         contacts.params[:] = previous.params
+        contacts.stats[4] = previous.stats[4]
     return contacts
 
 

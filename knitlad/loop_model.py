@@ -31,6 +31,7 @@ from knitlad.contact import ContactModel
 from knitlad.scenes.jersey import Jersey
 from knitlad.scenes.loop import LoopScene, build_single_loop
 from knitlad.simulation import Simulation, numba_threads
+from knitlad.timestep import DEFAULT_SAFETY
 from knitlad.topology import piercings
 from knitlad.units import NYLON, Material
 
@@ -50,6 +51,7 @@ class LoopSettings:
     topology_every_s: float = 1e-6  # threading checks (tau is resolved to this)
     confirm_s: float = 20e-6  # unthreaded this long: released
     max_time_s: float = 1e-3  # releases take 50 to 150 us
+    dt_safety: float = DEFAULT_SAFETY  # time step as a fraction of the stability limit
     material: Material = NYLON
 
     def __post_init__(self) -> None:
@@ -100,7 +102,7 @@ class LoopRun:
         self.scene: LoopScene = build_single_loop(geometry, settings.fx * m.f0)
         contact = ContactModel.for_force(settings.contact_force_f0 * m.f0, m.diameter,
                                          overlap_fraction=settings.overlap_fraction, friction=0.0)
-        self.sim = Simulation(self.scene.state, contact=contact)
+        self.sim = Simulation(self.scene.state, contact=contact, safety=settings.dt_safety)
         self.result = LoopResult(settings, nodes=self.scene.state.x.shape[0])
 
     def relax(self) -> None:

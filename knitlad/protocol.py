@@ -47,6 +47,8 @@ from knitlad.state import cut_edge
 from knitlad.timestep import DEFAULT_SAFETY, critical_time_steps
 from knitlad.units import NYLON, Material
 
+MAX_OVERLAP_OVER_D = 0.5  # deeper than this, a yarn may pass through another: the run stops with an error
+MIN_BUILD_LX = 0.15  # narrowest l_x/l0 tried when a thick yarn does not fit at build_width
 BUILD_LX = 0.30  # widest l_x/l0 at which the built knit is in tension and its loops still overlap well
 
 
@@ -91,6 +93,7 @@ class LadderSettings:
     arrest_s: float = 2e-3
     max_time_s: float = 30e-3
     frame_every_s: float = 100e-6
+    dt_safety: float = DEFAULT_SAFETY  # time step as a fraction of the stability limit
     material: Material = NYLON
 
     def __post_init__(self) -> None:
@@ -127,6 +130,7 @@ class LadderResult:
     relax_steps: int = 0  # FIRE steps of the stretch and relaxation
     fx_within_tolerance: bool = True  # force control: f_x^ini within fx_tolerance of the target
     box_lx_over_l0: float = float("nan")  # the affine stretch of the held ends and edge courses
+    peak_overlap_over_d: float = 0.0  # deepest yarn-yarn overlap at any step (stretch, relaxation, laddering), in d
 
     def summary(self) -> dict:
         return {
@@ -146,12 +150,17 @@ class LadderResult:
             "relax_steps": self.relax_steps,
             "fx_within_tolerance": self.fx_within_tolerance,
             "box_lx_over_l0": self.box_lx_over_l0,
+            "peak_overlap_over_d": self.peak_overlap_over_d,
             "wall_s": float(sum(self.wall_s.values())),
             **{f"wall_{k}_s": v for k, v in self.wall_s.items()},
         }
 
 
 Progress = Callable[[str, float], None]  # (stage, fraction done)
+
+
+class Interpenetration(RuntimeError):
+    """Two yarns overlap by more than MAX_OVERLAP_OVER_D: the contact is too soft for the forces it carries."""
 
 
 class LadderRun:
@@ -164,16 +173,27 @@ class LadderRun:
         self.build_lx = build_width(settings.ly_over_l0, m, settings.nodes_per_stitch)
         self.lx = min(settings.lx_over_l0, self.build_lx) if settings.lx_over_l0 is not None else self.build_lx
         self.ly = settings.ly_over_l0  # current box stretch, l/l0
-        geometry = Jersey(
-            n_x=settings.n_x, n_y=settings.n_y, l_x=self.lx * m.stitch_length, l_y=self.ly * m.stitch_length,
-            nodes_per_stitch=settings.nodes_per_stitch, material=m,
-        )
-        self.knit: KnitScene = build_jersey(geometry)
+        self.knit: KnitScene = self._build_knit()
         self.contact = ContactModel.for_force(
             settings.contact_force_f0 * m.f0, m.diameter, overlap_fraction=settings.overlap_fraction, friction=0.0
         )
-        self.sim = Simulation(self.knit.state, contact=self.contact)
+        self.sim = Simulation(self.knit.state, contact=self.contact, safety=settings.dt_safety)
         self.result = LadderResult(settings, nodes=self.knit.state.x.shape[0])
+
+    def _build_knit(self) -> KnitScene:
+        """The jersey at (self.lx, self.ly); thick yarns (d/l0 = 1/20) only fit narrower: 0.01 l0 at a time."""
+        s, m = self.s, self.s.material
+        while True:
+            geometry = Jersey(
+                n_x=s.n_x, n_y=s.n_y, l_x=self.lx * m.stitch_length, l_y=self.ly * m.stitch_length,
+                nodes_per_stitch=s.nodes_per_stitch, material=m,
+            )
+            try:
+                return build_jersey(geometry)
+            except ValueError as err:
+                if "too wide" not in str(err) or self.lx - 0.01 < MIN_BUILD_LX:
+                    raise
+                self.lx = self.build_lx = round(self.lx - 0.01, 6)
 
     # ------------------------------------------------------------ measurements
     def tension(self) -> float:
@@ -308,6 +328,7 @@ class LadderRun:
             fx = self._relax_to_steady_tension()
         else:
             fx = self._force_control()
+        self._check_overlap("while stretching")
         self.result.fx_ini = fx
         self.result.box_lx_over_l0 = self.lx
         self.result.wall_s["stretch"] = time.perf_counter() - t0
@@ -337,7 +358,7 @@ class LadderRun:
         state = cut_edge(self.sim.state, edge)
         # the cut frees two end nodes: keep the smaller of the old and the new stable step
         limit = critical_time_steps(state, False, contact_time_step(state, self.contact)).combined * units.TIME
-        sim = Simulation(state, contact=self.contact, dt_s=min(self.sim.dt_s, DEFAULT_SAFETY * limit))
+        sim = Simulation(state, contact=self.contact, dt_s=min(self.sim.dt_s, self.s.dt_safety * limit))
         sim.set_friction(self.s.mu)
         self.sim = sim
         return edge
@@ -360,6 +381,7 @@ class LadderRun:
         while True:
             self.sim.run(s.observe_every_s)
             t = self.sim.time_s - t_start
+            self._check_overlap(f"at t = {t * 1e3:.3f} ms after the cut")
             # an undone cell does not knit itself again: keep every cell ever undone
             undone |= self.laddered() & ~baseline
             lad = undone
@@ -407,6 +429,17 @@ class LadderRun:
         res.v_lad_over_cb = laddering_velocity(times, np.array(res.front_up), l_y, first, last) / s.material.c_b
         res.steps = self.sim.steps
         res.wall_s["propagate"] = time.perf_counter() - t0
+
+    def _check_overlap(self, when: str) -> None:
+        """Stop with :class:`Interpenetration` if two yarns overlapped deeper than MAX_OVERLAP_OVER_D since the last check."""
+        d = self.s.material.diameter
+        peak = self.sim.peak_overlap_m(reset=True) / d
+        self.result.peak_overlap_over_d = max(self.result.peak_overlap_over_d, peak)
+        if peak > MAX_OVERLAP_OVER_D:
+            raise Interpenetration(
+                f"yarns overlap by {peak:.2f} d {when} (limit {MAX_OVERLAP_OVER_D} d): "
+                f"the contact is too soft for this tension; raise contact_force_f0 (now {self.s.contact_force_f0:g})"
+            )
 
     def run(self) -> LadderResult:
         self.stretch()

@@ -140,6 +140,13 @@ class Simulation:
             "candidates": int(self.contacts.n_pairs[0]),
         }
 
+    def peak_overlap_m(self, reset: bool = False) -> float:
+        """Largest overlap of two yarns [m] at any step since the last reset (``reset``: start a new window)."""
+        peak = float(self.contacts.stats[4] * units.LENGTH)
+        if reset:
+            self.contacts.stats[4] = 0.0
+        return peak
+
     def fresh_contacts(self) -> Contacts:
         """The contact buffers with a candidate list valid at the current positions."""
         s = self.state

@@ -29,6 +29,8 @@ def run(*args, cwd=None):
         (["loop", "--mu", "-0.1"], "--mu"),
         (["loop", "--lx", "0.39"], "--lx"),
         (["loop", "--max-time-ms", "0"], "--max-time-ms"),
+        (["cut", "--preset", "fastest"], "--preset"),
+        (["loop", "--preset", "exact"], "--preset"),
     ],
 )
 def test_bad_options_get_one_line_and_exit_code_2(args, option):
@@ -70,3 +72,12 @@ def test_loop_prints_the_release_as_json():
     s = json.loads(p.stdout.strip().splitlines()[-1])
     assert s["released"] and s["v_lad_over_cb"] > 0 and 0 < s["tau_s"] < 1e-3
     assert s["v_lad_over_cb"] == pytest.approx(0.25 * 9.74e-3 / s["tau_s"] / 30.58, rel=2e-3)  # l_y / tau / c_b
+
+
+def test_presets_set_the_resolution_and_an_explicit_one_wins():
+    from knitlad.config import CutConfig, LoopConfig
+
+    assert [CutConfig(fx=4, preset=p).resolution for p in ("fast", "default", "accurate")] == [16, 24, 36]
+    assert [LoopConfig(preset=p).resolution for p in ("fast", "default", "accurate")] == [24, 36, 48]
+    assert CutConfig(fx=4, preset="fast", resolution=30).resolution == 30
+    assert CutConfig(fx=4, preset="accurate").settings().nodes_per_stitch == 36

@@ -304,8 +304,9 @@ def contact_forces(
     """Add contact forces of the ``n_pairs`` candidate pairs to F; advance the slip history.
 
     ``damping_n``/``damping_t`` are damping ratios of the contact springs (gamma =
-    2 zeta sqrt(k m_eff)). ``stats`` (4,) receives: number of touching pairs,
-    largest overlap, normal-force sum, number of sliding pairs.
+    2 zeta sqrt(k m_eff)). ``stats`` (5,) receives: number of touching pairs,
+    largest overlap, normal-force sum, number of sliding pairs; and keeps the
+    peak overlap since the caller last zeroed ``stats[4]``.
     """
     n_touch = 0
     max_overlap = 0.0
@@ -412,6 +413,10 @@ def contact_forces(
     stats[1] = max_overlap
     stats[2] = fn_sum
     stats[3] = n_slide
+    # the peak over every evaluation since the caller last zeroed it: an interpenetration
+    # lasting a few steps between two observations must not go unseen
+    if max_overlap > stats[4]:
+        stats[4] = max_overlap
 
 
 @njit(**NUMBA_OPTS)

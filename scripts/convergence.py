@@ -1,0 +1,199 @@
+"""Speed against error: each observable against a reference run, per solver setting.
+
+Settings varied one at a time from the default (24 nodes per stitch, contact
+overlap 5 % of d at 20 f0, time step 0.7 x the stability limit):
+
+* nodes per stitch (the yarn's discretisation);
+* contact stiffness, as the overlap fraction at the design force (k_n ~ 1/fraction);
+* time-step factor (fraction of the stability limit).
+
+Observables, each with its wall time:
+
+* ``stitch``: f_x of the periodised stitch at (l_x, l_y) = (0.35, 0.25) l0 (f_x at fixed periodicities);
+* ``loop``: the single-loop v_lad/c_b at f_x = 4, mu = 0.4;
+* ``knit``: on an N x N knit (default 16 x 16, ``--size 42`` for the paper's),
+  mu = 0.4, force control: v_lad/c_b and n_lad/n_y at f_x^ini = 4 and 13.6.
+
+Errors are per setting: the runs that vary one setting (with the default) are
+compared with the finest of them (48 nodes per stitch; overlap 2.5 % of d; time
+step 0.35 x the limit): error = |value - finest| / |finest|. The observed order
+in the resolution is the slope of log(error) against log(nodes per stitch) over
+the points coarser than the finest.
+Writes ``<out>/convergence.csv`` and prints tables (markdown).
+
+    python scripts/convergence.py [--out docs/convergence] [--size 16] [--parts stitch loop knit]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import time
+from pathlib import Path
+
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+DEFAULT = {"nodes_per_stitch": 24, "overlap_fraction": 0.05, "dt_safety": 0.7}
+STUDY = {
+    "nodes_per_stitch": [16, 24, 36, 48],
+    "overlap_fraction": [0.1, 0.05, 0.025],
+    "dt_safety": [0.7, 0.35],
+}
+FINEST = {"nodes_per_stitch": max, "overlap_fraction": min, "dt_safety": min}
+
+
+def variations(static: bool = False, only: list[str] | None = None) -> list[dict]:
+    """The default, then each setting varied alone (``only``: just these settings)."""
+    out = [dict(DEFAULT, varied="default")]
+    for key, values in STUDY.items():
+        if only and key not in only:
+            continue
+        if static and key == "dt_safety":
+            continue  # a static relaxation has no time step to vary
+        for v in values:
+            if v != DEFAULT[key]:
+                out.append(dict(DEFAULT, **{key: v}, varied=key))
+    return out
+
+
+def stitch_run(cfg: dict) -> dict:
+    from knitlad.stitch_model import StitchSettings, StitchRun
+
+    t = time.perf_counter()
+    res = StitchRun(StitchSettings(lx_over_l0=0.35, ly_over_l0=0.25, nodes_per_stitch=cfg["nodes_per_stitch"],
+                                   overlap_fraction=cfg["overlap_fraction"])).run()
+    return {"observable": "stitch f_x (0.35, 0.25)", "value": res.fx, "wall_s": time.perf_counter() - t}
+
+
+def loop_run(cfg: dict) -> dict:
+    from knitlad.loop_model import LoopRun, LoopSettings
+
+    t = time.perf_counter()
+    res = LoopRun(LoopSettings(fx=4.0, mu=0.4, nodes_per_stitch=cfg["nodes_per_stitch"],
+                                overlap_fraction=cfg["overlap_fraction"], dt_safety=cfg["dt_safety"])).run()
+    return {"observable": "loop v_lad/c_b (f_x 4)", "value": res.v_lad_over_cb, "wall_s": time.perf_counter() - t}
+
+
+def knit_runs(cfg: dict, size: int, tensions: list[float]) -> list[dict]:
+    from knitlad.protocol import LadderSettings, run_ladder
+
+    rows = []
+    for fx in tensions:
+        t = time.perf_counter()
+        res = run_ladder(LadderSettings(n_x=size, n_y=size, fx_target=fx, mu=0.4, max_time_s=30e-3,
+                                        nodes_per_stitch=cfg["nodes_per_stitch"],
+                                        overlap_fraction=cfg["overlap_fraction"], dt_safety=cfg["dt_safety"]))
+        wall = time.perf_counter() - t
+        rows.append({"observable": f"knit {size}x{size} v_lad/c_b (f_x {fx:g})", "value": res.v_lad_over_cb,
+                     "wall_s": wall, "fx_ini": res.fx_ini})
+        rows.append({"observable": f"knit {size}x{size} n_lad/n_y (f_x {fx:g})", "value": res.n_lad_over_ny,
+                     "wall_s": wall, "fx_ini": res.fx_ini})
+    return rows
+
+
+def with_errors(df: pd.DataFrame) -> pd.DataFrame:
+    """One row per (observable, setting, value of that setting) with its error against the finest value."""
+    out = []
+    for obs, sub in df.groupby("observable", sort=False):
+        default = sub[sub.varied == "default"]
+        for key, finest in FINEST.items():
+            group = pd.concat([default, sub[sub.varied == key]])
+            if len(group) < 2:
+                continue
+            ref = group[group[key] == finest(group[key])].value.iloc[0]
+            g = group.assign(setting=key, reference=ref, rel_error=(group.value - ref).abs() / abs(ref))
+            out.append(g.sort_values(key))
+    return pd.concat(out, ignore_index=True)
+
+
+def resolution_order(df: pd.DataFrame, observable: str) -> float:
+    sub = df[(df.observable == observable) & (df.setting == "nodes_per_stitch") & (df.rel_error > 0)]
+    if len(sub) < 2:
+        return math.nan
+    return float(-np.polyfit(np.log(sub.nodes_per_stitch), np.log(sub.rel_error), 1)[0])
+
+
+def pareto_plot(df: pd.DataFrame, path: Path) -> None:
+    """Wall time against error, one panel per observable; the default setting ringed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    observables = list(dict.fromkeys(df.observable))
+    fig, axes = plt.subplots(1, len(observables), figsize=(4.2 * len(observables), 3.6), squeeze=False)
+    style = {"nodes_per_stitch": ("o", "C0"), "overlap_fraction": ("s", "C1"), "dt_safety": ("^", "C2")}
+    for ax, obs in zip(axes[0], observables):
+        sub = df[(df.observable == obs) & (df.rel_error > 0)]
+        for key, g in sub.groupby("setting"):
+            marker, colour = style[key]
+            ax.loglog(g.wall_s, g.rel_error, marker, color=colour, label=key.replace("_", " "))
+            for _, r in g.iterrows():
+                ax.annotate(f"{r[key]:g}", (r.wall_s, r.rel_error), fontsize=7, xytext=(3, 3), textcoords="offset points")
+        d = sub[sub.varied == "default"]
+        ax.loglog(d.wall_s, d.rel_error, "o", mfc="none", ms=14, color="k", label="default (its error in each setting)")
+        ax.set_title(obs, fontsize=9)
+        ax.set_xlabel("wall time [s]")
+        ax.set_ylabel("relative error")
+    axes[0][0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--out", default="docs/convergence")
+    p.add_argument("--size", type=int, default=16, help="knit size N for N x N")
+    p.add_argument("--parts", nargs="+", default=["stitch", "loop", "knit"], choices=["stitch", "loop", "knit"])
+    p.add_argument("--tensions", type=float, nargs="+", default=[4.0, 13.6], help="knit: target f_x^ini values")
+    p.add_argument("--resolutions", type=int, nargs="+", help="nodes per stitch to study (default 16 24 36 48)")
+    p.add_argument("--only", nargs="+", choices=list(STUDY), help="vary only these settings")
+    args = p.parse_args()
+    if args.resolutions:
+        STUDY["nodes_per_stitch"] = args.resolutions
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    csv = out / "convergence.csv"
+    rows: list[dict] = []
+    if csv.exists():  # resume: keep what an interrupted study finished
+        rows = pd.read_csv(csv).to_dict("records")
+    done = {(r["part"], r["varied"], r["nodes_per_stitch"], r["overlap_fraction"], r["dt_safety"]) for r in rows}
+    for part in args.parts:
+        for cfg in variations(static=(part == "stitch"), only=args.only):
+            key = (part if part != "knit" else f"knit{args.size}", cfg["varied"], cfg["nodes_per_stitch"],
+                   cfg["overlap_fraction"], cfg["dt_safety"])
+            if key in done:
+                continue
+            if part == "stitch":
+                new = [stitch_run(cfg)]
+            elif part == "loop":
+                new = [loop_run(cfg)]
+            else:
+                new = knit_runs(cfg, args.size, args.tensions)
+            for r in new:
+                r.update(part=key[0], **cfg)
+                rows.append(r)
+                print(f"{key[0]:8s} {cfg['varied']:17s} n={cfg['nodes_per_stitch']:2d} ov={cfg['overlap_fraction']:.3f} "
+                      f"dt={cfg['dt_safety']:.2f}  {r['observable']:34s} {r['value']:.4f}  {r['wall_s']:.1f} s", flush=True)
+            tmp = csv.with_suffix(".tmp")
+            pd.DataFrame(rows).to_csv(tmp, index=False)
+            tmp.replace(csv)
+    df = with_errors(pd.DataFrame(rows))
+    df.to_csv(out / "errors.csv", index=False)
+    pareto_plot(df, out / "pareto.png")
+    for obs, sub in df.groupby("observable", sort=False):
+        print(f"\n### {obs} (observed order in nodes/stitch {resolution_order(df, obs):.2f})\n")
+        print("| varied | nodes/stitch | overlap / d | dt factor | value | error vs finest of its setting | wall [s] |")
+        print("|---|---|---|---|---|---|---|")
+        for _, r in sub.iterrows():
+            print(f"| {r.setting} | {r.nodes_per_stitch} | {r.overlap_fraction:g} | {r.dt_safety:g} | {r.value:.4f} | "
+                  f"{r.rel_error:.1%} | {r.wall_s:.1f} |")
+
+
+if __name__ == "__main__":
+    main()

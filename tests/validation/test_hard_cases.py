@@ -1,0 +1,111 @@
+"""Numerical stability on hard cases (issue 7): high tension, strong friction, a jammed
+knit, the time step at its limit, a long undamped run, interpenetration.
+
+Each case either runs with every position finite and no two yarns overlapping by more
+than a stated fraction of d, or stops before/while running with a one-line error.
+Small knits (6 x 8 stitches, 16 nodes per stitch) keep the suite short.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import knitlad as kl
+from knitlad.config import material_for
+from knitlad.contact import ContactModel
+from knitlad.protocol import Interpenetration, LadderRun, LadderSettings
+from knitlad.scenes.weave import plain_weave
+from knitlad.simulation import numba_threads
+
+# The contact is designed to overlap 5 % of d under 20 f0; a quarter of d is five times that.
+OVERLAP_BOUND = 0.25
+
+
+def small(**kw) -> LadderSettings:
+    base = dict(n_x=6, n_y=8, nodes_per_stitch=16, max_time_s=5e-3)
+    base.update(kw)
+    if "fx_target" not in kw:
+        base["fx_target"] = None
+    return LadderSettings(**base)
+
+
+def run(settings: LadderSettings):
+    with numba_threads(1):
+        r = LadderRun(settings)
+        res = r.run()
+    assert np.isfinite(r.sim.state.x).all() and np.isfinite(r.sim.state.v).all()
+    return r, res
+
+
+def test_tension_25_is_reached_and_ladders_without_deep_overlap():
+    """f_x^ini = 25 (above the paper's highest point, 15.67), force control within 2 %."""
+    r, res = run(small(fx_target=25.0))
+    assert res.fx_within_tolerance and res.fx_ini == pytest.approx(25.0, rel=0.02)
+    assert 0.0 < res.peak_overlap_over_d < OVERLAP_BOUND
+    assert res.n_lad_over_ny >= 0.25 and res.fx_fin < res.fx_ini
+
+
+def test_friction_08_runs_without_deep_overlap():
+    r, res = run(small(lx_over_l0=0.42, mu=0.8))
+    assert res.fx_ini > 2.0
+    assert 0.0 < res.peak_overlap_over_d < OVERLAP_BOUND
+
+
+def test_a_jammed_thick_yarn_knit_is_built_narrower_and_runs():
+    """d/l0 = 1/20: no jersey centreline holds l0 per stitch at l_x = 0.30 l0, so the knit
+    is built at the widest l_x (0.01 l0 steps) where it does, then run as any other."""
+    r, res = run(small(lx_over_l0=0.24, material=material_for(1 / 20)))
+    assert r.build_lx <= 0.23 and res.box_lx_over_l0 == pytest.approx(0.24)
+    assert res.peak_overlap_over_d < OVERLAP_BOUND
+
+
+def test_a_contact_too_soft_for_the_tension_stops_with_an_interpenetration_error():
+    """k_n 400 times below the default (20 f0 -> 0.05 f0 at 5 % of d): the loops sink into each other."""
+    with numba_threads(1), pytest.raises(Interpenetration, match=r"yarns overlap by .* d .*raise contact_force_f0"):
+        LadderRun(small(lx_over_l0=0.42, contact_force_f0=0.05)).run()
+
+
+def test_a_knit_stepped_at_the_stability_limit_stays_finite():
+    """safety = 1: the largest step knitlad accepts (Gershgorin bound over stretching,
+    bending and contact springs); 3000 steps of a relaxed 4 x 4 knit with friction."""
+    with numba_threads(1):
+        r = LadderRun(small(n_x=4, n_y=4, lx_over_l0=0.36))
+        r.stretch()
+        sim = kl.Simulation(r.sim.state, contact=r.contact, safety=1.0)
+        sim.set_friction(0.4)
+        sim.step(3000)  # raises SimulationBlowUp on a non-finite value or a supersonic node
+        assert np.isfinite(sim.state.x).all()
+        assert sim.peak_overlap_m() < OVERLAP_BOUND * kl.NYLON.diameter
+
+
+def undamped_weave_energy(safety: float) -> np.ndarray:
+    """Relative change of the total energy of a pressed plain weave, mu = 0, no damping
+    anywhere, every 0.05 ms over 0.4 ms. The crossings start 3 % of d into each other."""
+    d = kl.NYLON.diameter
+    state = plain_weave(4, 1.0e-3, nodes_per_spacing=8, amplitude=0.47 * d).build(stretch_damping_ratio=0.0)
+    model = ContactModel.for_force(20 * kl.NYLON.f0, d, friction=0.0, damping_ratio=0.0, tangential_damping_ratio=0.0)
+    with numba_threads(1):
+        sim = kl.Simulation(state, contact=model, safety=safety)
+        e0 = sim.energies_J()["total"]
+        n = int(round(0.05e-3 / sim.dt_s))
+        out = []
+        for _ in range(8):
+            sim.step(n)
+            out.append(sim.energies_J()["total"] / e0 - 1.0)
+    return np.array(out)
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "known defect (issue 7): the contact is counted once per local minimum of the distance between two "
+    "chains of capsules (owns_contact); a minimum born at a node while the yarns already overlap enters with "
+    "its full penalty, so the energy jumps. Undamped, this weave gains 3 x its energy in 0.4 ms at any dt. "
+    "Counting every edge pair conserves it (1 %) but doubles friction at nodes; inclusion-exclusion over the "
+    "node spheres conserves it (1.5 %, 0.18 % at dt/2) but gives a straight line contact no stiffness."
+))
+def test_a_long_undamped_contact_run_keeps_its_energy_and_the_error_falls_with_dt():
+    """Velocity Verlet on a conservative contact force: bounded energy error, smaller with dt."""
+    coarse = np.max(np.abs(undamped_weave_energy(0.5)))
+    fine = np.max(np.abs(undamped_weave_energy(0.25)))
+    assert coarse < 0.03
+    assert fine < coarse / 3
