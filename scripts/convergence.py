@@ -61,7 +61,7 @@ def variations(static: bool = False, only: list[str] | None = None) -> list[dict
 
 
 def stitch_run(cfg: dict) -> dict:
-    from knitlad.stitch_model import StitchSettings, StitchRun
+    from knitlad.stitch_model import StitchRun, StitchSettings
 
     t = time.perf_counter()
     res = StitchRun(StitchSettings(lx_over_l0=0.35, ly_over_l0=0.25, nodes_per_stitch=cfg["nodes_per_stitch"],

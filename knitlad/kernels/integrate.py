@@ -19,7 +19,11 @@ from knitlad.kernels.elastic import (
     stretching_energy,
     stretching_forces,
 )
-from knitlad.kernels.frames import material_frames, transport_reference_frames, update_reference_twist
+from knitlad.kernels.frames import (
+    material_frames,
+    transport_reference_frames,
+    update_reference_twist,
+)
 
 # fast-math without "nnan"/"ninf", so the blow-up guard still sees NaN and infinity
 NUMBA_OPTS = dict(cache=True, error_model="numpy", fastmath={"nsz", "arcp", "contract", "afn", "reassoc"})
