@@ -91,7 +91,7 @@ def cut(
     mu: float = typer.Option(0.4, "--mu", help="Friction coefficient during laddering."),
     stitches: str = typer.Option("42", "--stitches", help="Fabric size: N (N x N) or NXxNY."),
     preset: str = typer.Option("default", "--preset", help="Accuracy preset: fast, default or accurate (docs/accuracy.md); sets the resolution."),
-    resolution: int = typer.Option(None, "--resolution", help="Nodes per stitch (default: the preset's, 16/24/36)."),
+    resolution: int = typer.Option(None, "--resolution", help="Nodes per stitch (default: the preset's, 16/24/48)."),
     max_time_ms: float = typer.Option(30.0, "--max-time-ms", help="Longest laddering time after the cut [ms]."),
     out: str = typer.Option(None, "--out", help="Output folder (HDF5 + PNG); default runs/cut-<time>."),
     json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
@@ -215,7 +215,8 @@ def loop(
 def stitch(
     lx: float = typer.Option(0.35, "--lx", help="Cell width l_x/l0."),
     ly: float = typer.Option(0.25, "--ly", help="Cell height l_y/l0."),
-    resolution: int = typer.Option(36, "--resolution", help="Nodes per stitch."),
+    preset: str = typer.Option("default", "--preset", help="Accuracy preset: fast, default or accurate (docs/accuracy.md); sets the resolution."),
+    resolution: int = typer.Option(None, "--resolution", help="Nodes per stitch (default: the preset's, 24/36/64)."),
     d_over_l0: float = typer.Option(1 / 70, "--d-over-l0", help="Yarn diameter over stitch length."),
     json_out: bool = typer.Option(False, "--json", help='Print {"fx": ..., "fy": ...} and the rest as JSON.'),
 ) -> None:
@@ -225,7 +226,7 @@ def stitch(
     from knitlad.config import StitchConfig
     from knitlad.stitch_model import StitchRun
 
-    cfg = _validated(StitchConfig, {"d_over_l0": "--d-over-l0"}, lx=lx, ly=ly, resolution=resolution,
+    cfg = _validated(StitchConfig, {"d_over_l0": "--d-over-l0"}, lx=lx, ly=ly, resolution=resolution, preset=preset,
                      d_over_l0=d_over_l0)
     settings = cfg.settings()
     try:

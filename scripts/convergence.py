@@ -95,6 +95,23 @@ def knit_runs(cfg: dict, size: int, tensions: list[float]) -> list[dict]:
     return rows
 
 
+def scatter_runs(size: int, tensions: list[float]) -> pd.DataFrame:
+    """The default setting at targets 0.5 % apart: how far a knit observable moves under a
+    perturbation far below any setting's effect (laddering is a sequence of stick-slip
+    events, so trajectories separate). Spread = (max - min) / mean."""
+    rows = []
+    for fx in tensions:
+        for factor in (0.995, 1.0, 1.005):
+            for r in knit_runs(dict(DEFAULT), size, [fx * factor]):
+                r["observable"] = r["observable"].replace(f"(f_x {fx * factor:g})", f"(f_x {fx:g})")
+                rows.append(r)
+                print(f"scatter  target {fx * factor:.3f}  {r['observable']:34s} {r['value']:.4f}  {r['wall_s']:.1f} s",
+                      flush=True)
+    df = pd.DataFrame(rows)
+    return df.groupby("observable", sort=False).value.agg(
+        mean="mean", spread=lambda v: (v.max() - v.min()) / abs(v.mean()), n="count").reset_index()
+
+
 def with_errors(df: pd.DataFrame) -> pd.DataFrame:
     """One row per (observable, setting, value of that setting) with its error against the finest value."""
     out = []
@@ -149,7 +166,8 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", default="docs/convergence")
     p.add_argument("--size", type=int, default=16, help="knit size N for N x N")
-    p.add_argument("--parts", nargs="+", default=["stitch", "loop", "knit"], choices=["stitch", "loop", "knit"])
+    p.add_argument("--parts", nargs="+", default=["stitch", "loop", "knit"],
+                   choices=["stitch", "loop", "knit", "scatter"])
     p.add_argument("--tensions", type=float, nargs="+", default=[4.0, 13.6], help="knit: target f_x^ini values")
     p.add_argument("--resolutions", type=int, nargs="+", help="nodes per stitch to study (default 16 24 36 48)")
     p.add_argument("--only", nargs="+", choices=list(STUDY), help="vary only these settings")
@@ -163,6 +181,11 @@ def main() -> None:
     if csv.exists():  # resume: keep what an interrupted study finished
         rows = pd.read_csv(csv).to_dict("records")
     done = {(r["part"], r["varied"], r["nodes_per_stitch"], r["overlap_fraction"], r["dt_safety"]) for r in rows}
+    if "scatter" in args.parts:
+        spread = scatter_runs(args.size, args.tensions)
+        spread.to_csv(out / "scatter.csv", index=False)
+        print(spread.to_string(index=False))
+        return
     for part in args.parts:
         for cfg in variations(static=(part == "stitch"), only=args.only):
             key = (part if part != "knit" else f"knit{args.size}", cfg["varied"], cfg["nodes_per_stitch"],

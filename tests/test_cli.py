@@ -77,7 +77,7 @@ def test_loop_prints_the_release_as_json():
 def test_presets_set_the_resolution_and_an_explicit_one_wins():
     from knitlad.config import CutConfig, LoopConfig
 
-    assert [CutConfig(fx=4, preset=p).resolution for p in ("fast", "default", "accurate")] == [16, 24, 36]
+    assert [CutConfig(fx=4, preset=p).resolution for p in ("fast", "default", "accurate")] == [16, 24, 48]
     assert [LoopConfig(preset=p).resolution for p in ("fast", "default", "accurate")] == [24, 36, 48]
     assert CutConfig(fx=4, preset="fast", resolution=30).resolution == 30
-    assert CutConfig(fx=4, preset="accurate").settings().nodes_per_stitch == 36
+    assert CutConfig(fx=4, preset="accurate").settings().nodes_per_stitch == 48
