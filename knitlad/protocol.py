@@ -93,7 +93,12 @@ class LadderSettings:
     arrest_s: float = 2e-3
     max_time_s: float = 30e-3
     frame_every_s: float = 100e-6
-    dt_safety: float = DEFAULT_SAFETY  # time step as a fraction of the stability limit
+    # time step of the laddering dynamics, as a fraction of the stability limit; 0.35, not the
+    # 0.7 of a smooth problem: on 16 x 16 at f_x = 13.6, v_lad was 0.85 at 0.7, 0.70 at 0.35 and
+    # 0.69 at 0.175 (42 x 42: 1.24 and 1.13; docs/accuracy.md). Likely cause, not yet shown:
+    # the dashpots and the friction history use the half-step velocity, first order in dt. The mu = 0 stretch is
+    # a FIRE minimisation: its end state does not depend on the step, so it keeps 0.7.
+    dt_safety: float = 0.5 * DEFAULT_SAFETY
     material: Material = NYLON
 
     def __post_init__(self) -> None:
@@ -177,7 +182,7 @@ class LadderRun:
         self.contact = ContactModel.for_force(
             settings.contact_force_f0 * m.f0, m.diameter, overlap_fraction=settings.overlap_fraction, friction=0.0
         )
-        self.sim = Simulation(self.knit.state, contact=self.contact, safety=settings.dt_safety)
+        self.sim = Simulation(self.knit.state, contact=self.contact)
         self.result = LadderResult(settings, nodes=self.knit.state.x.shape[0])
 
     def _build_knit(self) -> KnitScene:
