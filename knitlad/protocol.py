@@ -41,7 +41,7 @@ from knitlad.measure import (
     periodicities,
     tension_per_thread,
 )
-from knitlad.scenes.jersey import Jersey, KnitScene, build_jersey
+from knitlad.scenes.jersey import Jersey, KnitScene, build_jersey, widest_fitting_width
 from knitlad.simulation import Simulation
 from knitlad.state import cut_edge
 from knitlad.timestep import DEFAULT_SAFETY, critical_time_steps
@@ -186,19 +186,15 @@ class LadderRun:
         self.result = LadderResult(settings, nodes=self.knit.state.x.shape[0])
 
     def _build_knit(self) -> KnitScene:
-        """The jersey at (self.lx, self.ly); thick yarns (d/l0 = 1/20) only fit narrower: 0.01 l0 at a time."""
+        """The jersey at (self.lx, self.ly); thick yarns (d/l0 = 1/20) only fit narrower."""
         s, m = self.s, self.s.material
-        while True:
-            geometry = Jersey(
-                n_x=s.n_x, n_y=s.n_y, l_x=self.lx * m.stitch_length, l_y=self.ly * m.stitch_length,
-                nodes_per_stitch=s.nodes_per_stitch, material=m,
-            )
-            try:
-                return build_jersey(geometry)
-            except ValueError as err:
-                if "too wide" not in str(err) or self.lx - 0.01 < MIN_BUILD_LX:
-                    raise
-                self.lx = self.build_lx = round(self.lx - 0.01, 6)
+        lx = widest_fitting_width(self.lx, self.ly, m, s.nodes_per_stitch, lx_min=MIN_BUILD_LX)
+        if lx < self.lx:
+            self.lx = self.build_lx = lx
+        return build_jersey(Jersey(
+            n_x=s.n_x, n_y=s.n_y, l_x=self.lx * m.stitch_length, l_y=self.ly * m.stitch_length,
+            nodes_per_stitch=s.nodes_per_stitch, material=m,
+        ))
 
     # ------------------------------------------------------------ measurements
     def tension(self) -> float:

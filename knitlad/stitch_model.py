@@ -30,7 +30,7 @@ from knitlad import units
 from knitlad.contact import ContactModel
 from knitlad.kernels.contact import contact_energy
 from knitlad.kernels.elastic import bending_energy, edge_vectors, stretching_energy
-from knitlad.scenes.jersey import Jersey
+from knitlad.scenes.jersey import Jersey, widest_fitting_width
 from knitlad.scenes.stitch import PeriodicStitch, build_periodic_stitch
 from knitlad.simulation import Simulation, numba_threads
 from knitlad.units import NYLON, Material
@@ -85,19 +85,10 @@ class StitchRun:
         """The widest build l_x <= min(target, 0.30 l0) at which a stitch holds l0 and its loop
         overlaps the next course's by at least d (thick yarns need narrower cells)."""
         s, m = self.s, self.s.material
-        l0 = m.stitch_length
-        lx = min(s.lx_over_l0, BUILD_LX)
-        while lx > 0.1:
-            geometry = Jersey(n_x=1, n_y=1, l_x=lx * l0, l_y=self.ly * l0, nodes_per_stitch=s.nodes_per_stitch,
-                              material=m)
-            try:
-                H = geometry.loop_half_height()
-            except ValueError:
-                H = 0.0
-            if 2 * H > self.ly * l0 + m.diameter:
-                return lx, geometry
-            lx -= 0.01
-        raise ValueError(f"no jersey stitch of d/l0 = {m.diameter / l0:.3g} fits at l_y/l0 = {self.ly}")
+        lx = widest_fitting_width(min(s.lx_over_l0, BUILD_LX), self.ly, m, s.nodes_per_stitch,
+                                  min_loop_overlap=m.diameter)
+        return lx, Jersey(n_x=1, n_y=1, l_x=lx * m.stitch_length, l_y=self.ly * m.stitch_length,
+                          nodes_per_stitch=s.nodes_per_stitch, material=m)
 
     def _relax(self, steps: int, tol_f0: float) -> bool:
         info = self.sim.relax(force_tol_N=tol_f0 * self.s.material.f0, max_steps=steps)

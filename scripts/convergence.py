@@ -79,19 +79,21 @@ def loop_run(cfg: dict) -> dict:
     return {"observable": "loop v_lad/c_b (f_x 4)", "value": res.v_lad_over_cb, "wall_s": time.perf_counter() - t}
 
 
-def knit_runs(cfg: dict, size: int, tensions: list[float]) -> list[dict]:
+def knit_runs(cfg: dict, size: int, tensions: list[float], nominal: float | None = None) -> list[dict]:
+    """v_lad and n_lad at each target; ``nominal``: the tension named in the labels (default: the target)."""
     from knitlad.protocol import LadderSettings, run_ladder
 
     rows = []
     for fx in tensions:
+        label = fx if nominal is None else nominal
         t = time.perf_counter()
         res = run_ladder(LadderSettings(n_x=size, n_y=size, fx_target=fx, mu=0.4, max_time_s=30e-3,
                                         nodes_per_stitch=cfg["nodes_per_stitch"],
                                         overlap_fraction=cfg["overlap_fraction"], dt_safety=cfg["dt_safety"]))
         wall = time.perf_counter() - t
-        rows.append({"observable": f"knit {size}x{size} v_lad/c_b (f_x {fx:g})", "value": res.v_lad_over_cb,
+        rows.append({"observable": f"knit {size}x{size} v_lad/c_b (f_x {label:g})", "value": res.v_lad_over_cb,
                      "wall_s": wall, "fx_ini": res.fx_ini})
-        rows.append({"observable": f"knit {size}x{size} n_lad/n_y (f_x {fx:g})", "value": res.n_lad_over_ny,
+        rows.append({"observable": f"knit {size}x{size} n_lad/n_y (f_x {label:g})", "value": res.n_lad_over_ny,
                      "wall_s": wall, "fx_ini": res.fx_ini})
     return rows
 
@@ -103,8 +105,7 @@ def scatter_runs(size: int, tensions: list[float], dt_safety: float = DEFAULT["d
     rows = []
     for fx in tensions:
         for factor in (0.995, 1.0, 1.005):
-            for r in knit_runs(dict(DEFAULT, dt_safety=dt_safety), size, [fx * factor]):
-                r["observable"] = r["observable"].replace(f"(f_x {fx * factor:g})", f"(f_x {fx:g})")
+            for r in knit_runs(dict(DEFAULT, dt_safety=dt_safety), size, [fx * factor], nominal=fx):
                 rows.append(r)
                 print(f"scatter  target {fx * factor:.3f}  {r['observable']:34s} {r['value']:.4f}  {r['wall_s']:.1f} s",
                       flush=True)

@@ -24,6 +24,10 @@ import numpy as np
 from knitlad.state import RodState, Scene
 from knitlad.units import NYLON, Material
 
+
+class CourseTooWide(ValueError):
+    """No centreline of this family holds l0 per stitch at this l_x: even a flat course is longer."""
+
 CRANE_A = 1.5
 
 
@@ -77,7 +81,7 @@ class Jersey:
         l0 = self.material.stitch_length if length is None else length
         lo, hi = 0.0, self.material.stitch_length
         if self.stitch_length_for(lo) > l0:
-            raise ValueError(
+            raise CourseTooWide(
                 f"l_x/l0 = {self.l_x / l0:.3f} is too wide for this centreline: a flat course is already longer than l0"
             )
         for _ in range(60):
@@ -108,6 +112,24 @@ class Jersey:
         t_left = np.full(n_tail, -np.inf)
         t_right = np.full(n_tail, np.inf)
         return np.vstack([left, knit, right]), np.concatenate([t_left, tk, t_right])
+
+
+def widest_fitting_width(lx_max: float, ly: float, material: Material, nodes_per_stitch: int,
+                         min_loop_overlap: float = -math.inf, lx_min: float = 0.1) -> float:
+    """The widest l_x/l0 <= lx_max, in steps of 0.01, at which a stitch holds l0 of yarn and its
+    loop reaches ``min_loop_overlap`` [m] past the next course (2 H - l_y); thick yarns need
+    narrower cells. Raises :class:`CourseTooWide` if none down to ``lx_min`` does."""
+    l0 = material.stitch_length
+    lx = lx_max
+    while lx >= lx_min - 1e-12:
+        geometry = Jersey(n_x=1, n_y=1, l_x=lx * l0, l_y=ly * l0, nodes_per_stitch=nodes_per_stitch, material=material)
+        try:
+            if 2 * geometry.loop_half_height() - ly * l0 > min_loop_overlap:
+                return lx
+        except CourseTooWide:
+            pass
+        lx = round(lx - 0.01, 6)
+    raise CourseTooWide(f"no jersey stitch of d/l0 = {material.diameter / l0:.3g} fits at l_y/l0 = {ly}")
 
 
 @dataclass
