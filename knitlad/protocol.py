@@ -99,6 +99,10 @@ class LadderSettings:
     # the dashpots and the friction history use the half-step velocity, first order in dt. The mu = 0 stretch is
     # a FIRE minimisation: its end state does not depend on the step, so it keeps 0.7.
     dt_safety: float = 0.5 * DEFAULT_SAFETY
+    # a global viscous drag on every node during the laddering dynamics [1/s]; 0 (no drag) is the
+    # physics: air drag on this yarn is ~1e2 /s at 10 m/s. For comparison with engines that damp globally (the
+    # authors' public engine does): on 16 x 16, 3e3 /s slows the ladder and 3e4 /s stops it.
+    drag_per_s: float = 0.0
     material: Material = NYLON
 
     def __post_init__(self) -> None:
@@ -359,7 +363,8 @@ class LadderRun:
         state = cut_edge(self.sim.state, edge)
         # the cut frees two end nodes: keep the smaller of the old and the new stable step
         limit = critical_time_steps(state, False, contact_time_step(state, self.contact)).combined * units.TIME
-        sim = Simulation(state, contact=self.contact, dt_s=min(self.sim.dt_s, self.s.dt_safety * limit))
+        sim = Simulation(state, contact=self.contact, dt_s=min(self.sim.dt_s, self.s.dt_safety * limit),
+                         drag_per_s=self.s.drag_per_s)
         sim.set_friction(self.s.mu)
         self.sim = sim
         return edge

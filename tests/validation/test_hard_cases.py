@@ -98,10 +98,12 @@ def undamped_weave_energy(safety: float) -> np.ndarray:
 
 @pytest.mark.xfail(strict=True, reason=(
     "known defect (issue 7): the contact is counted once per local minimum of the distance between two "
-    "chains of capsules (owns_contact); a minimum born at a node while the yarns already overlap enters with "
-    "its full penalty, so the energy jumps. Undamped, this weave gains 3 x its energy in 0.4 ms at any dt. "
-    "Counting every edge pair conserves it (1 %) but doubles friction at nodes; inclusion-exclusion over the "
-    "node spheres conserves it (1.5 %, 0.18 % at dt/2) but gives a straight line contact no stiffness."
+    "chains of capsules (owns_contact). Where a crossing sits at a kink node of both yarns, each of the four "
+    "chord pairs around it has its own minimum (here 64 counted pairs for 16 crossings at t = 0); they merge "
+    "into one pair and split again as the crossing moves, and a split at finite overlap adds three penalties "
+    "at once. Undamped, this weave gains 3 x its energy in 0.4 ms at any dt. Counting every edge pair conserves "
+    "it (1 %) but doubles friction at nodes; inclusion-exclusion over the node spheres conserves it (1.5 %, "
+    "0.18 % at dt/2) but gives a straight line contact no stiffness."
 ))
 def test_a_long_undamped_contact_run_keeps_its_energy_and_the_error_falls_with_dt():
     """Velocity Verlet on a conservative contact force: bounded energy error, smaller with dt."""
