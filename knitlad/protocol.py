@@ -86,6 +86,8 @@ class LadderSettings:
     nodes_per_stitch: int = 24
     contact_force_f0: float = 20.0  # the contact force (in f0) at which the overlap is overlap_fraction d
     overlap_fraction: float = 0.05
+    contact_damping_ratio: float = 0.3  # normal and tangential contact dashpots, fraction of critical
+    stretch_damping_ratio: float = 0.2  # the yarn's axial dashpot, fraction of critical
     stretch_increment: float = 0.005  # l/l0 per affine step
     steps_per_increment: int = 750
     fx_tolerance: float = 0.02
@@ -184,7 +186,8 @@ class LadderRun:
         self.ly = settings.ly_over_l0  # current box stretch, l/l0
         self.knit: KnitScene = self._build_knit()
         self.contact = ContactModel.for_force(
-            settings.contact_force_f0 * m.f0, m.diameter, overlap_fraction=settings.overlap_fraction, friction=0.0
+            settings.contact_force_f0 * m.f0, m.diameter, overlap_fraction=settings.overlap_fraction, friction=0.0,
+            damping_ratio=settings.contact_damping_ratio, tangential_damping_ratio=settings.contact_damping_ratio,
         )
         self.sim = Simulation(self.knit.state, contact=self.contact)
         self.result = LadderResult(settings, nodes=self.knit.state.x.shape[0])
@@ -198,7 +201,7 @@ class LadderRun:
         return build_jersey(Jersey(
             n_x=s.n_x, n_y=s.n_y, l_x=self.lx * m.stitch_length, l_y=self.ly * m.stitch_length,
             nodes_per_stitch=s.nodes_per_stitch, material=m,
-        ))
+        ), stretch_damping_ratio=s.stretch_damping_ratio)
 
     # ------------------------------------------------------------ measurements
     def tension(self) -> float:

@@ -15,6 +15,10 @@ Observables, each with its wall time:
 * ``knit``: on an N x N knit (default 16 x 16, ``--size 42`` for the paper's),
   mu = 0.4, force control: v_lad/c_b and n_lad/n_y at f_x^ini = 4 and 13.6.
 
+``--parts damping``: the model's dashpots (contact, normal and tangential; the
+yarn's axial one), each varied alone about the current defaults, reported as the
+change against the default run (``<out>/damping.csv``).
+
 Errors are per setting: the runs that vary one setting (with the default) are
 compared with the finest of them (48 nodes per stitch; overlap 2.5 % of d; time
 step 0.35 x the limit): error = |value - finest| / |finest|. The observed order
@@ -22,7 +26,7 @@ in the resolution is the slope of log(error) against log(nodes per stitch) over
 the points coarser than the finest.
 Writes ``<out>/convergence.csv`` and prints tables (markdown).
 
-    python scripts/convergence.py [--out docs/convergence] [--size 16] [--parts stitch loop knit]
+    python scripts/convergence.py [--out docs/convergence] [--size 16] [--parts stitch loop knit scatter damping]
 """
 
 from __future__ import annotations
@@ -115,6 +119,45 @@ def scatter_runs(size: int, tensions: list[float], dt_safety: float = DEFAULT["d
         mean="mean", spread=lambda v: (v.max() - v.min()) / abs(v.mean()), n="count").reset_index()
 
 
+DAMPING = {"contact_damping_ratio": [0.1, 0.3, 0.6], "stretch_damping_ratio": [0.05, 0.2, 0.5]}
+
+
+def damping_runs(size: int, tensions: list[float], csv: Path) -> pd.DataFrame:
+    """Model parameters rather than discretisation: the contact dashpots (normal and
+    tangential) and the yarn's axial dashpot, as fractions of critical, each varied alone
+    about knitlad's current defaults (LadderSettings: 24 nodes/stitch, dynamics at 0.35 x
+    the limit). There is no finest value to converge to: the change against the default
+    run is what is reported, to be read against the run-to-run scatter. Resumable."""
+    from knitlad.protocol import LadderSettings, run_ladder
+
+    base = LadderSettings(fx_target=1.0)
+    defaults = {k: getattr(base, k) for k in DAMPING}
+    rows = pd.read_csv(csv).to_dict("records") if csv.exists() else []
+    done = {(r["varied"], r["setting_value"], r["fx_target"]) for r in rows}
+    # (varied, its value): the default run is labelled with value 0 (it varies nothing)
+    cases = [("default", 0.0)] + [(k, v) for k, values in DAMPING.items() for v in values if v != defaults[k]]
+    for fx in tensions:
+        for key, value in cases:
+            if (key, value, fx) in done:
+                continue
+            extra = {} if key == "default" else {key: value}
+            t = time.perf_counter()
+            res = run_ladder(LadderSettings(n_x=size, n_y=size, fx_target=fx, mu=0.4, **extra))
+            wall = time.perf_counter() - t
+            rows.append({"varied": key, "setting_value": value, "fx_target": fx, "fx_ini": res.fx_ini,
+                         "v_lad_over_cb": res.v_lad_over_cb, "n_lad_over_ny": res.n_lad_over_ny, "wall_s": wall})
+            print(f"damping  {key:22s} {value:5.2f}  f_x {fx:5.2f}  v {res.v_lad_over_cb:.4f}  "
+                  f"n_lad/n_y {res.n_lad_over_ny:.3f}  {wall:.1f} s", flush=True)
+            tmp = csv.with_suffix(".tmp")
+            pd.DataFrame(rows).to_csv(tmp, index=False)
+            tmp.replace(csv)
+    df = pd.DataFrame(rows)
+    ref = df[df.varied == "default"].set_index("fx_target")
+    for col in ("v_lad_over_cb", "n_lad_over_ny"):
+        df[f"{col}_change"] = (df[col] - df.fx_target.map(ref[col])) / df.fx_target.map(ref[col]).abs()
+    return df
+
+
 def with_errors(df: pd.DataFrame) -> pd.DataFrame:
     """One row per (observable, setting, value of that setting) with its error against the finest value."""
     out = []
@@ -178,7 +221,7 @@ def main() -> None:
     p.add_argument("--out", default="docs/convergence")
     p.add_argument("--size", type=int, default=16, help="knit size N for N x N")
     p.add_argument("--parts", nargs="+", default=["stitch", "loop", "knit"],
-                   choices=["stitch", "loop", "knit", "scatter"])
+                   choices=["stitch", "loop", "knit", "scatter", "damping"])
     p.add_argument("--tensions", type=float, nargs="+", default=[4.0, 13.6], help="knit: target f_x^ini values")
     p.add_argument("--resolutions", type=int, nargs="+", help="nodes per stitch to study (default 16 24 36 48)")
     p.add_argument("--only", nargs="+", choices=list(STUDY), help="vary only these settings")
@@ -193,6 +236,14 @@ def main() -> None:
     if csv.exists():  # resume: keep what an interrupted study finished
         rows = pd.read_csv(csv).to_dict("records")
     done = {(r["part"], r["varied"], r["nodes_per_stitch"], r["overlap_fraction"], r["dt_safety"]) for r in rows}
+    if "damping" in args.parts:
+        df = damping_runs(args.size, args.tensions, out / "damping.csv")
+        print("\n| dashpot varied | value | f_x target | f_x^ini | v_lad/c_b | change | n_lad/n_y | change | wall [s] |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        for _, r in df.sort_values(["fx_target", "varied", "setting_value"]).iterrows():
+            print(f"| {r.varied} | {r.setting_value:g} | {r.fx_target:g} | {r.fx_ini:.2f} | {r.v_lad_over_cb:.3f} | "
+                  f"{r.v_lad_over_cb_change:+.1%} | {r.n_lad_over_ny:.3f} | {r.n_lad_over_ny_change:+.1%} | {r.wall_s:.0f} |")
+        return
     if "scatter" in args.parts:
         spread = scatter_runs(args.size, args.tensions, args.scatter_dt)
         suffix = "" if args.scatter_dt == DEFAULT["dt_safety"] else f"_dt{args.scatter_dt:g}"

@@ -170,8 +170,11 @@ def discrete_loop_half_height(geometry: Jersey) -> float:
     return H
 
 
-def build_jersey(geometry: Jersey) -> KnitScene:
-    """A jersey knit at (l_x, l_y), every course held at its two ends, edge courses held whole."""
+def build_jersey(geometry: Jersey, stretch_damping_ratio: float = 0.2) -> KnitScene:
+    """A jersey knit at (l_x, l_y), every course held at its two ends, edge courses held whole.
+
+    ``stretch_damping_ratio``: each edge's axial dashpot as a fraction of critical (``Scene.build``).
+    """
     H = discrete_loop_half_height(geometry)
     scene = Scene(geometry.material)
     courses, bars, ts = [], [], []
@@ -190,7 +193,7 @@ def build_jersey(geometry: Jersey) -> KnitScene:
             left.append(offset)
             right.append(offset + pts.shape[0] - 1)
         offset += pts.shape[0]
-    state = scene.build(twist=False)
+    state = scene.build(twist=False, stretch_damping_ratio=stretch_damping_ratio)
     return KnitScene(
         geometry=geometry, state=state, H=H, courses=courses, bars=bars, node_t=np.concatenate(ts),
         left_end=np.array(left), right_end=np.array(right),
