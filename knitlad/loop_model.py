@@ -52,6 +52,10 @@ class LoopSettings:
     confirm_s: float = 20e-6  # unthreaded this long: released
     max_time_s: float = 1e-3  # releases take 50 to 150 us
     dt_safety: float = DEFAULT_SAFETY  # time step as a fraction of the stability limit
+    # global viscous drag on every node after the lower row is removed [1/s]; 0 is the physics.
+    # With 2e4 /s the loop stays hooked (f_x = 8, mu = 0, 36 to 96 nodes per stitch): it gets
+    # out only on the momentum the release gives it.
+    drag_per_s: float = 0.0
     material: Material = NYLON
 
     def __post_init__(self) -> None:
@@ -125,6 +129,7 @@ class LoopRun:
         t0 = time.perf_counter()
         sc, res = self.scene, self.result
         self.sim.set_friction(self.s.mu)
+        self.sim.set_drag(self.s.drag_per_s)
         res.contacts_before = self.sim.touching_pairs(sc.loop, sc.upper)
         if res.contacts_before == 0:
             raise RuntimeError("the loop does not touch the upper row after relaxation: nothing to release")

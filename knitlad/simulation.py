@@ -100,7 +100,7 @@ class Simulation:
             self.dt = dt
         if not math.isfinite(self.dt):
             self.dt = 1.0  # nothing moves; any step is stable
-        self.drag = drag_per_s * units.TIME
+        self.set_drag(drag_per_s)
         self.guard_every = int(guard_every)
         self.steps = 0
         self.time = 0.0  # internal ms
@@ -124,6 +124,12 @@ class Simulation:
         if not (mu >= 0 and math.isfinite(mu)):
             raise ValueError(f"friction must be >= 0, got {mu!r}")
         self.contacts.params[MU] = mu
+
+    def set_drag(self, per_s: float) -> None:
+        """A global viscous drag -gamma m v on every free node from the next step on [1/s] (0: none)."""
+        if not (per_s >= 0 and math.isfinite(per_s)):
+            raise ValueError(f"drag must be >= 0 per second, got {per_s!r}")
+        self.drag = per_s * units.TIME
 
     @property
     def friction(self) -> float:
