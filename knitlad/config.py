@@ -14,9 +14,10 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 # The resolution is the setting that matters: the stitch's f_x at fixed (l_x, l_y) is
 # 40-55 % too high at 24 nodes per stitch, 21-25 % at 36, 7-10 % at 48 (order 3 to 4).
 # The time step and the contact stiffness are the same in every preset: the laddering
-# dynamics run at 0.35 x the stability limit (LadderSettings.dt_safety: v_lad changed by
-# 18 % from 0.7 to 0.35 and by 1 % from 0.35 to 0.175), the single loop at 0.7 (1 %);
-# halving the contact overlap moved v_lad by up to 9 %, at the knit's run-to-run scatter.
+# dynamics run at 0.35 x the stability limit (LadderSettings.dt_safety: from one stretched
+# knit, v_lad changed by 14 % from 0.7 to 0.35 and by 1.4 % from 0.35 to 0.175 at f_x = 3.9),
+# the single loop at 0.7 (1 %); halving the contact overlap moved v_lad by up to 9 %, within
+# the knit's run-to-run scatter.
 Preset = Literal["fast", "default", "accurate"]
 LADDER_RESOLUTION = {"fast": 16, "default": 24, "accurate": 48}
 LOOP_RESOLUTION = {"fast": 24, "default": 36, "accurate": 48}

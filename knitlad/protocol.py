@@ -96,10 +96,12 @@ class LadderSettings:
     max_time_s: float = 30e-3
     frame_every_s: float = 100e-6
     # time step of the laddering dynamics, as a fraction of the stability limit; 0.35, not the
-    # 0.7 of a smooth problem: on 16 x 16 at f_x = 13.6, v_lad was 0.85 at 0.7, 0.70 at 0.35 and
-    # 0.69 at 0.175 (42 x 42: 1.24 and 1.13; docs/accuracy.md). Likely cause, not yet shown:
-    # the dashpots and the friction history use the half-step velocity, first order in dt. The mu = 0 stretch is
-    # a FIRE minimisation: its end state does not depend on the step, so it keeps 0.7.
+    # 0.7 of a smooth problem: from the same stretched 16 x 16 knit at f_x^ini = 3.92, v_lad was
+    # 0.312 at 0.7, 0.270 at 0.35 and 0.266 at 0.175 (at 13.5 the step moved it by 0.3 %;
+    # docs/accuracy.md). Likely cause, not yet shown: the dashpots and the friction history use
+    # the half-step velocity, first order in dt. The mu = 0 stretch is a FIRE minimisation and
+    # keeps 0.7: a stretch at another step ends in another relaxed state of nearly the same
+    # f_x^ini, whose ladder differs by the knit's run-to-run scatter (v_lad 0.27 against 0.49 at 3.9).
     dt_safety: float = 0.5 * DEFAULT_SAFETY
     # a global viscous drag on every node during the laddering dynamics [1/s]; 0 (no drag) is the
     # physics: air drag on this yarn is ~1e2 /s at 10 m/s. For comparison with engines that damp globally (the

@@ -46,7 +46,7 @@ DEFAULT = {"nodes_per_stitch": 24, "overlap_fraction": 0.05, "dt_safety": 0.7}
 STUDY = {
     "nodes_per_stitch": [16, 24, 36, 48],
     "overlap_fraction": [0.1, 0.05, 0.025],
-    "dt_safety": [0.7, 0.35],
+    "dt_safety": [0.7, 0.35, 0.175],
 }
 FINEST = {"nodes_per_stitch": max, "overlap_fraction": min, "dt_safety": min}
 
@@ -224,11 +224,14 @@ def main() -> None:
                    choices=["stitch", "loop", "knit", "scatter", "damping"])
     p.add_argument("--tensions", type=float, nargs="+", default=[4.0, 13.6], help="knit: target f_x^ini values")
     p.add_argument("--resolutions", type=int, nargs="+", help="nodes per stitch to study (default 16 24 36 48)")
+    p.add_argument("--dt-factors", type=float, nargs="+", help="time-step factors to study (default 0.7 0.35 0.175)")
     p.add_argument("--only", nargs="+", choices=list(STUDY), help="vary only these settings")
     p.add_argument("--scatter-dt", type=float, default=DEFAULT["dt_safety"], help="scatter: the time-step factor")
     args = p.parse_args()
     if args.resolutions:
         STUDY["nodes_per_stitch"] = args.resolutions
+    if args.dt_factors:
+        STUDY["dt_safety"] = args.dt_factors
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     csv = out / "convergence.csv"

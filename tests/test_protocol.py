@@ -42,3 +42,24 @@ def test_dashpot_and_drag_settings_reach_the_knit_and_the_laddering_dynamics():
     assert run.sim.drag == pytest.approx(3e3 * units.TIME)
     default = LadderRun(LadderSettings(n_x=4, n_y=4, nodes_per_stitch=16, fx_target=None, lx_over_l0=0.30))
     assert default.knit.state.stretch_damping.min() > 0 and default.contact.damping_ratio == 0.3
+
+
+def test_the_stretched_knit_does_not_depend_on_the_laddering_time_step():
+    """dt_safety sets the step of the dynamics after the cut only: a stretch at another step
+    would end in another relaxed state, and the ladder from it differs by the knit's scatter
+    (16 x 16 at f_x = 3.9: v_lad 0.27 against 0.49), which would pass for an effect of dt."""
+    import numpy as np
+
+    runs = []
+    for dt in (0.35, 0.175):
+        run = LadderRun(LadderSettings(n_x=4, n_y=4, nodes_per_stitch=16, fx_target=None, lx_over_l0=0.34,
+                                       dt_safety=dt))
+        run.stretch()
+        runs.append(run)
+    assert np.array_equal(runs[0].sim.state.x, runs[1].sim.state.x)
+    assert runs[0].result.fx_ini == runs[1].result.fx_ini
+    steps = []
+    for run in runs:
+        run.cut()
+        steps.append(run.sim.dt / run.sim.limits.combined)
+    assert steps == pytest.approx([0.35, 0.175], rel=1e-9)
