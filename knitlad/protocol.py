@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -48,6 +48,12 @@ from knitlad.timestep import DEFAULT_SAFETY, critical_time_steps
 from knitlad.units import NYLON, Material
 
 MAX_OVERLAP_OVER_D = 0.5  # deeper than this, a yarn may pass through another: the run stops with an error
+# The dashpots of the mu = 0 stretch. FIRE ends at a minimum whatever they are, but they shape
+# its path and so pick which relaxed state of nearly the same f_x it ends in (16 x 16 at f_x 13.6:
+# the contact dashpot at 0.1 instead of 0.3 ended at f_x^ini 13.56 instead of 13.51); the
+# settings for the dynamics after the cut must not move the stretched knit.
+STRETCH_CONTACT_DAMPING = 0.3
+STRETCH_AXIAL_DAMPING = 0.2
 MIN_BUILD_LX = 0.15  # narrowest l_x/l0 tried when a thick yarn does not fit at build_width
 BUILD_LX = 0.30  # widest l_x/l0 at which the built knit is in tension and its loops still overlap well
 
@@ -86,8 +92,9 @@ class LadderSettings:
     nodes_per_stitch: int = 24
     contact_force_f0: float = 20.0  # the contact force (in f0) at which the overlap is overlap_fraction d
     overlap_fraction: float = 0.05
-    contact_damping_ratio: float = 0.3  # normal and tangential contact dashpots, fraction of critical
-    stretch_damping_ratio: float = 0.2  # the yarn's axial dashpot, fraction of critical
+    # dashpots of the dynamics after the cut, fractions of critical (the stretch uses STRETCH_*)
+    contact_damping_ratio: float = STRETCH_CONTACT_DAMPING  # normal and tangential contact dashpots
+    stretch_damping_ratio: float = STRETCH_AXIAL_DAMPING  # the yarn's axial dashpot
     stretch_increment: float = 0.005  # l/l0 per affine step
     steps_per_increment: int = 750
     fx_tolerance: float = 0.02
@@ -189,7 +196,7 @@ class LadderRun:
         self.knit: KnitScene = self._build_knit()
         self.contact = ContactModel.for_force(
             settings.contact_force_f0 * m.f0, m.diameter, overlap_fraction=settings.overlap_fraction, friction=0.0,
-            damping_ratio=settings.contact_damping_ratio, tangential_damping_ratio=settings.contact_damping_ratio,
+            damping_ratio=STRETCH_CONTACT_DAMPING, tangential_damping_ratio=STRETCH_CONTACT_DAMPING,
         )
         self.sim = Simulation(self.knit.state, contact=self.contact)
         self.result = LadderResult(settings, nodes=self.knit.state.x.shape[0])
@@ -203,7 +210,7 @@ class LadderRun:
         return build_jersey(Jersey(
             n_x=s.n_x, n_y=s.n_y, l_x=self.lx * m.stitch_length, l_y=self.ly * m.stitch_length,
             nodes_per_stitch=s.nodes_per_stitch, material=m,
-        ), stretch_damping_ratio=s.stretch_damping_ratio)
+        ), stretch_damping_ratio=STRETCH_AXIAL_DAMPING)
 
     # ------------------------------------------------------------ measurements
     def tension(self) -> float:
@@ -366,6 +373,10 @@ class LadderRun:
         apex = nodes.start + near[np.argmin(x[near, 1])]
         edge = int(np.flatnonzero(self.sim.state.edge_a == apex)[0])
         state = cut_edge(self.sim.state, edge)
+        # from here on, the dashpots of the dynamics
+        state.stretch_damping[:] *= self.s.stretch_damping_ratio / STRETCH_AXIAL_DAMPING
+        self.contact = replace(self.contact, damping_ratio=self.s.contact_damping_ratio,
+                               tangential_damping_ratio=self.s.contact_damping_ratio)
         # the cut frees two end nodes: keep the smaller of the old and the new stable step
         limit = critical_time_steps(state, False, contact_time_step(state, self.contact)).combined * units.TIME
         sim = Simulation(state, contact=self.contact, dt_s=min(self.sim.dt_s, self.s.dt_safety * limit),

@@ -29,19 +29,19 @@ def test_force_control_reaches_its_target_in_a_tall_knit(ly):
 
 
 def test_dashpot_and_drag_settings_reach_the_knit_and_the_laddering_dynamics():
-    """The model's dissipation is set from LadderSettings alone (the damping study and
-    scripts/energy_drift.py switch it off this way)."""
+    """The dissipation of the dynamics after the cut is set from LadderSettings alone (the
+    damping study and scripts/energy_drift.py switch it off this way)."""
     from knitlad import units
 
     run = LadderRun(LadderSettings(n_x=4, n_y=4, nodes_per_stitch=16, fx_target=None, lx_over_l0=0.30,
                                    contact_damping_ratio=0.0, stretch_damping_ratio=0.0, drag_per_s=3e3))
-    assert not run.knit.state.stretch_damping.any()
-    assert run.contact.damping_ratio == 0.0 and run.contact.tangential_damping_ratio == 0.0
-    assert run.sim.drag == 0.0  # the mu = 0 stretch is a FIRE minimisation: no drag there
+    # the mu = 0 stretch (FIRE) keeps its own dashpots and no drag: they only shape its path
+    assert run.knit.state.stretch_damping.min() > 0 and run.contact.damping_ratio == 0.3
+    assert run.sim.drag == 0.0
     run.cut()
+    assert not run.sim.state.stretch_damping.any()
+    assert run.sim.contact_model.damping_ratio == 0.0 and run.sim.contact_model.tangential_damping_ratio == 0.0
     assert run.sim.drag == pytest.approx(3e3 * units.TIME)
-    default = LadderRun(LadderSettings(n_x=4, n_y=4, nodes_per_stitch=16, fx_target=None, lx_over_l0=0.30))
-    assert default.knit.state.stretch_damping.min() > 0 and default.contact.damping_ratio == 0.3
 
 
 def test_the_stretched_knit_does_not_depend_on_the_laddering_time_step():
