@@ -40,7 +40,7 @@ def undamped_contact(material=kl.NYLON) -> ContactModel:
 def ladder_energy(safety: float, samples: int = 20, every_s: float = 0.1e-3) -> dict:
     run = LadderRun(LadderSettings(n_x=6, n_y=8, nodes_per_stitch=16, fx_target=13.6, mu=0.0, dt_safety=safety,
                                    contact_damping_ratio=0.0, stretch_damping_ratio=0.0))
-    run.stretch()  # FIRE: the stretch reaches the same relaxed knit with or without dashpots
+    run.stretch()  # FIRE with its own dashpots; the settings above take effect at the cut
     run.cut()
     sim = run.sim
     sim.state.v[:] = 0.0
