@@ -49,9 +49,9 @@ from knitlad.units import NYLON, Material
 
 MAX_OVERLAP_OVER_D = 0.5  # deeper than this, a yarn may pass through another: the run stops with an error
 # The dashpots of the mu = 0 stretch. FIRE ends at a minimum whatever they are, but they shape
-# its path and so pick which relaxed state of nearly the same f_x it ends in (16 x 16 at f_x 13.6:
-# the contact dashpot at 0.1 instead of 0.3 ended at f_x^ini 13.56 instead of 13.51); the
-# settings for the dynamics after the cut must not move the stretched knit.
+# its path and so pick which relaxed state of nearly the same f_x it ends in (16 x 16, target
+# 13.6: contact dashpots at 0.1 and 0.6 instead of 0.3 ended at f_x^ini 13.65 and 13.56 instead
+# of 13.51); the settings for the dynamics after the cut must not move the stretched knit.
 STRETCH_CONTACT_DAMPING = 0.3
 STRETCH_AXIAL_DAMPING = 0.2
 MIN_BUILD_LX = 0.15  # narrowest l_x/l0 tried when a thick yarn does not fit at build_width
