@@ -119,6 +119,10 @@ class LadderSettings:
     def __post_init__(self) -> None:
         if (self.lx_over_l0 is None) == (self.fx_target is None):
             raise ValueError("give exactly one of lx_over_l0 (position control) and fx_target (force control)")
+        for name in ("contact_damping_ratio", "stretch_damping_ratio", "drag_per_s"):
+            value = getattr(self, name)
+            if not (value >= 0 and math.isfinite(value)):  # checked here, not after a long stretch
+                raise ValueError(f"{name} must be >= 0, got {value!r}")
 
 
 @dataclass

@@ -63,3 +63,9 @@ def test_the_stretched_knit_does_not_depend_on_the_laddering_time_step():
         run.cut()
         steps.append(run.sim.dt / run.sim.limits.combined)
     assert steps == pytest.approx([0.35, 0.175], rel=1e-9)
+
+
+@pytest.mark.parametrize("name", ["contact_damping_ratio", "stretch_damping_ratio", "drag_per_s"])
+def test_a_negative_dissipation_setting_is_refused_before_anything_runs(name):
+    with pytest.raises(ValueError, match=name):
+        LadderSettings(fx_target=4.0, **{name: -0.1})
