@@ -111,3 +111,15 @@ def test_a_long_undamped_contact_run_keeps_its_energy_and_the_error_falls_with_d
     fine = np.max(np.abs(undamped_weave_energy(0.25)))
     assert coarse < 0.03
     assert fine < coarse / 3
+
+
+@pytest.mark.slow
+def test_a_ladder_freed_slowly_is_held_by_friction():
+    """16 x 16, f_x^ini = 13.5, mu = 0.4: undamped, the ladder runs to an edge (v_lad 0.84,
+    n_lad/n_y 1.5); under a global drag of 3e4 /s (momentum gone in 33 us) it stops before
+    (measured n_lad/n_y 1.0): the model's ladders run on the momentum of the freed loops
+    (README, issue 4)."""
+    with numba_threads(1):
+        res = LadderRun(LadderSettings(n_x=16, n_y=16, fx_target=13.6, drag_per_s=3e4)).run()
+    assert not res.reached_edge
+    assert res.n_lad_over_ny < 1.5
