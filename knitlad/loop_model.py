@@ -63,6 +63,8 @@ class LoopSettings:
             raise ValueError(f"fx must be > 0, got {self.fx}")
         if self.mu < 0:
             raise ValueError(f"mu must be >= 0, got {self.mu}")
+        if not (self.drag_per_s >= 0 and math.isfinite(self.drag_per_s)):  # before the relaxation, not after
+            raise ValueError(f"drag_per_s must be >= 0, got {self.drag_per_s!r}")
 
 
 @dataclass

@@ -128,10 +128,14 @@ def damping_runs(size: int, tensions: list[float], csv: Path) -> pd.DataFrame:
     about knitlad's current defaults (LadderSettings: 24 nodes/stitch, dynamics at 0.35 x
     the limit). There is no finest value to converge to: the change against the default
     run is what is reported, to be read against the run-to-run scatter. Resumable."""
-    from knitlad.protocol import LadderSettings, run_ladder
+    from knitlad.protocol import (
+        STRETCH_AXIAL_DAMPING,
+        STRETCH_CONTACT_DAMPING,
+        LadderSettings,
+        run_ladder,
+    )
 
-    base = LadderSettings(fx_target=1.0)
-    defaults = {k: getattr(base, k) for k in DAMPING}
+    defaults = {"contact_damping_ratio": STRETCH_CONTACT_DAMPING, "stretch_damping_ratio": STRETCH_AXIAL_DAMPING}
     rows = pd.read_csv(csv).to_dict("records") if csv.exists() else []
     done = {(r["varied"], r["setting_value"], r["fx_target"]) for r in rows}
     # (varied, its value): the default run is labelled with value 0 (it varies nothing)
