@@ -19,6 +19,7 @@ from knitlad.state import RodState
 
 # parameter slots of Contacts.params (internal units)
 K_N, DAMP_N, K_T, DAMP_T, MU, SKIN = range(6)
+COUNTING = ("union", "all_pairs")
 
 
 @dataclass(frozen=True)
@@ -35,6 +36,10 @@ class ContactModel:
                                 (and at least the adjacent edge) never interact
     contacts_per_node [-]       contacts one node may carry at once, for the time-step limit
     capacity_per_edge [-]       initial pair-buffer size per edge (grown on overflow)
+    counting                    "union" (default): a yarn is the union of its capsules, a
+                                contact at a node shared by two edges counts once; "all_pairs":
+                                every touching edge pair counts (a conservative energy, stiffer
+                                where a crossing sits at a node; see docs/accuracy.md)
     """
 
     stiffness: float
@@ -46,6 +51,7 @@ class ContactModel:
     exclusion_diameters: float = 2.5
     contacts_per_node: int = 2
     capacity_per_edge: int = 4
+    counting: str = "union"
 
     def __post_init__(self) -> None:
         if not (self.stiffness > 0 and math.isfinite(self.stiffness)):
@@ -57,6 +63,8 @@ class ContactModel:
                 raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
         if not self.tangential_stiffness_ratio > 0:
             raise ValueError("tangential_stiffness_ratio must be > 0")
+        if self.counting not in COUNTING:
+            raise ValueError(f"counting must be one of {', '.join(COUNTING)}, got {self.counting!r}")
         if self.skin is not None and not self.skin > 0:
             raise ValueError(f"skin must be > 0 m, got {self.skin!r}")
 
@@ -78,8 +86,8 @@ class Contacts(NamedTuple):
     status: np.ndarray  # (2,) [1 if the list must be rebuilt, pairs found at the last overflow]
     x_ref: np.ndarray  # (n, 3) positions at the last rebuild
     edge_radius: np.ndarray
-    edge_prev: np.ndarray  # previous edge along the yarn, -1 at an open end
-    edge_next: np.ndarray  # next edge along the yarn, -1 at an open end
+    edge_prev: np.ndarray  # previous edge along the yarn, -1 at an open end (all -1: all_pairs counting)
+    edge_next: np.ndarray  # next edge along the yarn, -1 at an open end (all -1: all_pairs counting)
     edge_yarn: np.ndarray  # physical yarn (see contact_topology)
     edge_local: np.ndarray  # arc index along the physical yarn
     yarn_edges: np.ndarray
@@ -204,6 +212,10 @@ def make_contacts(state: RodState, model: ContactModel | None, capacity: int | N
         seg = np.bincount(own_yarn, weights=state.rest_length, minlength=state.n_yarns) / np.maximum(yarn_edges, 1)
         d_yarn = 2.0 * np.bincount(own_yarn, weights=edge_radius, minlength=state.n_yarns) / np.maximum(yarn_edges, 1)
         exclusion = np.maximum(1, np.ceil(model.exclusion_diameters * d_yarn / seg)).astype(np.int64)
+        if model.counting == "all_pairs":
+            # no neighbouring edge can own a contact, so owns_contact keeps every touching pair
+            edge_prev = np.full_like(edge_prev, -1)
+            edge_next = np.full_like(edge_next, -1)
     contacts = Contacts(
         pairs=np.zeros((cap, 2), dtype=np.int64),
         keys=np.zeros(cap, dtype=np.int64),
@@ -245,4 +257,7 @@ def contact_time_step(state: RodState, model: ContactModel | None) -> float:
         return math.inf
     m = float(state.mass[free].min())
     zeta = max(model.damping_ratio, model.tangential_damping_ratio)
-    return 2.0 / math.sqrt(2.0 * model.contacts_per_node * k / m) * (math.sqrt(1 + zeta * zeta) - zeta)
+    # counting every pair, a contact at a node shared by two edges of each yarn is four pairs,
+    # each with its full lever weight on that node: four times the stiffness union counting puts there
+    z = model.contacts_per_node * (4 if model.counting == "all_pairs" else 1)
+    return 2.0 / math.sqrt(2.0 * z * k / m) * (math.sqrt(1 + zeta * zeta) - zeta)

@@ -31,7 +31,7 @@ from typing import Callable
 import numpy as np
 
 from knitlad import units
-from knitlad.contact import ContactModel, contact_time_step
+from knitlad.contact import COUNTING, ContactModel, contact_time_step
 from knitlad.measure import (
     cell_overlap,
     course_rows,
@@ -92,6 +92,9 @@ class LadderSettings:
     nodes_per_stitch: int = 24
     contact_force_f0: float = 20.0  # the contact force (in f0) at which the overlap is overlap_fraction d
     overlap_fraction: float = 0.05
+    # ContactModel.counting of the dynamics after the cut (the stretch, a minimisation, counts "union"):
+    # "union" or "all_pairs", which conserves energy (docs/accuracy.md, "Contact counting")
+    contact_counting: str = "union"
     # dashpots of the dynamics after the cut, fractions of critical (the stretch uses STRETCH_*)
     contact_damping_ratio: float = STRETCH_CONTACT_DAMPING  # normal and tangential contact dashpots
     stretch_damping_ratio: float = STRETCH_AXIAL_DAMPING  # the yarn's axial dashpot
@@ -123,6 +126,8 @@ class LadderSettings:
             value = getattr(self, name)
             if not (value >= 0 and math.isfinite(value)):  # checked here, not after a long stretch
                 raise ValueError(f"{name} must be >= 0, got {value!r}")
+        if self.contact_counting not in COUNTING:
+            raise ValueError(f"contact_counting must be one of {', '.join(COUNTING)}, got {self.contact_counting!r}")
 
 
 @dataclass
@@ -380,7 +385,7 @@ class LadderRun:
         # from here on, the dashpots of the dynamics
         state.stretch_damping[:] *= self.s.stretch_damping_ratio / STRETCH_AXIAL_DAMPING
         self.contact = replace(self.contact, damping_ratio=self.s.contact_damping_ratio,
-                               tangential_damping_ratio=self.s.contact_damping_ratio)
+                               tangential_damping_ratio=self.s.contact_damping_ratio, counting=self.s.contact_counting)
         # the cut frees two end nodes: keep the smaller of the old and the new stable step
         limit = critical_time_steps(state, False, contact_time_step(state, self.contact)).combined * units.TIME
         sim = Simulation(state, contact=self.contact, dt_s=min(self.sim.dt_s, self.s.dt_safety * limit),

@@ -148,3 +148,43 @@ def test_bad_contact_parameters_are_refused():
     sim = kl.Simulation(pressed_weave(), contact=ContactModel(stiffness=1e3))
     with pytest.raises(ValueError, match="friction"):
         sim.set_friction(float("nan"))
+
+
+def crossing_at_a_node(counting: str, offset: float = 0.0):
+    """A straight yarn along y pressed onto a rail along x right above one of its nodes
+    (``offset``: along x, in edge lengths), with the equilibrium overlap of a single pair."""
+    rail = np.zeros((11, 3))
+    rail[:, 0] = np.linspace(-10 * D, 10 * D, 11)  # edges 2 d long (a knit's are 2-3 d), a node at x = 0
+    y = np.linspace(-2 * D, 2 * D, 4)  # edges 1.33 d long, crossing mid-edge
+    crossing = np.column_stack([np.full(4, offset * 2 * D), y, np.full(4, 0.95 * D)])
+    scene = kl.Scene()
+    scene.add_yarn(rail)
+    scene.add_yarn(crossing)
+    return contact_forces_of(scene.build(), ContactModel(stiffness=1e3, counting=counting))
+
+
+def test_union_counts_a_crossing_at_a_node_once_all_pairs_once_per_edge_of_the_node():
+    """Union: one pair whatever the crossing's place; all_pairs: the two rail edges that share
+    the node each touch, so the normal force there is twice that of mid-edge (and the two
+    counts agree mid-edge)."""
+    f_union, c_union = crossing_at_a_node("union")
+    f_all, c_all = crossing_at_a_node("all_pairs")
+    assert c_union.stats[0] == 1 and c_all.stats[0] == 2
+    assert c_all.stats[2] == pytest.approx(2 * c_union.stats[2], rel=1e-12)
+    f_mid, c_mid = crossing_at_a_node("all_pairs", offset=0.5)
+    f_mid_union, c_mid_union = crossing_at_a_node("union", offset=0.5)
+    assert c_mid.stats[0] == c_mid_union.stats[0] == 1
+    np.testing.assert_allclose(f_mid, f_mid_union, rtol=0, atol=1e-12 * np.abs(f_mid).max())
+
+
+def test_counting_every_pair_halves_the_stable_contact_step():
+    """all_pairs may put four pairs' stiffness on one node (a crossing at a node of both
+    yarns), so its contact time-step limit is half that of union counting."""
+    from knitlad.contact import contact_time_step
+
+    state = pressed_weave()
+    union = contact_time_step(state, ContactModel(stiffness=1e3))
+    every = contact_time_step(state, ContactModel(stiffness=1e3, counting="all_pairs"))
+    assert every == pytest.approx(union / 2, rel=1e-12)
+    with pytest.raises(ValueError, match="counting"):
+        ContactModel(stiffness=1e3, counting="pairs")

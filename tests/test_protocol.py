@@ -69,3 +69,8 @@ def test_the_stretched_knit_does_not_depend_on_the_laddering_time_step():
 def test_a_negative_dissipation_setting_is_refused_before_anything_runs(name):
     with pytest.raises(ValueError, match=name):
         LadderSettings(fx_target=4.0, **{name: -0.1})
+
+
+def test_an_unknown_contact_counting_is_refused_before_anything_runs():
+    with pytest.raises(ValueError, match="contact_counting"):
+        LadderSettings(fx_target=4.0, contact_counting="every")

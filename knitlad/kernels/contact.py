@@ -18,8 +18,11 @@ Every edge is a capsule (a cylinder of its yarn's radius with spherical caps).
   value. u_t is reset when the pair separates and carried across rebuilds.
 * A yarn is the *union* of its capsules, so a contact at a node shared by two
   edges of a yarn is counted once (:func:`owns_contact`): without this, a yarn
-  sliding over a chain of capsules feels a bump and doubled friction at every
-  node (seen in the slider test before this rule).
+  sliding over a chain of capsules feels a bump at every node (two pairs share
+  the load there), and the normal dashpot turns the bumps into a drag. The rule
+  is not conservative (a count that jumps where two distance minima merge); with
+  ``edge_prev = edge_next = -1`` no edge has a neighbour to defer to and every
+  touching pair counts: a sum of pair potentials, which is (``counting="all_pairs"``).
 * Forces go to the two nodes of each segment by the lever rule ((1 - s), s),
   which keeps the force and its moment about the contact point.
 """
