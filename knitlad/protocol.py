@@ -354,11 +354,15 @@ class LadderRun:
             fx = self._relax_to_steady_tension()
         else:
             fx = self._force_control()
+        self.record_stretched(fx)
+        self.result.wall_s["stretch"] = time.perf_counter() - t0
+
+    def record_stretched(self, fx: float) -> None:
+        """The stretched knit's f_x^ini, box and measured periodicities; stops on a deep overlap."""
         self._check_overlap("while stretching")
         self.result.fx_ini = fx
         self.result.box_lx_over_l0 = self.lx
-        self.result.wall_s["stretch"] = time.perf_counter() - t0
-        l0 = s.material.stitch_length / units.LENGTH
+        l0 = self.s.material.stitch_length / units.LENGTH
         lx_m, ly_m = periodicities(self.rows()[:-1], self.column_centres(), self.lx * l0)
         self.result.lx_over_l0 = lx_m / l0
         self.result.ly_over_l0 = ly_m / l0

@@ -1,0 +1,54 @@
+"""The mu = 0 tension of a knit held at fixed boxes, and a ladder from the first box at a target.
+
+At mu = 0 nothing holds the loops but their shape, and the knit creeps: at a fixed box
+its tension keeps rising over thousands of FIRE steps (42 x 42 at box l_x/l0 = 0.355:
+0.33 to 0.94 f0 per thread over 20 rounds of 750 steps, with residual forces of about
+f0 on some node; see the README, issue 4). Force control therefore reads the tension of a
+creeping knit, and the low tensions it misses can be reached by holding the box and
+waiting. This script stretches along one path (boxes in the given order, position
+control), relaxes ``--rounds`` rounds at each box, prints the tension after every round,
+and with ``--target`` ladders (mu = 0.4, the defaults of ``knitlad cut``) from the first
+box whose tension is within 2 % of it.
+
+    python scripts/creep_scan.py --boxes 0.34 0.35 0.355 0.36 --rounds 20 --target 1.58
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+from knitlad.protocol import LadderRun, LadderSettings
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--boxes", type=float, nargs="+", required=True, help="box l_x/l0, in the order visited")
+    p.add_argument("--rounds", type=int, default=20, help="relaxation rounds at each box")
+    p.add_argument("--target", type=float, help="f_x^ini at which to cut and ladder")
+    p.add_argument("--stitches", type=int, default=42, help="N for an N x N knit")
+    args = p.parse_args()
+    run = LadderRun(LadderSettings(n_x=args.stitches, n_y=args.stitches, lx_over_l0=args.boxes[-1], fx_target=None))
+    f0 = run.s.material.f0
+    t0 = time.perf_counter()
+    for box in args.boxes:
+        run.stretch_to(box, run.s.ly_over_l0)
+        series = [run.tension()]
+        for _ in range(args.rounds):
+            info = run.sim.relax(force_tol_N=1e-3 * f0, max_steps=run.s.steps_per_increment)
+            series.append(run.tension())
+        print(json.dumps({"box_lx_over_l0": box, "fx_after_each_round": [round(f, 3) for f in series],
+                          "max_residual_force_over_f0": round(info["max_force_N"] / f0, 3),
+                          "wall_s": round(time.perf_counter() - t0)}), flush=True)
+        if args.target is not None and abs(series[-1] - args.target) <= 0.02 * args.target:
+            run.record_stretched(series[-1])
+            run.propagate()
+            print(json.dumps(run.result.summary()), flush=True)
+            return
+    if args.target is not None:
+        print(f"no box reached f_x = {args.target} within 2 %")
+
+
+if __name__ == "__main__":
+    main()
