@@ -165,10 +165,10 @@ def crossing_at_a_node(counting: str, offset: float = 0.0):
 
 def test_union_counts_a_crossing_at_a_node_once_all_pairs_once_per_edge_of_the_node():
     """Union: one pair whatever the crossing's place; all_pairs: the two rail edges that share
-    the node each touch, so the normal force there is twice that of mid-edge (and the two
-    counts agree mid-edge)."""
-    f_union, c_union = crossing_at_a_node("union")
-    f_all, c_all = crossing_at_a_node("all_pairs")
+    the node each touch, so at the same overlap the normal force is twice union's there
+    (mid-edge the two countings agree, force for force)."""
+    _, c_union = crossing_at_a_node("union")
+    _, c_all = crossing_at_a_node("all_pairs")
     assert c_union.stats[0] == 1 and c_all.stats[0] == 2
     assert c_all.stats[2] == pytest.approx(2 * c_union.stats[2], rel=1e-12)
     f_mid, c_mid = crossing_at_a_node("all_pairs", offset=0.5)
