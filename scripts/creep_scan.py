@@ -8,7 +8,11 @@ creeping knit, and the low tensions it misses can be reached by holding the box 
 waiting. This script stretches along one path (boxes in the given order, position
 control), relaxes ``--rounds`` rounds at each box, prints the tension after every round,
 and with ``--target`` ladders (mu = 0.4, the defaults of ``knitlad cut``) from the first
-box whose tension is within 2 % of it.
+box whose tension is within 2 % of it. It also tracks the head of every loop (the
+highest node of each course within each column; nodes are material points, built
+``nodes_per_stitch`` to a stitch): how far the heads have moved along the yarn since
+the first box, and the yarn each stitch holds (nodes between consecutive heads), to
+show the yarn flowing from stitch to stitch.
 
     python scripts/creep_scan.py --boxes 0.34 0.35 0.355 0.36 --rounds 20 --target 1.58
 """
@@ -19,7 +23,24 @@ import argparse
 import json
 import time
 
+import numpy as np
+
 from knitlad.protocol import LadderRun, LadderSettings
+
+
+def loop_heads(run: LadderRun) -> np.ndarray:
+    """(courses, columns) index along its course of the highest node of each loop."""
+    x = run.sim.state.x
+    centres = run.column_centres()
+    half = 0.5 * (centres[1] - centres[0])
+    heads = np.full((len(run.knit.courses), centres.size), -1)
+    for r in range(len(run.knit.courses)):
+        xr = x[run.knit.course_nodes(r)]
+        for c, centre in enumerate(centres):
+            inside = np.flatnonzero(np.abs(xr[:, 0] - centre) < half)
+            if inside.size:
+                heads[r, c] = inside[np.argmax(xr[inside, 1])]
+    return heads
 
 
 def main() -> None:
@@ -32,14 +53,20 @@ def main() -> None:
     run = LadderRun(LadderSettings(n_x=args.stitches, n_y=args.stitches, lx_over_l0=args.boxes[-1], fx_target=None))
     f0 = run.s.material.f0
     t0 = time.perf_counter()
+    first_heads = None
     for box in args.boxes:
         run.stretch_to(box, run.s.ly_over_l0)
+        first_heads = loop_heads(run) if first_heads is None else first_heads
         series = [run.tension()]
         for _ in range(args.rounds):
             info = run.sim.relax(force_tol_N=1e-3 * f0, max_steps=run.s.steps_per_increment)
             series.append(run.tension())
+        heads = loop_heads(run)
+        yarn_per_stitch = np.diff(heads, axis=1)
         print(json.dumps({"box_lx_over_l0": box, "fx_after_each_round": [round(f, 3) for f in series],
                           "max_residual_force_over_f0": round(info["max_force_N"] / f0, 3),
+                          "largest_head_shift_nodes": int(np.abs(heads - first_heads).max()),
+                          "nodes_per_stitch_min_max": [int(yarn_per_stitch.min()), int(yarn_per_stitch.max())],
                           "wall_s": round(time.perf_counter() - t0)}), flush=True)
         if args.target is not None and abs(series[-1] - args.target) <= 0.02 * args.target:
             run.record_stretched(series[-1])
