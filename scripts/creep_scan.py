@@ -66,6 +66,7 @@ def main() -> None:
         print(json.dumps({"box_lx_over_l0": box, "fx_after_each_round": [round(f, 3) for f in series],
                           "max_residual_force_over_f0": round(info["max_force_N"] / f0, 3),
                           "largest_head_shift_nodes": int(np.abs(heads - first_heads).max()),
+                          "mean_head_shift_by_column": np.abs(heads - first_heads).mean(axis=0).round(1).tolist(),
                           "nodes_per_stitch_min_max": [int(yarn_per_stitch.min()), int(yarn_per_stitch.max())],
                           "wall_s": round(time.perf_counter() - t0)}), flush=True)
         if args.target is not None and abs(series[-1] - args.target) <= 0.02 * args.target:
