@@ -276,6 +276,19 @@ class Simulation:
         r[~self.state.held] = 0.0
         return r
 
+    def energy_history(self, samples: int, every_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """Step the run ``samples`` times by ``every_s`` (whole steps, at least one); the total and
+        kinetic energy [J] at the start and after each interval, as two arrays of samples + 1."""
+        n = max(1, int(round(every_s / self.dt_s)))
+        total, kinetic = [], []
+        for k in range(samples + 1):
+            if k:
+                self.step(n)
+            e = self.energies_J()
+            total.append(e["total"])
+            kinetic.append(e["kinetic"])
+        return np.array(total), np.array(kinetic)
+
     def energies_J(self) -> dict[str, float]:
         """Kinetic, stretching, bending, twisting, contact (stored), external-potential and total energy [J]."""
         es, eb, et, ec, ext = potential_energy(self.state, self.work, self.contacts, self.twist)

@@ -50,6 +50,8 @@ def main() -> None:
     p.add_argument("--target", type=float, help="f_x^ini at which to cut and ladder")
     p.add_argument("--stitches", type=int, default=42, help="N for an N x N knit")
     args = p.parse_args()
+    if args.rounds < 1:
+        p.error("--rounds must be >= 1")
     run = LadderRun(LadderSettings(n_x=args.stitches, n_y=args.stitches, lx_over_l0=args.boxes[-1], fx_target=None))
     f0 = run.s.material.f0
     t0 = time.perf_counter()
