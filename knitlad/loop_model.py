@@ -104,7 +104,7 @@ class LoopRun:
         m = settings.material
         l0 = m.stitch_length
         geometry = Jersey(n_x=1, n_y=1, l_x=settings.lx_over_l0 * l0, l_y=settings.ly_over_l0 * l0,
-                          nodes_per_stitch=settings.nodes_per_stitch, material=m)
+                          nodes_per_stitch=settings.nodes_per_stitch, material=m, edge="tail")
         self.scene: LoopScene = build_single_loop(geometry, settings.fx * m.f0)
         contact = ContactModel.for_force(settings.contact_force_f0 * m.f0, m.diameter,
                                          overlap_fraction=settings.overlap_fraction, friction=0.0)

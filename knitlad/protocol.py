@@ -41,7 +41,7 @@ from knitlad.measure import (
     periodicities,
     tension_per_thread,
 )
-from knitlad.scenes.jersey import Jersey, KnitScene, build_jersey, widest_fitting_width
+from knitlad.scenes.jersey import EDGES, Jersey, KnitScene, build_jersey, widest_fitting_width
 from knitlad.simulation import Simulation
 from knitlad.state import cut_edge
 from knitlad.timestep import DEFAULT_SAFETY, critical_time_steps
@@ -95,6 +95,7 @@ class LadderSettings:
     # ContactModel.counting of the dynamics after the cut (the stretch, a minimisation, counts "union"):
     # "union" or "all_pairs", which conserves energy (docs/accuracy.md, "Contact counting")
     contact_counting: str = "union"
+    edge: str = "clamped"  # how the course ends are held (knitlad.scenes.jersey.EDGES)
     # dashpots of the dynamics after the cut, fractions of critical (the stretch uses STRETCH_*)
     contact_damping_ratio: float = STRETCH_CONTACT_DAMPING  # normal and tangential contact dashpots
     stretch_damping_ratio: float = STRETCH_AXIAL_DAMPING  # the yarn's axial dashpot
@@ -126,6 +127,8 @@ class LadderSettings:
             value = getattr(self, name)
             if not (value >= 0 and math.isfinite(value)):  # checked here, not after a long stretch
                 raise ValueError(f"{name} must be >= 0, got {value!r}")
+        if self.edge not in EDGES:
+            raise ValueError(f"edge must be one of {', '.join(EDGES)}, got {self.edge!r}")
         if self.contact_counting not in COUNTING:
             raise ValueError(f"contact_counting must be one of {', '.join(COUNTING)}, got {self.contact_counting!r}")
 
@@ -218,7 +221,7 @@ class LadderRun:
             self.lx = self.build_lx = lx
         return build_jersey(Jersey(
             n_x=s.n_x, n_y=s.n_y, l_x=self.lx * m.stitch_length, l_y=self.ly * m.stitch_length,
-            nodes_per_stitch=s.nodes_per_stitch, material=m,
+            nodes_per_stitch=s.nodes_per_stitch, material=m, edge=s.edge,
         ), stretch_damping_ratio=STRETCH_AXIAL_DAMPING)
 
     # ------------------------------------------------------------ measurements
@@ -256,8 +259,9 @@ class LadderRun:
         """Relax in rounds until f_x is within ``rtol`` of its extrapolated asymptote.
 
         After a stretch f_x creeps toward equilibrium with a time constant of a few
-        rounds (42 x 42: from 2.1 to 5.0 over 14 rounds at l_x = 0.38 l0), so a small
-        change between two rounds does not mean convergence. The asymptote is
+        rounds (42 x 42 with tail ends: from 2.1 to 5.0 over 14 rounds at l_x = 0.38 l0;
+        clamped ends: 2.36 to 2.28 over 30 rounds at 0.355), so a small change between
+        two rounds does not mean convergence. The asymptote is
         estimated by Aitken's delta-squared extrapolation of the last three readings.
         """
         readings = [self.tension()]

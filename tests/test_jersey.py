@@ -73,16 +73,35 @@ def test_jersey_topology_each_loop_passes_through_the_loop_of_the_course_below(k
                     assert piercings(ring, loop_arc(knit, other_row, other_col))[0] == 0, (r, i, other_row, other_col)
 
 
-def test_edge_courses_are_held_and_courses_are_held_at_their_ends(knit):
-    s = knit.state
+def test_edge_courses_are_held_and_courses_are_clamped_at_their_edge_sinkers(knit):
+    """Two nodes held at each end (position and tangent), the end node on the box edge at the
+    bottom of the sinker, the yarn leaving it along x: the periodic stitch's mirror symmetry there."""
+    s, g = knit.state, knit.geometry
     for y in knit.bars:
         assert s.held[s.yarn_start[y]: s.yarn_start[y + 1]].all()
     for k, y in enumerate(knit.courses):
+        nodes = s.x[s.yarn_start[y]: s.yarn_start[y + 1]] * kl.units.LENGTH
+        held = np.flatnonzero(s.held[s.yarn_start[y]: s.yarn_start[y + 1]])
+        last = nodes.shape[0] - 1
+        assert held.tolist() == [0, 1, last - 1, last]
+        assert nodes[0, 0] == pytest.approx(g.column_x(0) - 0.5 * g.l_x, abs=1e-9 * L0)
+        assert nodes[last, 0] == pytest.approx(g.column_x(g.n_x - 1) + 0.5 * g.l_x, abs=1e-9 * L0)
+        assert nodes[0, 1] == pytest.approx(k * g.l_y - knit.H, abs=1e-9 * L0)
+        for a, b in ((0, 1), (last, last - 1)):
+            t = (nodes[b] - nodes[a]) / np.linalg.norm(nodes[b] - nodes[a])
+            assert abs(t[0]) > 0.99
+
+
+def test_course_ends_with_tails_are_held_at_one_node():
+    knit = build_jersey(Jersey(n_x=3, n_y=2, l_x=0.3 * L0, l_y=0.25 * L0, nodes_per_stitch=24, edge="tail"))
+    s = knit.state
+    for y in knit.courses:
         held = np.flatnonzero(s.held[s.yarn_start[y]: s.yarn_start[y + 1]])
         assert held.tolist() == [0, s.yarn_start[y + 1] - s.yarn_start[y] - 1]
 
 
-@pytest.mark.parametrize("kwargs, match", [(dict(n_x=0), "1 x 1"), (dict(l_x=L0), "l0"), (dict(nodes_per_stitch=4), "nodes_per_stitch")])
+@pytest.mark.parametrize("kwargs, match", [(dict(n_x=0), "1 x 1"), (dict(l_x=L0), "l0"), (dict(nodes_per_stitch=4), "nodes_per_stitch"),
+                                           (dict(edge="loose"), "edge must be one of")])
 def test_bad_geometry_is_refused(kwargs, match):
     with pytest.raises(ValueError, match=match):
         Jersey(**kwargs)

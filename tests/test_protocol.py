@@ -74,3 +74,45 @@ def test_a_negative_dissipation_setting_is_refused_before_anything_runs(name):
 def test_an_unknown_contact_counting_is_refused_before_anything_runs():
     with pytest.raises(ValueError, match="contact_counting"):
         LadderSettings(fx_target=4.0, contact_counting="every")
+
+
+def _relax_in_rounds(run: LadderRun, rounds: int) -> tuple[list[float], dict]:
+    """FIRE rounds of the protocol's length at a fixed box; f_x after each, and the last round's report."""
+    tol = 1e-3 * run.s.material.f0
+    readings, info = [], {}
+    for _ in range(rounds):
+        info = run.sim.relax(force_tol_N=tol, max_steps=run.s.steps_per_increment)
+        readings.append(run.tension())
+        if info["converged"]:
+            break
+    return readings, info
+
+
+def test_at_mu_0_a_knit_with_clamped_course_ends_reaches_equilibrium_at_a_fixed_box():
+    """Course ends clamped at the edge sinkers (position and tangent, the mirror symmetry of the
+    periodic stitch there): FIRE reaches its force tolerance and f_x settles. Ends held at the tip of
+    straight tails instead leave the edge stitches free to trade yarn, and the knit creeps: 8 x 10
+    at l_x/l0 = 0.355 wandered between f_x 1.21 and 1.46 over 30 rounds, residual ~0.4 f0."""
+    clamped = LadderRun(LadderSettings(n_x=8, n_y=10, lx_over_l0=0.355, fx_target=None, edge="clamped"))
+    clamped.stretch_to(0.355, 0.25)
+    readings, info = _relax_in_rounds(clamped, 40)
+    assert info["converged"], f"residual {info['max_force_N'] / NYLON.f0:.3g} f0 after {len(readings)} rounds"
+    assert abs(readings[-1] - readings[-2]) < 0.005 * abs(readings[-1])
+
+    tail = LadderRun(LadderSettings(n_x=8, n_y=10, lx_over_l0=0.355, fx_target=None, edge="tail"))
+    tail.stretch_to(0.355, 0.25)
+    _, info = _relax_in_rounds(tail, len(readings) + 10)
+    assert info["max_force_N"] > 10 * 1e-3 * NYLON.f0
+
+
+def test_an_unknown_edge_is_refused_before_anything_runs():
+    with pytest.raises(ValueError, match="edge must be one of"):
+        LadderRun(LadderSettings(n_x=4, n_y=4, lx_over_l0=0.35, fx_target=None, edge="loose"))
+
+
+def test_force_control_says_when_the_knit_as_built_is_already_past_the_target():
+    """With tails, the 8 x 10 knit built at l_x/l0 = 0.30 carries f_x ~ 0.4: a target of 0.05
+    cannot be reached by stretching, and force control says so (position control is advised)."""
+    run = LadderRun(LadderSettings(n_x=8, n_y=10, fx_target=0.05, edge="tail"))
+    with pytest.raises(RuntimeError, match="use position control"):
+        run.stretch()

@@ -141,13 +141,15 @@ def test_plot_draws_the_summary_figures_and_the_diagrams(smoke):
 
 # ------------------------------------------------------------------ failures
 def test_a_failing_job_is_recorded_and_the_others_go_on(tmp_path):
-    """f_x = 0.05 is below the built knit's tension: that job fails (RuntimeError), the other runs."""
-    cfg = write_config(tmp_path / "f.yaml", {"fixed": TINY, "sweep": {"axes": {"fx": [0.05, 1.5]}}})
+    """No jersey stitch of d/l0 = 1/20 holds l0 at these periodicities: that job fails
+    (CourseTooWide, raised by the run, not by the config), the other runs."""
+    cfg = write_config(tmp_path / "f.yaml", {"scene": "stitch", "fixed": {"lx": 0.35, "ly": 0.25, "resolution": 16},
+                                             "sweep": {"axes": {"d_over_l0": [0.05, 1 / 70]}}})
     p = knitlad("sweep", str(cfg), "--out", str(tmp_path / "out"), "--workers", "1")
     assert p.returncode == 1
     df = read_summary(tmp_path / "out")
     assert list(df["status"]) == ["failed", "ok"]
-    assert "RuntimeError" in df["error"][0] and "--lx" in df["error"][0]
+    assert "CourseTooWide" in df["error"][0] and "d/l0 = 0.05" in df["error"][0]
     assert "failed" in p.stderr and "Traceback" not in p.stderr
 
 

@@ -14,8 +14,10 @@ yield, and at high tension the tightened head of the loop is trapped between
 its diverging legs (no release at f_x = 20 with mu = 0, f_x >= 16 with mu = 0.4).
 Variants tried and dropped: a free upper row (under the same tension, or with
 pinned ends) and a row held above it (the loops ring against each other and
-part only at f_x <= 2), and the column stretched from 0.30 to 0.39 l0 before
-the release (the upper row's legs then trap the head at every tension).
+part only at f_x <= 2), the column stretched from 0.30 to 0.39 l0 before
+the release (the upper row's legs then trap the head at every tension), and the
+loop row without tails, clamped at its sinkers and sliding along x as the
+fabric's courses are held (session 6: never released, f_x = 1 to 20, mu = 0).
 """
 
 from __future__ import annotations
