@@ -290,8 +290,8 @@ class LadderRun:
     def _force_control(self) -> float:
         """Stretch until the relaxed f_x matches the target within ``fx_tolerance``; returns f_x.
 
-        A reading taken right after an increment lags the relaxed tension (42 x 42 at
-        l_x = 0.38 l0: 1.9 read, 5.0 relaxed), so only steady (extrapolated) readings
+        A reading taken right after an increment lags the relaxed tension (42 x 42 with
+        tail ends at l_x = 0.38 l0: 1.9 read, 5.0 relaxed), so only steady (extrapolated) readings
         decide near the target: cheap increments while the reading is below a quarter
         of the target, then a steady reading after every increment until the target is
         bracketed, then bisection on steady readings.
