@@ -17,9 +17,9 @@ How the course ends are held (``Jersey.edge``):
 
 * ``"clamped"`` (default): the last two nodes at each end are held, fixing the
   end's position and its tangent (along x). The periodic stitch is mirror
-  symmetric about its sinkers, so there the yarn runs along x with no net
-  shear: the clamp is that symmetry, and the edge stitch is as in the bulk
-  as a held end can make it.
+  symmetric about its sinkers, so there the yarn runs along x: the clamp
+  imposes that symmetry. It also fixes the sinker's height (as built, then
+  carried by the affine stretch), which in the bulk is free.
 * ``"tail"``: a straight tail 0.5 l_x long continues each end, and only its
   tip is held. The edge sinker and the tail are then free to bend and to trade
   yarn with the edge stitches, which at mu = 0 they do without end: the knit
@@ -114,7 +114,7 @@ class Jersey:
     def course_points(self, row: int, H: float) -> tuple[np.ndarray, np.ndarray]:
         """Nodes of one course, uniform in arc length, and the parameter t of each.
 
-        The tails are straight, from the end sinkers out to the held ends.
+        With ``edge="tail"``, straight tails continue from the end sinkers out to the held ends.
         """
         fine_per_stitch = 400
         t = np.linspace(-math.pi, 2 * math.pi * (self.n_x - 1) + math.pi, fine_per_stitch * self.n_x + 1)
