@@ -19,7 +19,11 @@ import numpy as np
 
 
 def tension_per_thread(reactions_N: np.ndarray, left_end: np.ndarray, right_end: np.ndarray, f0: float) -> float:
-    """f_x = F_x / (n_y f0) with F_x the mean of the right-end pull and minus the left-end pull [N]."""
+    """f_x = F_x / (n_y f0) with F_x the mean of the right-end pull and minus the left-end pull [N].
+
+    ``left_end``, ``right_end``: (n_y,) or (n_y, k) node indices, the held nodes of each course's
+    ends (k = 2 for clamped ends: their reactions together are the end's force).
+    """
     F_x = 0.5 * (reactions_N[right_end, 0].sum() - reactions_N[left_end, 0].sum())
     return float(F_x / (len(right_end) * f0))
 
