@@ -251,9 +251,11 @@ class LadderRun:
         x[:, 1] *= ly_new / self.ly
         self.lx, self.ly = lx_new, ly_new
 
-    def _relax(self, steps: int) -> None:
-        f0 = self.s.material.f0
-        self.result.relax_steps += self.sim.relax(force_tol_N=1e-3 * f0, max_steps=steps)["steps"]
+    def _relax(self, steps: int) -> dict:
+        """One FIRE round of at most ``steps`` to the protocol's tolerance (1e-3 f0); its report."""
+        info = self.sim.relax(force_tol_N=1e-3 * self.s.material.f0, max_steps=steps)
+        self.result.relax_steps += info["steps"]
+        return info
 
     def _relax_to_steady_tension(self, rtol: float = 0.005, max_rounds: int = 60) -> float:
         """Relax in rounds until f_x is within ``rtol`` of its extrapolated asymptote.

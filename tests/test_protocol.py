@@ -77,11 +77,10 @@ def test_an_unknown_contact_counting_is_refused_before_anything_runs():
 
 
 def _relax_in_rounds(run: LadderRun, rounds: int) -> tuple[list[float], dict]:
-    """FIRE rounds of the protocol's length at a fixed box; f_x after each, and the last round's report."""
-    tol = 1e-3 * run.s.material.f0
+    """The protocol's FIRE rounds at a fixed box; f_x after each, and the last round's report."""
     readings, info = [], {}
     for _ in range(rounds):
-        info = run.sim.relax(force_tol_N=tol, max_steps=run.s.steps_per_increment)
+        info = run._relax(run.s.steps_per_increment)
         readings.append(run.tension())
         if info["converged"]:
             break
