@@ -66,7 +66,7 @@ def main() -> None:
         first_heads = loop_heads(run) if first_heads is None else first_heads
         series = [run.tension()]
         for _ in range(args.rounds):
-            info = run.sim.relax(force_tol_N=1e-3 * f0, max_steps=run.s.steps_per_increment)
+            info = run._relax(run.s.steps_per_increment)
             series.append(run.tension())
         heads = loop_heads(run)
         yarn_per_stitch = np.diff(heads, axis=1)
