@@ -125,6 +125,17 @@ def ladder_front(laddered: np.ndarray, column: int, start_row: int, max_gap: int
     return reach(+1), reach(-1)
 
 
+def laddering_column(final_fronts: list[tuple[int, int]]) -> int:
+    """Index of the column to follow, given each candidate's final (upward, downward) extent.
+
+    The column whose ladder ran farthest up (v_lad is the speed of the upward
+    front, paper Fig. 3d), its downward extent breaking ties, then the first.
+    Ranking by up + down instead lets a longer downward ladder in the column
+    beside the upward one take its place (seen on 20 x 20 at f_x 13.6).
+    """
+    return max(range(len(final_fronts)), key=lambda c: (final_fronts[c][0], final_fronts[c][1], -c))
+
+
 def laddering_velocity(times: np.ndarray, front: np.ndarray, l_y: float, first: int = 2, last: int = 10) -> float:
     """v_lad = slope of the front from stitch ``first`` to ``last`` (paper Fig. 3d) [l_y / time unit].
 

@@ -37,6 +37,7 @@ from knitlad.measure import (
     course_rows,
     ladder_front,
     laddered_cells,
+    laddering_column,
     laddering_velocity,
     periodicities,
     tension_per_thread,
@@ -414,7 +415,9 @@ class LadderRun:
         res.baseline_laddered = baseline
         undone = np.zeros_like(baseline)
         r0, i0 = self.cut_row(), self.cut_column()
-        columns = [i0 - 1, i0]
+        columns = [i0 - 1, i0]  # the two columns beside the cut sinker loop
+        fronts: list[list[tuple[int, int]]] = [[] for _ in columns]  # (up, down) extents over time
+        cells: list[list[np.ndarray]] = [[] for _ in columns]
         last_change = 0.0
         n_last = -1
         next_frame = 0.0
@@ -426,13 +429,11 @@ class LadderRun:
             # an undone cell does not knit itself again: keep every cell ever undone
             undone |= self.laddered() & ~baseline
             lad = undone
-            fronts = [ladder_front(lad, c, r0) for c in columns]
-            best = int(np.argmax([u + dn for u, dn in fronts]))
+            for c, col in enumerate(columns):
+                fronts[c].append(ladder_front(lad, col, r0))
+                cells[c].append(lad[:, col].copy())
             res.times_s.append(t)
-            res.front_up.append(fronts[best][0])
-            res.front_down.append(fronts[best][1])
             res.fx_series.append(self.tension())
-            res.column_history.append(lad[:, columns[best]].copy())
             n = int(lad.sum())
             if n != n_last:
                 n_last, last_change = n, t
@@ -454,10 +455,15 @@ class LadderRun:
                 res.stop_reason = "max_time_s reached"
                 break
         res.final_laddered = lad
+        # one column for the whole run, as the paper follows one; chosen at each observation
+        # instead, the front jumped between the two columns
+        best = laddering_column([f[-1] for f in fronts])
+        res.front_up = [up for up, _ in fronts[best]]
+        res.front_down = [down for _, down in fronts[best]]
+        res.column_history = cells[best]
         res.n_lad = int(lad.sum())
         res.n_lad_over_ny = res.n_lad / s.n_y
-        col_counts = lad.sum(axis=0)
-        res.laddering_column = int(np.argmax(col_counts))
+        res.laddering_column = columns[best]
         # f_x after arrest: mean over the last arrest window (the force rings after the cut)
         times = np.array(res.times_s)
         window = times >= times[-1] - 0.5 * s.arrest_s

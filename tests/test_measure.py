@@ -10,6 +10,7 @@ from knitlad.measure import (
     cell_overlap,
     ladder_front,
     laddered_cells,
+    laddering_column,
     laddering_velocity,
     periodicities,
     tension_per_thread,
@@ -65,6 +66,15 @@ def test_ladder_front_follows_the_run_from_the_cut_across_small_gaps():
     lad[2:4, 2] = True
     assert ladder_front(lad, 2, 4) == (3, 2)
     assert ladder_front(lad, 1, 4) == (0, 0)
+
+
+def test_the_followed_column_is_the_one_whose_ladder_ran_farthest_up():
+    # 20 x 20 at f_x 13.6: the left column's ladder ran 8 up and 3 down, the right one's 9 up
+    # (to the top course) and 2 down; up + down ties at 11 and would follow the left one
+    assert laddering_column([(8, 3), (9, 2)]) == 1
+    assert laddering_column([(9, 2), (8, 3)]) == 0
+    assert laddering_column([(5, 1), (5, 4)]) == 1  # same upward extent: the longer downward one
+    assert laddering_column([(5, 4), (5, 4)]) == 0
 
 
 def test_laddering_velocity_recovers_a_constant_front_speed():
