@@ -144,7 +144,7 @@ class LadderResult:
     n_lad: int = 0
     n_lad_over_ny: float = float("nan")
     v_lad_over_cb: float = float("nan")
-    laddering_column: int = -1
+    laddering_column: int = -1  # the column beside the cut whose front is followed (measure.laddering_column)
     reached_edge: bool = False
     stop_reason: str = ""
     v_fit_stitches: tuple = (2, 10)
