@@ -133,7 +133,7 @@ def laddering_column(final_fronts: list[tuple[int, int]]) -> int:
     Ranking by up + down instead lets a longer downward ladder in the column
     beside the upward one take its place (seen on 20 x 20 at f_x 13.6).
     """
-    return max(range(len(final_fronts)), key=lambda c: (final_fronts[c][0], final_fronts[c][1], -c))
+    return max(range(len(final_fronts)), key=lambda c: tuple(final_fronts[c]))  # max keeps the first of equals
 
 
 def laddering_velocity(times: np.ndarray, front: np.ndarray, l_y: float, first: int = 2, last: int = 10) -> float:
