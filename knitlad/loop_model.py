@@ -18,7 +18,10 @@ Protocol (:class:`LoopRun`):
    less than 3 % (f_x = 2 to 16, mu = 0).
 
 At mu = 0 the release is inertial and the paper finds v_lad/c_b = 0.34 sqrt(f_x);
-friction slows it and makes v_lad(f_x) close to linear.
+friction slows it and makes v_lad(f_x) close to linear. Here the freed loop also
+recoils (a bent rod with no natural curvature unbends), so at mu = 0
+v_lad^2 = v_0^2 + beta^2 f_x, with beta close to the paper's 0.34 and v_0 about 0.5 to
+0.6 c_b (README, "The single-loop model").
 """
 
 from __future__ import annotations

@@ -1,12 +1,14 @@
 """The single-loop model (paper Fig. 5b,c): the loop holds while the lower row is there, lets
 go once it is removed, faster under more tension and slower with more friction; the release
-time is converged in the resolution. The paper's inertial law 0.34 sqrt(f_x) is *not*
-reproduced (pinned below as a known deviation)."""
+time is converged in the resolution. At mu = 0 the tension-driven part of v_lad^2 has the
+paper's prefactor, beta = 0.34 within 10 %, but the loop's own bending recoil adds to it, so
+the paper's law 0.34 sqrt(f_x) itself is *not* reproduced (pinned below as a known deviation)."""
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from knitlad.loop_model import LoopRun, LoopSettings
@@ -65,8 +67,36 @@ def test_the_freed_loop_leaves_on_its_momentum_not_quasi_statically():
     assert not strong.released
 
 
+def test_at_mu_0_the_tension_driven_part_of_v_squared_has_the_papers_prefactor():
+    """At mu = 0 nothing dissipates, and the freed loop leaves on the kinetic energy it gains:
+    the work of the tension, proportional to f_x, plus its own bending recoil (a loop of a rod
+    with no natural curvature unbends once the lower row is gone: it lets go at 0.50 c_b even
+    at f_x = 0.05). So v_lad^2 = v_0^2 + beta^2 f_x, and the paper's inertial law is the
+    recoil-free limit beta sqrt(f_x), beta = 0.34 (Fig. 5c, dashed). beta from a straight line
+    through v^2 at f_x = 2, 4, 8, 12 (above 12 the held upper row starts to trap the loop's
+    head, README), within 10 %: the fit's standard error on beta is ~4 % and 36 against 48
+    nodes per stitch moves it by 3 %. Measured: beta = 0.366 (36 nodes), 0.356 (48), with
+    v_0 = 0.58 c_b, which is why the absolute law below fails."""
+    fx = np.array([2.0, 4.0, 8.0, 12.0])
+    v = np.array([release(f, 0.0).v_lad_over_cb for f in fx])
+    beta_sq, v0_sq = np.polyfit(fx, v**2, 1)
+    assert math.sqrt(beta_sq) == pytest.approx(0.34, rel=0.10)
+    assert v0_sq > 0  # the recoil: without it the law would be the paper's
+
+
 @pytest.mark.xfail(strict=True, reason="known deviation: the model's v_lad/c_b at mu = 0 is 0.98 at f_x = 4, "
                    "44 % above the paper's 0.34 sqrt(f_x) = 0.68 (the held upper row and the loop's own "
                    "bending recoil); see the README, single-loop model")
 def test_inertial_law_of_the_paper_at_mu_0():
     assert release(4.0, 0.0).v_lad_over_cb == pytest.approx(0.34 * math.sqrt(4.0), rel=0.15)
+
+
+@pytest.mark.xfail(strict=True, reason="known deviation: at mu = 0.4 the model's v_lad/c_b is 1.16 at f_x = 8, "
+                   "twice the paper's 42 x 42 DER line (0.57; our own 42 x 42 knit: 0.74); see the README, "
+                   "single-loop model")
+def test_at_mu_0_4_the_loop_matches_the_papers_fabric():
+    """Paper Fig. 5c: at mu = 0.4 the single loop agrees with the 42 x 42 DER runs (0.176 c_b at
+    f_x 1.58, 1.05 at 15.67, a straight line between them) without adjustable parameters."""
+    (f1, v1), (f2, v2) = (1.58, 0.176), (15.67, 1.05)
+    paper_line = v1 + (v2 - v1) * (8.0 - f1) / (f2 - f1)
+    assert release(8.0, 0.4).v_lad_over_cb == pytest.approx(paper_line, rel=0.2)
