@@ -23,6 +23,7 @@ Stages, each driven here and measured by :mod:`knitlad.measure`:
 
 from __future__ import annotations
 
+import copy
 import math
 import time
 from dataclasses import dataclass, field, replace
@@ -194,6 +195,11 @@ Progress = Callable[[str, float], None]  # (stage, fraction done)
 
 class Interpenetration(RuntimeError):
     """Two yarns overlap by more than MAX_OVERLAP_OVER_D: the contact is too soft for the forces it carries."""
+
+
+# settings read only from the cut on: one stretched knit can be laddered under each of them
+AFTER_CUT = ("mu", "contact_damping_ratio", "stretch_damping_ratio", "contact_counting", "drag_per_s",
+             "dt_safety", "observe_every_s", "arrest_s", "max_time_s", "frame_every_s")
 
 
 class LadderRun:
@@ -373,6 +379,21 @@ class LadderRun:
         lx_m, ly_m = periodicities(self.rows()[:-1], self.column_centres(), self.lx * l0)
         self.result.lx_over_l0 = lx_m / l0
         self.result.ly_over_l0 = ly_m / l0
+
+    def branch(self, **after_cut) -> "LadderRun":
+        """An independent copy of this stretched run that will ladder with other ``AFTER_CUT`` settings.
+
+        Studies of the laddering dynamics (dashpots, drag, mu, time step) compare runs from
+        one relaxed knit: re-stretching gives the same knit at several times the cost.
+        """
+        unknown = sorted(set(after_cut) - set(AFTER_CUT))
+        if unknown:
+            raise ValueError(f"{', '.join(unknown)}: not a setting of the laddering dynamics ({', '.join(AFTER_CUT)})")
+        settings = replace(self.s, **after_cut)  # validated before the copy is made
+        new = copy.deepcopy(self)
+        new.s = settings
+        new.result.settings = settings
+        return new
 
     # ------------------------------------------------------------ stage 3-4
     def cut_row(self) -> int:

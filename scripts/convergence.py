@@ -122,7 +122,10 @@ def scatter_runs(size: int, tensions: list[float], dt_safety: float = DEFAULT["d
         mean="mean", spread=lambda v: (v.max() - v.min()) / abs(v.mean()), n="count").reset_index()
 
 
-DAMPING = {"contact_damping_ratio": [0.1, 0.3, 0.6], "stretch_damping_ratio": [0.05, 0.2, 0.5]}
+# drag_per_s: a global drag (0, the default, is the physics): 1e2 to 1e3 /s perturb the ladder
+# without damping it (the scatter), 2e3 to 3e3 /s slow it at low tension only (docs/accuracy.md)
+DAMPING = {"contact_damping_ratio": [0.1, 0.3, 0.6], "stretch_damping_ratio": [0.05, 0.2, 0.5],
+           "drag_per_s": [1e2, 1e3, 2e3, 3e3]}
 COUNTING = {"contact_counting": ["union", "all_pairs"]}
 
 
@@ -130,10 +133,10 @@ def model_runs(size: int, tensions: list[float], csv: Path, study: dict[str, lis
     """Model parameters rather than discretisation (the dashpots, the contact counting),
     each varied alone about knitlad's current defaults (LadderSettings: 24 nodes/stitch,
     dynamics at 0.35 x the limit). Every one of them applies after the cut, so all runs at
-    one tension ladder from the same stretched knit. There is no finest value to converge
+    one tension ladder from one stretched knit (LadderRun.branch). There is no finest value to converge
     to: the change against the default run is what is reported, to be read against the
     run-to-run scatter. Resumable."""
-    from knitlad.protocol import LadderSettings, run_ladder
+    from knitlad.protocol import LadderRun, LadderSettings
 
     defaults = {f.name: f.default for f in dataclasses.fields(LadderSettings)}
     rows = pd.read_csv(csv, dtype={"setting_value": str}).to_dict("records") if csv.exists() else []
@@ -141,13 +144,17 @@ def model_runs(size: int, tensions: list[float], csv: Path, study: dict[str, lis
     # (varied, its value): the default run is labelled "default" (it varies nothing)
     cases = [("default", "default")] + [(k, v) for k, values in study.items() for v in values if v != defaults[k]]
     for fx in tensions:
-        for key, value in cases:
-            if (key, str(value), fx) in done:
-                continue
-            extra = {} if key == "default" else {key: value}
+        todo = [(key, value) for key, value in cases if (key, str(value), fx) not in done]
+        if not todo:
+            continue
+        stretched = LadderRun(LadderSettings(n_x=size, n_y=size, fx_target=fx, mu=0.4))
+        stretched.stretch()
+        for key, value in todo:
             t = time.perf_counter()
-            res = run_ladder(LadderSettings(n_x=size, n_y=size, fx_target=fx, mu=0.4, **extra))
-            wall = time.perf_counter() - t
+            run = stretched.branch(**({} if key == "default" else {key: value}))
+            run.propagate()
+            res = run.result
+            wall = time.perf_counter() - t + res.wall_s["stretch"]
             rows.append({"varied": key, "setting_value": str(value), "fx_target": fx, "fx_ini": res.fx_ini,
                          "v_lad_over_cb": res.v_lad_over_cb, "n_lad_over_ny": res.n_lad_over_ny, "wall_s": wall})
             print(f"model  {key:22s} {value!s:9s}  f_x {fx:5.2f}  v {res.v_lad_over_cb:.4f}  "

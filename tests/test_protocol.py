@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
+import numpy as np
 import pytest
 
 from knitlad.protocol import BUILD_LX, LadderRun, LadderSettings, build_width
@@ -114,3 +117,27 @@ def test_force_control_says_when_the_knit_as_built_is_already_past_the_target():
     run = LadderRun(LadderSettings(n_x=8, n_y=10, fx_target=0.05, edge="tail"))
     with pytest.raises(RuntimeError, match="use position control"):
         run.stretch()
+
+
+def test_a_branch_of_a_stretched_run_ladders_like_a_fresh_run_with_its_settings():
+    """LadderRun.branch: the laddering studies compare settings of the dynamics from one
+    stretched knit. A branch must be independent of its parent, carry its new settings into the
+    dynamics, and give the very ladder a fresh run with those settings gives (the stretch is
+    deterministic and does not read them)."""
+    base = LadderSettings(n_x=4, n_y=4, nodes_per_stitch=16, fx_target=None, lx_over_l0=0.34, max_time_s=0.2e-3)
+    parent = LadderRun(base)
+    parent.stretch()
+    x_before = parent.sim.state.x.copy()
+    child = parent.branch(mu=0.0, drag_per_s=1e3)
+    child.propagate()
+    assert np.array_equal(parent.sim.state.x, x_before)  # the parent is untouched
+    assert child.result.settings.mu == 0.0 and parent.s.mu == base.mu
+    fresh = LadderRun(replace(base, mu=0.0, drag_per_s=1e3))
+    fresh.stretch()
+    fresh.propagate()
+    assert np.array_equal(child.sim.state.x, fresh.sim.state.x)
+    assert child.result.fx_series == fresh.result.fx_series
+    with pytest.raises(ValueError, match="n_x: not a setting of the laddering dynamics"):
+        parent.branch(n_x=6)
+    with pytest.raises(ValueError, match="drag_per_s must be >= 0"):
+        parent.branch(drag_per_s=-1.0)
