@@ -5,7 +5,7 @@
 Prints one row per (mu, f_x) beside the paper's inertial law 0.34 sqrt(f_x), and
 the wall time of each run (the issue's speed goal: one run under 10 s). Then, for
 each mu, the straight line v_lad^2 = v_0^2 + beta^2 f_x through the released runs
-with f_x <= 12 (at mu = 0 the paper's law is beta sqrt(f_x), beta = 0.34; v_0 is the
+with 2 <= f_x <= 12 (at mu = 0 the paper's law is beta sqrt(f_x), beta = 0.34; v_0 is the
 loop's bending recoil; tests/validation/test_single_loop.py).
 """
 
@@ -39,7 +39,7 @@ def main() -> None:
             wall = time.perf_counter() - t
             print(f"{mu:4.1f} {fx:5.1f} {r.v_lad_over_cb:9.3f} {0.34 * math.sqrt(fx):11.3f} {r.tau_s * 1e6:9.1f} "
                   f"{str(r.released):>8s} {wall:7.2f}", flush=True)
-            if r.released and fx <= 12:
+            if r.released and 2 <= fx <= 12:
                 released.append((fx, r.v_lad_over_cb))
         if len(released) >= 2:
             f, v = np.array(released).T
@@ -48,7 +48,7 @@ def main() -> None:
     for mu, beta_sq, v0_sq, n in fits:
         beta = math.sqrt(beta_sq) if beta_sq > 0 else math.nan
         v0 = math.sqrt(v0_sq) if v0_sq > 0 else math.nan
-        print(f"mu {mu:.1f}: v^2 = v0^2 + beta^2 f_x over {n} runs (f_x <= 12): beta {beta:.3f} (paper, mu = 0: 0.34), "
+        print(f"mu {mu:.1f}: v^2 = v0^2 + beta^2 f_x over {n} runs (2 <= f_x <= 12): beta {beta:.3f} (paper, mu = 0: 0.34), "
               f"v0 {v0:.3f} c_b")
 
 
