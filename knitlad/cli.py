@@ -94,6 +94,7 @@ def cut(
     resolution: int = typer.Option(None, "--resolution", help="Nodes per stitch (default: the preset's, 16/24/48)."),
     max_time_ms: float = typer.Option(30.0, "--max-time-ms", help="Longest laddering time after the cut [ms]."),
     out: str = typer.Option(None, "--out", help="Output folder (HDF5 + PNG); default runs/cut-<time>."),
+    drag: float = typer.Option(0.0, "--drag", help="Global drag on every node during the laddering [1/s]; 0 is the physics (docs/accuracy.md: 2e3 matches the paper's DER velocities)."),
     json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
 ) -> None:
     """The laddering experiment: stretch at mu = 0, relax, switch friction on, cut a loop, follow the ladder."""
@@ -112,10 +113,11 @@ def cut(
         fx = 13.6
     try:
         cfg = CutConfig(fx=fx, lx=lx, ly=ly, mu=mu, n_x=n_x, n_y=n_y, resolution=resolution, preset=preset,
-                        max_time_ms=max_time_ms)
+                        max_time_ms=max_time_ms, drag_per_s=drag)
     except ValidationError as e:
         field, _, reason = one_line(e).partition(": ")
-        option = {"n_x": "--stitches", "n_y": "--stitches", "max_time_ms": "--max-time-ms"}.get(field, f"--{field}")
+        option = {"n_x": "--stitches", "n_y": "--stitches", "max_time_ms": "--max-time-ms",
+                  "drag_per_s": "--drag"}.get(field, f"--{field}")
         fail(f"{option}: {reason}" if field != "config" else reason)
     out_dir = Path(out) if out else Path("runs") / time.strftime("cut-%Y%m%d-%H%M%S")
     from knitlad.io.hdf5 import write_ladder_result

@@ -55,6 +55,9 @@ class CutConfig(_WithPreset):
     arrest_ms: float = Field(2.0, gt=0, description="the ladder has stopped when no cell changed for this long [ms]")
     observe_every_us: float = Field(20.0, gt=0, description="interval between front/tension samples [us]")
     frame_every_us: float = Field(100.0, gt=0, description="interval between stored position frames [us]")
+    drag_per_s: float = Field(0.0, ge=0, le=1e5, description=(
+        "global drag -gamma m v on every node during the laddering [1/s]; 0 is the physics. 2e3 brings the "
+        "42 x 42 runs to the paper's two DER velocities (docs/accuracy.md); 3e4 stops the ladder"))
 
     @model_validator(mode="after")
     def one_control(self) -> "CutConfig":
@@ -71,6 +74,7 @@ class CutConfig(_WithPreset):
             n_x=self.n_x, n_y=self.n_y, lx_over_l0=self.lx, fx_target=self.fx, ly_over_l0=self.ly, mu=self.mu,
             nodes_per_stitch=self.resolution, max_time_s=self.max_time_ms * 1e-3, arrest_s=self.arrest_ms * 1e-3,
             observe_every_s=self.observe_every_us * 1e-6, frame_every_s=self.frame_every_us * 1e-6,
+            drag_per_s=self.drag_per_s,
         )
 
 

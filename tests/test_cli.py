@@ -25,6 +25,7 @@ def run(*args, cwd=None):
         (["cut", "--lx", "1.2"], "--lx"),
         (["cut", "--lx", "0.4", "--fx", "3"], "either fx"),
         (["cut", "--resolution", "4"], "--resolution"),
+        (["cut", "--drag", "-5"], "--drag"),
         (["demo", "--nodes", "2"], "--nodes"),
         (["loop", "--mu", "-0.1"], "--mu"),
         (["loop", "--lx", "0.39"], "--lx"),
@@ -92,3 +93,10 @@ def test_presets_set_the_resolution_and_an_explicit_one_wins():
     assert [LoopConfig(preset=p).resolution for p in ("fast", "default", "accurate")] == [24, 36, 48]
     assert CutConfig(fx=4, preset="fast", resolution=30).resolution == 30
     assert CutConfig(fx=4, preset="accurate").settings().nodes_per_stitch == 48
+
+
+def test_the_drag_of_cut_reaches_the_laddering_settings_and_defaults_to_none():
+    from knitlad.config import CutConfig
+
+    assert CutConfig(fx=4).settings().drag_per_s == 0.0
+    assert CutConfig(fx=4, drag_per_s=2e3).settings().drag_per_s == 2e3
