@@ -386,6 +386,8 @@ class LadderRun:
         Studies of the laddering dynamics (dashpots, drag, mu, time step) compare runs from
         one relaxed knit: re-stretching gives the same knit at several times the cost.
         """
+        if self.result.times_s:
+            raise RuntimeError("this run is already cut: branch it after the stretch, before propagate()")
         unknown = sorted(set(after_cut) - set(AFTER_CUT))
         if unknown:
             raise ValueError(f"{', '.join(unknown)}: not a setting of the laddering dynamics ({', '.join(AFTER_CUT)})")

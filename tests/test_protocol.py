@@ -141,3 +141,5 @@ def test_a_branch_of_a_stretched_run_ladders_like_a_fresh_run_with_its_settings(
         parent.branch(n_x=6)
     with pytest.raises(ValueError, match="drag_per_s must be >= 0"):
         parent.branch(drag_per_s=-1.0)
+    with pytest.raises(RuntimeError, match="already cut"):
+        child.branch(mu=0.4)
