@@ -4,6 +4,16 @@ from __future__ import annotations
 
 import numpy as np
 
+# The paper's 42 x 42 DER laddering runs (mu = 0.4, l_y/l0 = 0.25; appendix "Simulations"):
+# (f_x^ini, v_lad/c_b). Fig. 5 shows more, undigitised; the two are joined by a straight line.
+PAPER_DER_POINTS = ((1.58, 0.176), (15.67, 1.05))
+
+
+def paper_der_line(fx: float) -> float:
+    """v_lad/c_b on the straight line through the paper's two DER points (0.062 f_x + 0.078)."""
+    (f1, v1), (f2, v2) = PAPER_DER_POINTS
+    return v1 + (v2 - v1) * (fx - f1) / (f2 - f1)
+
 
 def elastica_tip(load_parameter: float, n: int = 4000) -> tuple[float, float]:
     """Tip of an inextensible cantilever under a tip force normal to its clamp.

@@ -14,9 +14,9 @@ import math
 import pytest
 
 from knitlad.protocol import LadderRun, LadderSettings, run_ladder
+from tests.validation.references import paper_der_line
 
-PAPER_POINTS = ((1.58, 0.176), (15.67, 1.05))  # (f_x^ini, v_lad/c_b), the paper's DER runs
-PAPER_SLOPE = (PAPER_POINTS[1][1] - PAPER_POINTS[0][1]) / (PAPER_POINTS[1][0] - PAPER_POINTS[0][0])
+PAPER_SLOPE = paper_der_line(1.0) - paper_der_line(0.0)
 
 
 @pytest.mark.slow
