@@ -44,6 +44,11 @@ class _WithPreset(BaseModel):
 class CutConfig(_WithPreset):
     """One laddering run (``knitlad cut``)."""
 
+    # fields added after sweeps of this scene were first run, each with the value that
+    # reproduces the runs before it: at that value they stay out of a job's id
+    # (knitlad.sweep.job_id), so a finished job keeps its id and is not run again
+    ADDED_LATER: ClassVar[dict[str, object]] = {"drag_per_s": 0.0}
+
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
     ly: float = Field(0.25, gt=0.2, lt=0.5, description="stretch l_y/l0 [-]")

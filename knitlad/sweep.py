@@ -152,6 +152,9 @@ class Job(BaseModel):
 
 
 def job_id(scene: str, params: dict, output: Output) -> str:
+    """Hash of the resolved parameters, less those a scene added later left at their neutral value."""
+    neutral = getattr(SCENES[scene], "ADDED_LATER", {})
+    params = {k: v for k, v in params.items() if not (k in neutral and v == neutral[k])}
     blob = json.dumps({"scene": scene, "params": params, "output": output.model_dump()}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 

@@ -17,7 +17,7 @@ import yaml
 from knitlad.io.hdf5 import read_attrs
 from knitlad.io.summary import TIMING_COLUMNS, read_summary
 from knitlad.runner import run_sweep
-from knitlad.sweep import Job, SweepError, load_sweep
+from knitlad.sweep import Job, SweepConfig, SweepError, expand, job_id, load_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 KNITLAD = [sys.executable, "-m", "knitlad.cli"]
@@ -88,6 +88,17 @@ def test_grid_zip_and_ranges_expand_to_the_right_jobs_with_stable_ids(tmp_path):
     assert zjobs[0].id == grid[0].id
     _, other = load_sweep(write_config(tmp_path / "d.yaml", {**base, "fixed": {**TINY, "ly": 0.26}}))
     assert not {j.id for j in other} & {j.id for j in grid}
+
+
+def test_a_field_added_later_keeps_the_ids_of_finished_jobs_at_its_neutral_value():
+    """drag_per_s came after the first ladder sweeps: at 0 (the runs before it) a job's id is
+    the one computed without the field, so rerunning an old sweep skips its finished jobs."""
+    job = expand(SweepConfig.model_validate({"scene": "ladder", "fixed": {**TINY, "lx": 0.35},
+                                             "sweep": {"axes": {"mu": [0.4]}}}))[0]
+    assert job.params["drag_per_s"] == 0.0
+    before = {k: v for k, v in job.params.items() if k != "drag_per_s"}
+    assert job.id == job_id("ladder", before, job.output)
+    assert job_id("ladder", {**job.params, "drag_per_s": 2e3}, job.output) != job.id
 
 
 # ------------------------------------------------------------------ smoke sweep
