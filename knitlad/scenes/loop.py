@@ -28,7 +28,9 @@ v_lad is within 15 % of this model's (mu = 0: 0.65, 0.83, 1.11 at f_x 1, 4, 8; o
 exception: 0.49 against 0.67 at mu = 0.8, f_x = 2), but
 it stays hooked at f_x >= 12 for every mu, and at some lower tensions too (mu = 0 at
 f_x = 2, mu = 0.4 and 0.8 at 1): whether the recoil carries the head past the held
-upper row's legs decides release or trap.
+upper row's legs decides release or trap. With the tails' tips clamped along x (the
+last two nodes on rails), the loop never lets go (f_x = 0.05 to 16, mu = 0 and 0.4):
+the recoil that frees it here swings the legs about the tips.
 """
 
 from __future__ import annotations
