@@ -154,7 +154,7 @@ def model_runs(size: int, tensions: list[float], csv: Path, study: dict[str, lis
             run = stretched.branch(**({} if key == "default" else {key: value}))
             run.propagate()
             res = run.result
-            wall = time.perf_counter() - t + res.wall_s["stretch"]
+            wall = time.perf_counter() - t + res.wall_s["stretch"]  # what a fresh run would cost
             rows.append({"varied": key, "setting_value": str(value), "fx_target": fx, "fx_ini": res.fx_ini,
                          "v_lad_over_cb": res.v_lad_over_cb, "n_lad_over_ny": res.n_lad_over_ny, "wall_s": wall})
             print(f"model  {key:22s} {value!s:9s}  f_x {fx:5.2f}  v {res.v_lad_over_cb:.4f}  "
