@@ -15,6 +15,7 @@ import numba
 import numpy as np
 
 from knitlad import units
+from knitlad.kernels.contact import PAIR_RESULTS
 from knitlad.state import RodState
 
 # parameter slots of Contacts.params (internal units)
@@ -96,7 +97,8 @@ class Contacts(NamedTuple):
     edge_image: np.ndarray  # (ne,) bool: edge of a periodic image (image-image pairs are skipped)
     params: np.ndarray  # K_N, DAMP_N, K_T, DAMP_T, MU, SKIN
     stats: np.ndarray  # touching pairs, max overlap, sum f_n, sliding pairs (last evaluation); peak overlap since reset
-    threads: np.ndarray  # (1,) blocks the broad phase is split into (Numba threads)
+    threads: np.ndarray  # (1,) blocks the broad phase and the pair forces are split into (Numba threads)
+    pair_results: np.ndarray  # (cap, PAIR_RESULTS) scratch of contact_forces
 
 
 def edge_topology(state: RodState) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -235,6 +237,7 @@ def make_contacts(state: RodState, model: ContactModel | None, capacity: int | N
         params=params,
         stats=np.zeros(5),
         threads=np.array([numba.get_num_threads()], dtype=np.int64),
+        pair_results=np.zeros((cap, PAIR_RESULTS)),
     )
     if previous is not None:
         m = int(previous.n_pairs[0])

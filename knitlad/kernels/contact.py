@@ -299,23 +299,26 @@ def max_displacement(x, x_ref):
     return math.sqrt(m)
 
 
-@njit(**NUMBA_OPTS)
-def contact_forces(
-    x, v, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, n_pairs, slip,
-    k_n, damping_n, k_t, damping_t, mu, dt, F, stats,
-):
-    """Add contact forces of the ``n_pairs`` candidate pairs to F; advance the slip history.
+# columns of the per-pair results of :func:`pair_contact_forces`
+FORCE_X, FORCE_Y, FORCE_Z, S_PAIR, T_PAIR, OVERLAP, NORMAL, SLIDING = range(8)
+PAIR_RESULTS = 8
+# below this many candidate pairs per thread, starting the threads costs more than they save
+MIN_PAIRS_PER_THREAD = 1000
 
-    ``damping_n``/``damping_t`` are damping ratios of the contact springs (gamma =
-    2 zeta sqrt(k m_eff)). ``stats`` (5,) receives: number of touching pairs,
-    largest overlap, normal-force sum, number of sliding pairs; and keeps the
-    peak overlap since the caller last zeroed ``stats[4]``.
+
+@njit(**NUMBA_OPTS)
+def pair_contact_forces(
+    lo, hi, x, v, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, slip,
+    k_n, damping_n, k_t, damping_t, mu, dt, out,
+):
+    """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``.
+
+    ``out[p]``: the force (FORCE_X..Z), the closest-point parameters (S_PAIR, T_PAIR),
+    the overlap (OVERLAP, 0 when apart or owned by a neighbouring edge), the normal
+    force and 1 if sliding. Advances the slip history of each pair. Pairs are
+    independent here, so blocks of pairs can run on different threads.
     """
-    n_touch = 0
-    max_overlap = 0.0
-    fn_sum = 0.0
-    n_slide = 0
-    for p in range(n_pairs):
+    for p in range(lo, hi):
         i = pairs[p, 0]
         j = pairs[p, 1]
         overlap, s, t = counted_overlap(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, i, j)
@@ -323,6 +326,7 @@ def contact_forces(
             slip[p, 0] = 0.0
             slip[p, 1] = 0.0
             slip[p, 2] = 0.0
+            out[p, OVERLAP] = 0.0
             continue
         dist = edge_radius[i] + edge_radius[j] - overlap
         a0 = edge_a[i]
@@ -357,6 +361,7 @@ def contact_forces(
         if fn < 0.0:
             fn = 0.0
         # tangential slip: keep it in the current tangent plane with its length
+        sliding = 0.0
         ux, uy, uz = slip[p, 0], slip[p, 1], slip[p, 2]
         u_len = math.sqrt(ux * ux + uy * uy + uz * uz)
         un = dot(ux, uy, uz, nx, ny, nz)
@@ -389,13 +394,75 @@ def contact_forces(
             ux = -(ftx + gamma_t * vtx) / k_t
             uy = -(fty + gamma_t * vty) / k_t
             uz = -(ftz + gamma_t * vtz) / k_t
-            n_slide += 1
+            sliding = 1.0
         slip[p, 0] = ux
         slip[p, 1] = uy
         slip[p, 2] = uz
-        fx = fn * nx + ftx
-        fy = fn * ny + fty
-        fz = fn * nz + ftz
+        out[p, FORCE_X] = fn * nx + ftx
+        out[p, FORCE_Y] = fn * ny + fty
+        out[p, FORCE_Z] = fn * nz + ftz
+        out[p, S_PAIR] = s
+        out[p, T_PAIR] = t
+        out[p, OVERLAP] = overlap
+        out[p, NORMAL] = fn
+        out[p, SLIDING] = sliding
+
+
+@njit(**PARALLEL_OPTS)
+def _pair_contact_forces_in_blocks(
+    n_blocks, n_pairs, x, v, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, slip,
+    k_n, damping_n, k_t, damping_t, mu, dt, out,
+):
+    for blk in prange(n_blocks):
+        pair_contact_forces(
+            blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, mass, edge_a, edge_b, edge_shift,
+            edge_radius, edge_prev, edge_next, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
+        )
+
+
+@njit(**NUMBA_OPTS)
+def contact_forces(
+    x, v, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, n_pairs, slip,
+    k_n, damping_n, k_t, damping_t, mu, dt, F, stats, pair_results, n_threads,
+):
+    """Add contact forces of the ``n_pairs`` candidate pairs to F; advance the slip history.
+
+    ``damping_n``/``damping_t`` are damping ratios of the contact springs (gamma =
+    2 zeta sqrt(k m_eff)). ``stats`` (5,) receives: number of touching pairs,
+    largest overlap, normal-force sum, number of sliding pairs; and keeps the
+    peak overlap since the caller last zeroed ``stats[4]``. ``pair_results``
+    (capacity, PAIR_RESULTS) is scratch. The pairs are evaluated on up to
+    ``n_threads`` threads, then added to F one by one in pair order, so the
+    forces are bit for bit the same on any number of threads.
+    """
+    n_blocks = min(n_threads, n_pairs // MIN_PAIRS_PER_THREAD)
+    if n_blocks > 1:
+        _pair_contact_forces_in_blocks(
+            n_blocks, n_pairs, x, v, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs,
+            slip, k_n, damping_n, k_t, damping_t, mu, dt, pair_results,
+        )
+    else:
+        pair_contact_forces(
+            0, n_pairs, x, v, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, slip,
+            k_n, damping_n, k_t, damping_t, mu, dt, pair_results,
+        )
+    n_touch = 0
+    max_overlap = 0.0
+    fn_sum = 0.0
+    n_slide = 0
+    for p in range(n_pairs):
+        overlap = pair_results[p, OVERLAP]
+        if overlap <= 0.0:
+            continue
+        a0 = edge_a[pairs[p, 0]]
+        a1 = edge_b[pairs[p, 0]]
+        b0 = edge_a[pairs[p, 1]]
+        b1 = edge_b[pairs[p, 1]]
+        s = pair_results[p, S_PAIR]
+        t = pair_results[p, T_PAIR]
+        fx = pair_results[p, FORCE_X]
+        fy = pair_results[p, FORCE_Y]
+        fz = pair_results[p, FORCE_Z]
         F[a0, 0] += (1 - s) * fx
         F[a0, 1] += (1 - s) * fy
         F[a0, 2] += (1 - s) * fz
@@ -409,7 +476,8 @@ def contact_forces(
         F[b1, 1] -= t * fy
         F[b1, 2] -= t * fz
         n_touch += 1
-        fn_sum += fn
+        fn_sum += pair_results[p, NORMAL]
+        n_slide += int(pair_results[p, SLIDING])
         if overlap > max_overlap:
             max_overlap = overlap
     stats[0] = n_touch
