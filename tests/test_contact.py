@@ -100,6 +100,38 @@ def test_broad_phase_finds_exactly_the_pairs_of_an_all_pairs_search():
     assert len(touching) > 0
 
 
+def test_a_yarn_flung_far_away_coarsens_the_grid_and_no_touching_pair_is_missed():
+    """The grid spans the bounding box: 10 m away, one yarn would make 1e10 cells of the reach."""
+    from knitlad.kernels.contact import MAX_CELLS_PER_EDGE, refresh_contacts, segment_distance
+
+    state = pressed_weave()
+    first = slice(int(state.yarn_start[0]), int(state.yarn_start[1]))
+    state.x[first, 0] += 10.0 / kl.units.LENGTH
+    state.x[first, 2] += 10.0 / kl.units.LENGTH
+    assert (state.x.max(axis=0) - state.x.min(axis=0)).prod() / D**3 > MAX_CELLS_PER_EDGE * 1e6
+    c = make_contacts(state, ContactModel(stiffness=1e3))
+    assert refresh_contacts(state.x, state.edge_a, state.edge_b, state.edge_shift, c)
+    touching = {
+        (int(i), int(j))
+        for i, j in c.pairs[: c.n_pairs[0]]
+        if segment_distance(state.x, state.edge_a, state.edge_b, state.edge_shift, i, j)[0] < c.edge_radius[i] + c.edge_radius[j]
+    }
+    assert touching == brute_force_touching(state, int(c.exclusion[0]))
+    assert len(touching) >= 12  # the 12 crossings of the 3 warps left in place
+
+
+def test_a_non_finite_position_finds_no_pair_for_its_edges_and_crashes_nothing():
+    from knitlad.kernels.contact import refresh_contacts
+
+    state = pressed_weave()
+    state.x[3] = np.nan
+    c = make_contacts(state, ContactModel(stiffness=1e3))
+    assert refresh_contacts(state.x, state.edge_a, state.edge_b, state.edge_shift, c)
+    bad = set(np.flatnonzero((state.edge_a == 3) | (state.edge_b == 3)).tolist())
+    assert c.n_pairs[0] > 0
+    assert not any(int(i) in bad or int(j) in bad for i, j in c.pairs[: c.n_pairs[0]])
+
+
 @pytest.mark.parametrize("skin_d", [0.05, 0.5, 3.0])
 def test_contact_count_and_forces_do_not_depend_on_the_cell_size(skin_d):
     """The cell size is longest edge + 2 r + skin: changing the skin changes the cells."""

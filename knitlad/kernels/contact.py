@@ -6,7 +6,7 @@ Every edge is a capsule (a cylinder of its yarn's radius with spherical caps).
   (Ericson, *Real-Time Collision Detection*, sec. 5.1.9); for near-parallel
   segments the midpoint of their overlap, so the contact point moves
   continuously when two yarns lie side by side.
-* Broad phase: edge midpoints hashed into cells of size >= the longest
+* Broad phase: edge midpoints binned in a grid of cells of size >= the longest
   interaction reach; candidate pairs closer than r_a + r_b + skin go to a
   fixed-capacity buffer. A count past the capacity is reported so the caller
   can grow the buffer and rebuild (the kernel never allocates). The list stays
@@ -134,12 +134,6 @@ def counted_overlap(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_
 
 
 @njit(**NUMBA_OPTS)
-def _cell_hash(cx, cy, cz, table_size):
-    h = (cx * 73856093) ^ (cy * 19349663) ^ (cz * 83492791)
-    return h % table_size
-
-
-@njit(**NUMBA_OPTS)
 def excluded_pair(i, j, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion):
     """Same yarn and at most ``exclusion`` edges apart along it (cyclically if closed)."""
     y = edge_yarn[i]
@@ -151,6 +145,11 @@ def excluded_pair(i, j, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusio
     return gap <= exclusion[y]
 
 
+# a grid of more cells than this per edge is coarsened (a yarn flung far away must not
+# make the grid huge); cells larger than the reach only cost more distance tests
+MAX_CELLS_PER_EDGE = 8
+
+
 @njit(**PARALLEL_OPTS)
 def build_candidate_pairs(
     x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion,
@@ -158,18 +157,19 @@ def build_candidate_pairs(
 ):
     """Fill ``pairs`` (cap, 2) with candidate edge pairs (i < j), sorted; return how many were found.
 
+    Edge midpoints are binned in a dense grid of cells of at least ``cell_size``
+    over their bounding box, numbered x fastest, so the three cells along x of a
+    neighbourhood are one contiguous run of the binned edges: nine runs per edge.
     A return value above ``pairs.shape[0]`` means the buffer overflowed (the
     buffer's content is then undefined): grow it and call again. Blocks of edges
     are searched in parallel.
     """
     ne = edge_a.shape[0]
     cap = pairs.shape[0]
-    table = 2 * ne + 1
-    cells = np.empty((ne, 3), dtype=np.int64)
     mid = np.empty((ne, 3))
     reach = np.empty(ne)  # bounding-sphere radius of the capsule plus half the skin
-    bucket_count = np.zeros(table + 1, dtype=np.int64)
-    inv = 1.0 / cell_size
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
     for k in range(ne):
         a = edge_a[k]
         b = edge_b[k]
@@ -178,28 +178,51 @@ def build_candidate_pairs(
             xb = x[b, d] + edge_shift[k, d]
             mid[k, d] = 0.5 * (x[a, d] + xb)
             half2 += 0.25 * (xb - x[a, d]) ** 2
-            cells[k, d] = int(math.floor(mid[k, d] * inv))
+            if math.isfinite(mid[k, d]):  # a non-finite edge stays out of the box
+                lo[d] = min(lo[d], mid[k, d])
+                hi[d] = max(hi[d], mid[k, d])
         reach[k] = math.sqrt(half2) + edge_radius[k] + 0.5 * skin
-        bucket_count[_cell_hash(cells[k, 0], cells[k, 1], cells[k, 2], table) + 1] += 1
-    for h in range(table):
-        bucket_count[h + 1] += bucket_count[h]
-    fill = bucket_count[:-1].copy()
+    dims = np.ones(3, dtype=np.int64)
+    cell = cell_size
+    while True:
+        volume = 1.0  # in cells, as a float: a far-flung yarn must not overflow the count
+        for d in range(3):
+            volume *= math.floor((hi[d] - lo[d] if hi[d] >= lo[d] else 0.0) / cell) + 1.0
+        if volume <= MAX_CELLS_PER_EDGE * ne + 64:
+            break
+        cell *= 1.5
+    n_cells = 1
+    for d in range(3):
+        dims[d] = int((hi[d] - lo[d] if hi[d] >= lo[d] else 0.0) / cell) + 1
+        n_cells *= dims[d]
+    inv = 1.0 / cell
+    cells = np.empty((ne, 3), dtype=np.int64)
+    start = np.zeros(n_cells + 1, dtype=np.int64)
+    linear = np.empty(ne, dtype=np.int64)
+    for k in range(ne):
+        for d in range(3):
+            c = (mid[k, d] - lo[d]) * inv
+            # clamped: a non-finite midpoint lands somewhere in the grid and fails every distance test
+            cells[k, d] = min(max(int(c), 0), dims[d] - 1) if c == c else 0
+        linear[k] = (cells[k, 2] * dims[1] + cells[k, 1]) * dims[0] + cells[k, 0]
+        start[linear[k] + 1] += 1
+    for h in range(n_cells):
+        start[h + 1] += start[h]
+    fill = start[:-1].copy()
     order = np.empty(ne, dtype=np.int64)
     for k in range(ne):
-        h = _cell_hash(cells[k, 0], cells[k, 1], cells[k, 2], table)
-        order[fill[h]] = k
-        fill[h] += 1
+        order[fill[linear[k]]] = k
+        fill[linear[k]] += 1
     # candidates of each block of edges, found in parallel, then concatenated in order
     n_blocks = max(1, min(n_threads, ne))
     block_cap = cap  # blocks can be very unequal (e.g. all partners j > i on the first yarns)
     local = np.empty((n_blocks, block_cap, 2), dtype=np.int64)
     found = np.zeros(n_blocks, dtype=np.int64)
     for blk in prange(n_blocks):
-        lo = blk * ne // n_blocks
-        hi = (blk + 1) * ne // n_blocks
         found[blk] = _candidates_of_block(
-            lo, hi, x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed,
-            exclusion, edge_image, skin, cells, mid, reach, bucket_count, order, table, local[blk],
+            blk * ne // n_blocks, (blk + 1) * ne // n_blocks, x, edge_a, edge_b, edge_shift, edge_radius,
+            edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion, edge_image, skin, cells, dims, mid, reach,
+            start, order, local[blk],
         )
     n = 0
     for blk in range(n_blocks):
@@ -220,7 +243,7 @@ def build_candidate_pairs(
 @njit(**NUMBA_OPTS)
 def _candidates_of_block(
     lo, hi, x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed,
-    exclusion, edge_image, skin, cells, mid, reach, bucket_count, order, table, out,
+    exclusion, edge_image, skin, cells, dims, mid, reach, start, order, out,
 ):
     """Candidate pairs (i, j > i) for edges i in [lo, hi) into ``out``; partners of each i sorted.
 
@@ -233,32 +256,30 @@ def _candidates_of_block(
     n = 0
     for i in range(lo, hi):
         first = n
-        for ox in range(-1, 2):
-            for oy in range(-1, 2):
-                for oz in range(-1, 2):
-                    cx = cells[i, 0] + ox
-                    cy = cells[i, 1] + oy
-                    cz = cells[i, 2] + oz
-                    h = _cell_hash(cx, cy, cz, table)
-                    for idx in range(bucket_count[h], bucket_count[h + 1]):
-                        j = order[idx]
-                        if j <= i or cells[j, 0] != cx or cells[j, 1] != cy or cells[j, 2] != cz:
-                            continue
-                        if edge_image[i] and edge_image[j]:
-                            continue
-                        # bounding spheres first: most neighbours in the 27 cells are far
-                        r = reach[i] + reach[j]
-                        dm = (mid[i, 0] - mid[j, 0]) ** 2 + (mid[i, 1] - mid[j, 1]) ** 2 + (mid[i, 2] - mid[j, 2]) ** 2
-                        if dm > r * r:
-                            continue
-                        if excluded_pair(i, j, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion):
-                            continue
-                        dist, _, _ = segment_distance(x, edge_a, edge_b, edge_shift, i, j)
-                        if dist < edge_radius[i] + edge_radius[j] + skin:
-                            if n < cap:
-                                out[n, 0] = i
-                                out[n, 1] = j
-                            n += 1
+        x0 = max(cells[i, 0] - 1, 0)
+        x1 = min(cells[i, 0] + 1, dims[0] - 1)
+        for cz in range(max(cells[i, 2] - 1, 0), min(cells[i, 2] + 1, dims[2] - 1) + 1):
+            for cy in range(max(cells[i, 1] - 1, 0), min(cells[i, 1] + 1, dims[1] - 1) + 1):
+                row = (cz * dims[1] + cy) * dims[0]
+                for idx in range(start[row + x0], start[row + x1 + 1]):
+                    j = order[idx]
+                    if j <= i:
+                        continue
+                    if edge_image[i] and edge_image[j]:
+                        continue
+                    # bounding spheres first: most neighbours in the 27 cells are far
+                    r = reach[i] + reach[j]
+                    dm = (mid[i, 0] - mid[j, 0]) ** 2 + (mid[i, 1] - mid[j, 1]) ** 2 + (mid[i, 2] - mid[j, 2]) ** 2
+                    if dm > r * r:
+                        continue
+                    if excluded_pair(i, j, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion):
+                        continue
+                    dist, _, _ = segment_distance(x, edge_a, edge_b, edge_shift, i, j)
+                    if dist < edge_radius[i] + edge_radius[j] + skin:
+                        if n < cap:
+                            out[n, 0] = i
+                            out[n, 1] = j
+                        n += 1
         # insertion sort of this edge's partners (a handful)
         if n <= cap:
             for a in range(first + 1, n):
