@@ -250,17 +250,28 @@ def make_contacts(state: RodState, model: ContactModel | None, capacity: int | N
     return contacts
 
 
-def contact_time_step(state: RodState, model: ContactModel | None) -> float:
-    """Critical time step [ms] of the contact springs: 2/omega with omega^2 = z (k_n + k_t) * 2 / m_min."""
+def contact_time_step(state: RodState, model: ContactModel | None, spin: bool = False) -> float:
+    """Critical time step [ms] of the contact springs: 2/omega with omega^2 = 2 z (k_n + k_t) / m_min.
+
+    ``spin``: the yarns carry twist, so the tangential spring also turns each edge about
+    its axis: omega^2 gains 2 z k_t max(r^2 / I) over edges free to twist (for a solid
+    cylinder r^2 / I = 2 / m_edge: k_t then counts about three times).
+    """
     if model is None:
         return math.inf
-    k = model.stiffness * (1 + model.tangential_stiffness_ratio) * units.LENGTH / units.FORCE
-    free = ~state.held
-    if not np.any(free):
-        return math.inf
-    m = float(state.mass[free].min())
-    zeta = max(model.damping_ratio, model.tangential_damping_ratio)
+    k_n = model.stiffness * units.LENGTH / units.FORCE
+    k_t = k_n * model.tangential_stiffness_ratio
     # counting every pair, a contact at a node shared by two edges of each yarn is four pairs,
     # each with its full lever weight on that node: four times the stiffness union counting puts there
     z = model.contacts_per_node * (4 if model.counting == "all_pairs" else 1)
-    return 2.0 / math.sqrt(2.0 * z * k / m) * (math.sqrt(1 + zeta * zeta) - zeta)
+    free = ~state.held
+    omega2 = 2.0 * z * (k_n + k_t) / float(state.mass[free].min()) if np.any(free) else 0.0
+    if spin:
+        turning = ~state.theta_held
+        if np.any(turning):
+            r = 0.5 * (state.radius[state.edge_a] + state.radius[state.edge_b])
+            omega2 += 2.0 * z * k_t * float(np.max(r[turning] ** 2 / state.twist_inertia[turning]))
+    if omega2 == 0.0:
+        return math.inf
+    zeta = max(model.damping_ratio, model.tangential_damping_ratio)
+    return 2.0 / math.sqrt(omega2) * (math.sqrt(1 + zeta * zeta) - zeta)

@@ -45,7 +45,7 @@ from knitlad.measure import (
 )
 from knitlad.scenes.jersey import EDGES, Jersey, KnitScene, build_jersey, widest_fitting_width
 from knitlad.simulation import Simulation
-from knitlad.state import cut_edge
+from knitlad.state import cut_edge, with_twist
 from knitlad.timestep import DEFAULT_SAFETY, critical_time_steps
 from knitlad.units import NYLON, Material
 
@@ -120,6 +120,10 @@ class LadderSettings:
     # physics: air drag on this yarn is ~1e2 /s at 10 m/s. For comparison with engines that damp globally (the
     # authors' public engine does): on 16 x 16, 3e3 /s slows the ladder and 3e4 /s stops it.
     drag_per_s: float = 0.0
+    # the yarns carry twist during the laddering, so friction, acting on their surfaces, also
+    # turns them about their axes (the friction couple; knitlad.state.with_twist). The stretch
+    # at mu = 0 stays twist-free: there twist decouples from the centreline.
+    twist: bool = False
     material: Material = NYLON
 
     def __post_init__(self) -> None:
@@ -198,7 +202,7 @@ class Interpenetration(RuntimeError):
 
 
 # settings read only from the cut on: one stretched knit can be laddered under each of them
-AFTER_CUT = ("mu", "contact_damping_ratio", "stretch_damping_ratio", "contact_counting", "drag_per_s",
+AFTER_CUT = ("mu", "contact_damping_ratio", "stretch_damping_ratio", "contact_counting", "drag_per_s", "twist",
              "dt_safety", "observe_every_s", "arrest_s", "max_time_s", "frame_every_s")
 
 
@@ -418,10 +422,14 @@ class LadderRun:
         state = cut_edge(self.sim.state, edge)
         # from here on, the dashpots of the dynamics
         state.stretch_damping[:] *= self.s.stretch_damping_ratio / STRETCH_AXIAL_DAMPING
+        if self.s.twist:
+            m = self.s.material
+            state = with_twist(state, m.twisting_stiffness / m.bending_stiffness)
         self.contact = replace(self.contact, damping_ratio=self.s.contact_damping_ratio,
                                tangential_damping_ratio=self.s.contact_damping_ratio, counting=self.s.contact_counting)
         # the cut frees two end nodes: keep the smaller of the old and the new stable step
-        limit = critical_time_steps(state, False, contact_time_step(state, self.contact)).combined * units.TIME
+        limit = critical_time_steps(state, self.s.twist, contact_time_step(state, self.contact, spin=self.s.twist))
+        limit = limit.combined * units.TIME
         sim = Simulation(state, contact=self.contact, dt_s=min(self.sim.dt_s, self.s.dt_safety * limit),
                          drag_per_s=self.s.drag_per_s)
         sim.set_friction(self.s.mu)

@@ -84,7 +84,8 @@ class Simulation:
         self.contact_model = contact
         self.contacts: Contacts = make_contacts(state, contact)
         self.twist = bool(np.any(state.GJ_over_l) or np.any(state.kappa_bar))
-        self.limits: TimeStepLimits = critical_time_steps(state, self.twist, contact_time_step(state, contact))
+        contact_limit = contact_time_step(state, contact, spin=self.twist)
+        self.limits: TimeStepLimits = critical_time_steps(state, self.twist, contact_limit)
         if dt_s is None:
             self.dt = safety * self.limits.combined
         else:

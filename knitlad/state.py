@@ -417,3 +417,34 @@ def cut_edge(state: RodState, edge: int) -> RodState:
                  "image_node", "image_master", "image_shift"):
         fields[name] = np.array(fields[name], copy=True)
     return RodState(**fields)
+
+
+def with_twist(state: RodState, twist_over_bending: float) -> RodState:
+    """A copy of a twist-free state (``build(twist=False)``) that carries twist from here on.
+
+    For yarns straight at rest, twist decouples from the centreline while nothing
+    loads it; a frictional contact does (its force acts on the yarn's surface), so
+    a study of the friction couple switches twist on, here, from the current shape:
+    Bishop reference frames along the current tangents, theta = omega = 0, and the
+    natural twist set to the current reference twist, so the twist energy is zero
+    and every force is unchanged. ``twist_over_bending``: GJ / B of the yarns
+    (1 / (1 + nu), :attr:`knitlad.units.Material.twisting_stiffness`).
+    """
+    if np.any(state.GJ_over_l) or np.any(state.kappa_bar):
+        raise ValueError("the state already carries twist")
+    if not twist_over_bending > 0:
+        raise ValueError(f"twist_over_bending must be > 0, got {twist_over_bending!r}")
+    fields = {k: np.array(v, copy=True) for k, v in state._asdict().items()}
+    ne = state.edge_a.shape[0]
+    e = np.zeros((ne, 3))
+    elen = np.zeros(ne)
+    edge_vectors(state.x, state.edge_a, state.edge_b, state.edge_shift, e, elen)
+    tangent = e / elen[:, None]
+    ref_u = _initial_reference_directors(tangent, state.node_yarn[state.edge_a])
+    ref_twist = np.zeros(state.hinge_e0.shape[0])
+    update_reference_twist(tangent, ref_u, state.hinge_e0, state.hinge_e1, ref_twist)
+    fields.update(
+        tangent=tangent, ref_u=ref_u, ref_twist=ref_twist, twist_bar=ref_twist.copy(),
+        theta=np.zeros(ne), omega=np.zeros(ne), GJ_over_l=state.B_over_l * twist_over_bending,
+    )
+    return RodState(**fields)

@@ -60,9 +60,7 @@ def stiffness_row_sums(state: RodState, twist: bool) -> tuple[np.ndarray, np.nda
 def critical_time_steps(state: RodState, twist: bool, contact: float = math.inf) -> TimeStepLimits:
     """Stability limits dt_crit = 2 / omega_max; ``contact`` is the contact springs' own limit."""
     stretch, bend, twist_rows = stiffness_row_sums(state, twist)
-    free = ~state.held
-    if not np.any(free):
-        return TimeStepLimits(math.inf, math.inf, math.inf, math.inf, math.inf)
+    free = ~state.held  # none free: the twist (and contact) limits may still apply
     m = state.mass[free]
 
     def limit(rows: np.ndarray, mass: np.ndarray) -> float:

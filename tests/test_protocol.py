@@ -7,6 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from knitlad import units
 from knitlad.protocol import BUILD_LX, LadderRun, LadderSettings, build_width
 from knitlad.units import NYLON
 
@@ -143,3 +144,20 @@ def test_a_branch_of_a_stretched_run_ladders_like_a_fresh_run_with_its_settings(
         parent.branch(drag_per_s=-1.0)
     with pytest.raises(RuntimeError, match="already cut"):
         child.branch(mu=0.4)
+
+
+def test_with_twist_the_laddering_yarns_spin_and_the_time_step_allows_for_it():
+    """LadderSettings(twist=True): twist switched on at the cut (friction couple on)."""
+    base = LadderSettings(n_x=4, n_y=4, nodes_per_stitch=16, fx_target=None, lx_over_l0=0.34, max_time_s=0.1e-3)
+    parent = LadderRun(base)
+    parent.stretch()
+    plain = parent.branch()
+    plain.propagate()
+    twisted = parent.branch(twist=True)
+    twisted.propagate()
+    assert twisted.sim.twist and not plain.sim.twist
+    spin = np.abs(twisted.sim.state.omega).max() / units.TIME  # rad/s
+    assert spin > 1e3  # friction has turned the yarns (surface speeds of 0.1 m/s and more)
+    assert twisted.sim.limits.contact < plain.sim.limits.contact  # the turning adds to the contact stiffness
+    assert twisted.sim.dt <= base.dt_safety * twisted.sim.limits.combined * (1 + 1e-12)
+    assert np.isfinite(twisted.sim.state.x).all()

@@ -325,15 +325,15 @@ def max_displacement(x, x_ref):
 
 
 # columns of the per-pair results of :func:`pair_contact_forces`
-FORCE_X, FORCE_Y, FORCE_Z, S_PAIR, T_PAIR, OVERLAP, NORMAL, SLIDING = range(8)
-PAIR_RESULTS = 8
+FORCE_X, FORCE_Y, FORCE_Z, S_PAIR, T_PAIR, OVERLAP, NORMAL, SLIDING, TORQUE_I, TORQUE_J = range(10)
+PAIR_RESULTS = 10
 # below this many candidate pairs per thread, starting the threads costs more than they save
 MIN_PAIRS_PER_THREAD = 1000
 
 
 @njit(**NUMBA_OPTS)
 def pair_contact_forces(
-    lo, hi, x, v, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, slip,
+    lo, hi, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, slip,
     k_n, damping_n, k_t, damping_t, mu, dt, out,
 ):
     """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``.
@@ -342,6 +342,12 @@ def pair_contact_forces(
     the overlap (OVERLAP, 0 when apart or owned by a neighbouring edge), the normal
     force and 1 if sliding. Advances the slip history of each pair. Pairs are
     independent here, so blocks of pairs can run on different threads.
+
+    ``spin``: the yarns carry twist (spin rate ``omega`` per edge). The contact point
+    then sits on the two surfaces, C = P - r_i n = Q + r_j n, and each surface moves with
+    its yarn's spin: v_C,i = v_P + omega_i t_i x (-r_i n). The friction force, applied
+    there, twists each edge about its axis (TORQUE_I, TORQUE_J): the friction couple.
+    Its moment about the other two axes (lever r << edge length) is dropped.
     """
     for p in range(lo, hi):
         i = pairs[p, 0]
@@ -378,6 +384,19 @@ def pair_contact_forces(
         vrx = (1 - s) * v[a0, 0] + s * v[a1, 0] - (1 - t) * v[b0, 0] - t * v[b1, 0]
         vry = (1 - s) * v[a0, 1] + s * v[a1, 1] - (1 - t) * v[b0, 1] - t * v[b1, 1]
         vrz = (1 - s) * v[a0, 2] + s * v[a1, 2] - (1 - t) * v[b0, 2] - t * v[b1, 2]
+        li = 1.0
+        lj = 1.0
+        if spin:
+            # surfaces at the contact point: - r_i omega_i (t_i x n) on i, + r_j omega_j (t_j x n) on j
+            li = math.sqrt(d1x * d1x + d1y * d1y + d1z * d1z)
+            lj = math.sqrt(d2x * d2x + d2y * d2y + d2z * d2z)
+            wi = edge_radius[i] * omega[i] / li
+            wj = edge_radius[j] * omega[j] / lj
+            cix, ciy, ciz = cross(d1x, d1y, d1z, nx, ny, nz)
+            cjx, cjy, cjz = cross(d2x, d2y, d2z, nx, ny, nz)
+            vrx -= wi * cix + wj * cjx
+            vry -= wi * ciy + wj * cjy
+            vrz -= wi * ciz + wj * cjz
         vn = dot(vrx, vry, vrz, nx, ny, nz)  # > 0: separating
         m_a = (1 - s) * mass[a0] + s * mass[a1]
         m_b = (1 - t) * mass[b0] + t * mass[b1]
@@ -431,24 +450,31 @@ def pair_contact_forces(
         out[p, OVERLAP] = overlap
         out[p, NORMAL] = fn
         out[p, SLIDING] = sliding
+        if spin:
+            # torque about each axis of the friction force at the surface: t . (-r n x f_t) on i,
+            # t . (r n x (-f_t)) on j: the same expression for both
+            mx, my, mz = cross(nx, ny, nz, ftx, fty, ftz)
+            out[p, TORQUE_I] = -edge_radius[i] * dot(d1x, d1y, d1z, mx, my, mz) / li
+            out[p, TORQUE_J] = -edge_radius[j] * dot(d2x, d2y, d2z, mx, my, mz) / lj
 
 
 @njit(**PARALLEL_OPTS)
 def _pair_contact_forces_in_blocks(
-    n_blocks, n_pairs, x, v, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, slip,
-    k_n, damping_n, k_t, damping_t, mu, dt, out,
+    n_blocks, n_pairs, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs,
+    slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
 ):
     for blk in prange(n_blocks):
         pair_contact_forces(
-            blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, mass, edge_a, edge_b, edge_shift,
+            blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, omega, spin, mass, edge_a, edge_b,
+            edge_shift,
             edge_radius, edge_prev, edge_next, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
         )
 
 
 @njit(**NUMBA_OPTS)
 def contact_forces(
-    x, v, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, n_pairs, slip,
-    k_n, damping_n, k_t, damping_t, mu, dt, F, stats, pair_results, n_threads,
+    x, v, omega, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, n_pairs, slip,
+    k_n, damping_n, k_t, damping_t, mu, dt, F, torque, stats, pair_results, n_threads,
 ):
     """Add contact forces of the ``n_pairs`` candidate pairs to F; advance the slip history.
 
@@ -463,13 +489,13 @@ def contact_forces(
     n_blocks = min(n_threads, n_pairs // MIN_PAIRS_PER_THREAD)
     if n_blocks > 1:
         _pair_contact_forces_in_blocks(
-            n_blocks, n_pairs, x, v, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs,
-            slip, k_n, damping_n, k_t, damping_t, mu, dt, pair_results,
+            n_blocks, n_pairs, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev,
+            edge_next, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, pair_results,
         )
     else:
         pair_contact_forces(
-            0, n_pairs, x, v, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, slip,
-            k_n, damping_n, k_t, damping_t, mu, dt, pair_results,
+            0, n_pairs, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next,
+            pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, pair_results,
         )
     n_touch = 0
     max_overlap = 0.0
@@ -500,6 +526,9 @@ def contact_forces(
         F[b1, 0] -= t * fx
         F[b1, 1] -= t * fy
         F[b1, 2] -= t * fz
+        if spin:
+            torque[pairs[p, 0]] += pair_results[p, TORQUE_I]
+            torque[pairs[p, 1]] += pair_results[p, TORQUE_J]
         n_touch += 1
         fn_sum += pair_results[p, NORMAL]
         n_slide += int(pair_results[p, SLIDING])

@@ -83,9 +83,9 @@ def compute_forces(s, w, c, twist, drag, dt):
             return False
         p = c.params
         contact_forces(
-            s.x, s.v, s.mass, s.edge_a, s.edge_b, s.edge_shift, c.edge_radius, c.edge_prev, c.edge_next,
-            c.pairs, c.n_pairs[0], c.slip,
-            p[0], p[1], p[2], p[3], p[4], dt, w.force, c.stats, c.pair_results, c.threads[0],
+            s.x, s.v, s.omega, twist, s.mass, s.edge_a, s.edge_b, s.edge_shift, c.edge_radius, c.edge_prev,
+            c.edge_next, c.pairs, c.n_pairs[0], c.slip,
+            p[0], p[1], p[2], p[3], p[4], dt, w.force, w.torque, c.stats, c.pair_results, c.threads[0],
         )
     rail_forces(s.rail_node, s.rail_axis, w.force)
     return True

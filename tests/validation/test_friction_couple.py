@@ -1,0 +1,99 @@
+"""The friction couple: with twist on, friction acts on the yarns' surfaces and turns them.
+
+Two straight yarns cross, pressed together (axes 0.98 d apart), their centrelines held;
+yarn A may spin about its axis. The contact point sits on both surfaces, so
+
+* a spinning A slides on B and the friction torque r mu f_n spins it down:
+  d/dt sum(I omega) = -r mu F_n exactly (Coulomb sliding);
+* A rolling on B (axis moving at -r omega, so its surface at the contact is at rest)
+  feels no friction at all.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import knitlad as kl
+from knitlad import units
+from knitlad.contact import ContactModel
+from knitlad.state import Scene, with_twist
+
+D = kl.NYLON.diameter
+R = 0.5 * D
+MU = 0.3
+
+
+def crossing(spin_rad_s: float, axis_velocity=(0.0, 0.0, 0.0)):
+    n, length = 21, 4e-3
+    s = np.linspace(-length / 2, length / 2, n)
+    scene = Scene(kl.NYLON)
+    a = scene.add_yarn(np.column_stack([s, 0 * s, 0 * s + 0.49 * D]))
+    b = scene.add_yarn(np.column_stack([0 * s, s, 0 * s - 0.49 * D]))
+    scene.hold(a, range(n), velocity=axis_velocity)
+    scene.hold(b, range(n))
+    state = scene.build(twist=True)
+    state.v[:] = state.v_prescribed  # moving from the first force evaluation on
+    edges_a = np.flatnonzero(state.node_yarn[state.edge_a] == a)
+    state.omega[edges_a] = spin_rad_s * units.TIME
+    sim = kl.Simulation(state, contact=ContactModel(stiffness=1e3, friction=MU))
+    return sim, edges_a
+
+
+def test_a_spinning_yarn_is_spun_down_by_the_friction_torque_r_mu_fn():
+    sim, ea = crossing(2.0e5)  # surface speed r omega = 14 m/s
+    s = sim.state
+    times, spins, normal = [], [], []
+    for _ in range(40):
+        sim.step(20)
+        times.append(sim.time_s)
+        spins.append(float((s.twist_inertia[ea] * s.omega[ea]).sum()) * units.MASS * units.LENGTH**2 / units.TIME)
+        normal.append(sim.contact_stats()["normal_force_sum_N"])
+    assert sim.contact_stats()["sliding"] >= 1
+    rate = np.polyfit(times[10:], spins[10:], 1)[0]  # after the tangential spring has loaded
+    expected = -R * MU * np.mean(normal[10:])
+    assert expected < 0
+    assert rate == pytest.approx(expected, rel=1e-6)
+
+
+@pytest.mark.parametrize("direction, rolls", [(-1.0, True), (1.0, False)])
+def test_a_yarn_rolling_on_another_feels_no_friction_one_skidding_does(direction, rolls):
+    omega = 2.0e4
+    # A lies along x above B; its surface at the contact (below its axis) moves at +r omega along y
+    sim, ea = crossing(omega, axis_velocity=(0.0, direction * R * omega, 0.0))
+    sliding = 0
+    for _ in range(20):
+        sim.step(5)
+        sliding = max(sliding, sim.contact_stats()["sliding"])
+    spin_change = abs(sim.state.omega[ea].mean() / units.TIME - omega) / omega
+    if rolls:
+        assert sliding == 0 and spin_change < 1e-9
+    else:
+        assert sliding >= 1 and spin_change > 1e-3
+
+
+def test_switching_twist_on_leaves_every_force_unchanged():
+    from knitlad.contact import make_contacts
+    from knitlad.kernels.integrate import compute_forces, potential_energy
+    from knitlad.scenes.jersey import Jersey, build_jersey
+    from knitlad.state import Workspace
+
+    l0 = kl.NYLON.stitch_length
+    knit = build_jersey(Jersey(n_x=3, n_y=4, l_x=0.33 * l0, l_y=0.25 * l0, nodes_per_stitch=24))
+    plain = knit.state
+    plain.x[:] += np.random.default_rng(3).normal(scale=0.02 * D / units.LENGTH, size=plain.x.shape)  # any shape
+    twisted = with_twist(plain, kl.NYLON.twisting_stiffness / kl.NYLON.bending_stiffness)
+    contact = ContactModel(stiffness=1e3)
+    forces = []
+    for state, twist in ((plain, False), (twisted, True)):
+        w = Workspace.for_state(state)
+        c = make_contacts(state, contact)
+        assert compute_forces(state, w, c, twist, 0.0, 1e-3)
+        forces.append(w.force.copy())
+        if twist:
+            assert np.abs(w.torque).max() < 1e-9 * np.abs(w.force).max()
+            stretching, bending, twisting = potential_energy(state, w, c, True)[:3]
+            assert abs(twisting) < 1e-12 * (stretching + bending)
+    np.testing.assert_allclose(forces[1], forces[0], rtol=0, atol=1e-9 * np.abs(forces[0]).max())
+    with pytest.raises(ValueError, match="already carries twist"):
+        with_twist(twisted, 0.7)
