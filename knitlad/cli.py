@@ -94,6 +94,7 @@ def cut(
     resolution: int = typer.Option(None, "--resolution", help="Nodes per stitch (default: the preset's, 16/24/48)."),
     max_time_ms: float = typer.Option(30.0, "--max-time-ms", help="Longest laddering time after the cut [ms]."),
     out: str = typer.Option(None, "--out", help="Output folder (HDF5 + PNG); default runs/cut-<time>."),
+    twist: bool = typer.Option(False, "--twist", help="Yarns carry twist during the laddering: friction also turns them (the friction couple)."),
     drag: float = typer.Option(0.0, "--drag", help="Global drag on every node during the laddering [1/s]; 0 is the physics (docs/accuracy.md: 2e3 matches the paper's DER velocities)."),
     json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
 ) -> None:
@@ -113,7 +114,7 @@ def cut(
         fx = 13.6
     try:
         cfg = CutConfig(fx=fx, lx=lx, ly=ly, mu=mu, n_x=n_x, n_y=n_y, resolution=resolution, preset=preset,
-                        max_time_ms=max_time_ms, drag_per_s=drag)
+                        max_time_ms=max_time_ms, drag_per_s=drag, twist=twist)
     except ValidationError as e:
         field, _, reason = one_line(e).partition(": ")
         option = {"n_x": "--stitches", "n_y": "--stitches", "max_time_ms": "--max-time-ms",

@@ -47,7 +47,7 @@ class CutConfig(_WithPreset):
     # fields added after sweeps of this scene were first run, each with the value that
     # reproduces the runs before it: at that value they stay out of a job's id
     # (knitlad.sweep.job_id), so a finished job keeps its id and is not run again
-    ADDED_LATER: ClassVar[dict[str, object]] = {"drag_per_s": 0.0}
+    ADDED_LATER: ClassVar[dict[str, object]] = {"drag_per_s": 0.0, "twist": False}
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -63,6 +63,9 @@ class CutConfig(_WithPreset):
     drag_per_s: float = Field(0.0, ge=0, le=1e5, description=(
         "global drag -gamma m v on every node during the laddering [1/s]; 0 is the physics. 2e3 brings the "
         "42 x 42 runs to the paper's two DER velocities (docs/accuracy.md); 3e4 stops the ladder"))
+    twist: bool = Field(False, description=(
+        "the yarns carry twist during the laddering, so friction also turns them (the friction couple) [-]; "
+        "about 1.5 x the laddering's cost"))
 
     @model_validator(mode="after")
     def one_control(self) -> "CutConfig":
@@ -79,7 +82,7 @@ class CutConfig(_WithPreset):
             n_x=self.n_x, n_y=self.n_y, lx_over_l0=self.lx, fx_target=self.fx, ly_over_l0=self.ly, mu=self.mu,
             nodes_per_stitch=self.resolution, max_time_s=self.max_time_ms * 1e-3, arrest_s=self.arrest_ms * 1e-3,
             observe_every_s=self.observe_every_us * 1e-6, frame_every_s=self.frame_every_us * 1e-6,
-            drag_per_s=self.drag_per_s,
+            drag_per_s=self.drag_per_s, twist=self.twist,
         )
 
 

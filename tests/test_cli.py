@@ -100,3 +100,5 @@ def test_the_drag_of_cut_reaches_the_laddering_settings_and_defaults_to_none():
 
     assert CutConfig(fx=4).settings().drag_per_s == 0.0
     assert CutConfig(fx=4, drag_per_s=2e3).settings().drag_per_s == 2e3
+    assert CutConfig(fx=4).settings().twist is False
+    assert CutConfig(fx=4, twist=True).settings().twist is True

@@ -96,9 +96,11 @@ def test_a_field_added_later_keeps_the_ids_of_finished_jobs_at_its_neutral_value
     job = expand(SweepConfig.model_validate({"scene": "ladder", "fixed": {**TINY, "lx": 0.35},
                                              "sweep": {"axes": {"mu": [0.4]}}}))[0]
     assert job.params["drag_per_s"] == 0.0
-    before = {k: v for k, v in job.params.items() if k != "drag_per_s"}
+    before = {k: v for k, v in job.params.items() if k not in ("drag_per_s", "twist")}
     assert job.id == job_id("ladder", before, job.output)
     assert job_id("ladder", {**job.params, "drag_per_s": 2e3}, job.output) != job.id
+    assert job.params["twist"] is False  # twist came later still
+    assert job_id("ladder", {**job.params, "twist": True}, job.output) != job.id
 
 
 # ------------------------------------------------------------------ smoke sweep

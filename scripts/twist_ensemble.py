@@ -1,0 +1,75 @@
+"""Does the friction couple change the ladder? Paired runs, twist off and on, over an ensemble of knits.
+
+One ladder's v_lad scatters from knit to knit (about +-20 % at low tension: a
+perturbation far below any setting's effect sends the stick-slip releases down
+another path), so one pair of runs cannot tell an effect from the scatter. Here
+each knit of an ensemble (force-control targets a fraction of a percent apart)
+is stretched once and laddered twice from the same state (LadderRun.branch):
+twist-free (the default) and with twist (LadderSettings.twist: friction also turns
+the yarns). The paired change is averaged over the ensemble, with its standard error.
+
+    python scripts/twist_ensemble.py [--size 16] [--tensions 1.6 4 13.6] [--members 5] [--out runs/twist]
+
+Writes ``<out>/twist_ensemble.csv`` (resumable) and prints a markdown table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from knitlad.protocol import LadderRun, LadderSettings
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--size", type=int, default=16, help="knit size N for N x N")
+    p.add_argument("--tensions", type=float, nargs="+", default=[1.6, 4.0, 13.6], help="target f_x^ini values")
+    p.add_argument("--members", type=int, default=5, help="knits per tension (targets 0.5 %% apart)")
+    p.add_argument("--out", default="runs/twist")
+    args = p.parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    csv = out / "twist_ensemble.csv"
+    rows = pd.read_csv(csv).to_dict("records") if csv.exists() else []
+    done = {(r["fx_nominal"], r["member"]) for r in rows}
+    offsets = 0.005 * (np.arange(args.members) - (args.members - 1) / 2)
+    for fx in args.tensions:
+        for k, offset in enumerate(offsets):
+            if (fx, k) in done:
+                continue
+            stretched = LadderRun(LadderSettings(n_x=args.size, n_y=args.size, fx_target=fx * (1 + offset)))
+            stretched.stretch()
+            row = {"fx_nominal": fx, "member": k, "fx_ini": stretched.result.fx_ini}
+            for label, twist in (("free", False), ("twist", True)):
+                t = time.perf_counter()
+                run = stretched.branch(twist=twist)
+                run.propagate()
+                row[f"v_{label}"] = run.result.v_lad_over_cb
+                row[f"n_{label}"] = run.result.n_lad_over_ny
+                row[f"wall_{label}_s"] = time.perf_counter() - t
+            rows.append(row)
+            print(f"f_x {row['fx_ini']:6.3f}  v {row['v_free']:.4f} -> {row['v_twist']:.4f}   "
+                  f"n_lad/n_y {row['n_free']:.3f} -> {row['n_twist']:.3f}   "
+                  f"{row['wall_free_s']:.0f} s / {row['wall_twist_s']:.0f} s", flush=True)
+            tmp = csv.with_suffix(".tmp")
+            pd.DataFrame(rows).to_csv(tmp, index=False)
+            tmp.replace(csv)
+    df = pd.DataFrame(rows)
+    print("\n| f_x^ini | knits | v_lad/c_b twist-free | with twist | paired change (mean +- s.e.) "
+          "| n_lad/n_y twist-free | with twist | wall with / without twist |")
+    print("|---|---|---|---|---|---|---|---|")
+    for fx, g in df.groupby("fx_nominal"):
+        change = (g.v_twist - g.v_free) / g.v_free
+        se = change.std(ddof=1) / np.sqrt(len(g)) if len(g) > 1 else float("nan")
+        print(f"| {fx:g} | {len(g)} | {g.v_free.mean():.3f} +- {g.v_free.std(ddof=1):.3f} | "
+              f"{g.v_twist.mean():.3f} +- {g.v_twist.std(ddof=1):.3f} | {change.mean():+.1%} +- {se:.1%} | "
+              f"{g.n_free.mean():.3f} | {g.n_twist.mean():.3f} | {(g.wall_twist_s / g.wall_free_s).mean():.2f} |")
+
+
+if __name__ == "__main__":
+    main()
