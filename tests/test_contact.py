@@ -85,38 +85,39 @@ def brute_force_touching(state, exclusion):
     return found
 
 
-def test_broad_phase_finds_exactly_the_pairs_of_an_all_pairs_search():
-    state = pressed_weave()
-    c = make_contacts(state, ContactModel(stiffness=1e3))
+def touching_in_broad_phase(state):
+    """The touching pairs among the broad phase's candidates, and the exclusion it used."""
     from knitlad.kernels.contact import refresh_contacts, segment_distance
 
+    c = make_contacts(state, ContactModel(stiffness=1e3))
     assert refresh_contacts(state.x, state.edge_a, state.edge_b, state.edge_shift, c)
     touching = {
         (int(i), int(j))
         for i, j in c.pairs[: c.n_pairs[0]]
         if segment_distance(state.x, state.edge_a, state.edge_b, state.edge_shift, i, j)[0] < c.edge_radius[i] + c.edge_radius[j]
     }
-    assert touching == brute_force_touching(state, int(c.exclusion[0]))
+    return touching, int(c.exclusion[0])
+
+
+def test_broad_phase_finds_exactly_the_pairs_of_an_all_pairs_search():
+    state = pressed_weave()
+    touching, exclusion = touching_in_broad_phase(state)
+    assert touching == brute_force_touching(state, exclusion)
     assert len(touching) > 0
 
 
 def test_a_yarn_flung_far_away_coarsens_the_grid_and_no_touching_pair_is_missed():
     """The grid spans the bounding box: 10 m away, one yarn would make 1e10 cells of the reach."""
-    from knitlad.kernels.contact import MAX_CELLS_PER_EDGE, refresh_contacts, segment_distance
+    from knitlad.kernels.contact import MAX_CELLS_PER_EDGE
 
     state = pressed_weave()
     first = slice(int(state.yarn_start[0]), int(state.yarn_start[1]))
     state.x[first, 0] += 10.0 / kl.units.LENGTH
     state.x[first, 2] += 10.0 / kl.units.LENGTH
-    assert (state.x.max(axis=0) - state.x.min(axis=0)).prod() / D**3 > MAX_CELLS_PER_EDGE * 1e6
-    c = make_contacts(state, ContactModel(stiffness=1e3))
-    assert refresh_contacts(state.x, state.edge_a, state.edge_b, state.edge_shift, c)
-    touching = {
-        (int(i), int(j))
-        for i, j in c.pairs[: c.n_pairs[0]]
-        if segment_distance(state.x, state.edge_a, state.edge_b, state.edge_shift, i, j)[0] < c.edge_radius[i] + c.edge_radius[j]
-    }
-    assert touching == brute_force_touching(state, int(c.exclusion[0]))
+    box = (state.x.max(axis=0) - state.x.min(axis=0)) * kl.units.LENGTH
+    assert box.prod() / D**3 > MAX_CELLS_PER_EDGE * state.edge_a.shape[0] * 1e3  # cells of d: far too many
+    touching, exclusion = touching_in_broad_phase(state)
+    assert touching == brute_force_touching(state, exclusion)
     assert len(touching) >= 12  # the 12 crossings of the 3 warps left in place
 
 
