@@ -434,7 +434,7 @@ def with_twist(state: RodState, twist_over_bending: float) -> RodState:
         raise ValueError("the state already carries twist")
     if not twist_over_bending > 0:
         raise ValueError(f"twist_over_bending must be > 0, got {twist_over_bending!r}")
-    fields = {k: np.array(v, copy=True) for k, v in state._asdict().items()}
+    fields = state.copy()._asdict()
     ne = state.edge_a.shape[0]
     e = np.zeros((ne, 3))
     elen = np.zeros(ne)

@@ -19,8 +19,8 @@ Observables, each with its wall time:
 yarn's axial one), each varied alone about the current defaults, reported as the
 change against the default run (``<out>/damping.csv``). ``--parts counting``: the
 same for the contact counting of the dynamics, "union" (default) against the
-conservative "all_pairs" (``<out>/counting.csv``). ``--parts twist``: the yarns
-carry twist during the laddering, so friction also turns them (``<out>/twist.csv``).
+conservative "all_pairs" (``<out>/counting.csv``). Twist with the friction couple:
+``scripts/twist_ensemble.py`` (paired runs over an ensemble of knits).
 
 Errors are per setting: the runs that vary one setting (with the default) are
 compared with the finest of them (48 nodes per stitch; overlap 2.5 % of d; time
@@ -29,7 +29,7 @@ in the resolution is the slope of log(error) against log(nodes per stitch) over
 the points coarser than the finest.
 Writes ``<out>/convergence.csv`` and prints tables (markdown).
 
-    python scripts/convergence.py [--out docs/convergence] [--size 16] [--parts stitch loop knit scatter damping counting twist]
+    python scripts/convergence.py [--out docs/convergence] [--size 16] [--parts stitch loop knit scatter damping counting]
 """
 
 from __future__ import annotations
@@ -128,8 +128,6 @@ def scatter_runs(size: int, tensions: list[float], dt_safety: float = DEFAULT["d
 DAMPING = {"contact_damping_ratio": [0.1, 0.3, 0.6], "stretch_damping_ratio": [0.05, 0.2, 0.5],
            "drag_per_s": [1e2, 1e3, 2e3, 3e3]}
 COUNTING = {"contact_counting": ["union", "all_pairs"]}
-# twist with the friction couple (knitlad.state.with_twist), against the twist-free default
-TWIST = {"twist": [True]}
 
 
 def model_runs(size: int, tensions: list[float], csv: Path, study: dict[str, list]) -> pd.DataFrame:
@@ -235,7 +233,7 @@ def main() -> None:
     p.add_argument("--out", default="docs/convergence")
     p.add_argument("--size", type=int, default=16, help="knit size N for N x N")
     p.add_argument("--parts", nargs="+", default=["stitch", "loop", "knit"],
-                   choices=["stitch", "loop", "knit", "scatter", "damping", "counting", "twist"])
+                   choices=["stitch", "loop", "knit", "scatter", "damping", "counting"])
     p.add_argument("--tensions", type=float, nargs="+", default=[4.0, 13.6], help="knit: target f_x^ini values")
     p.add_argument("--resolutions", type=int, nargs="+", help="nodes per stitch to study (default 16 24 36 48)")
     p.add_argument("--dt-factors", type=float, nargs="+", help="time-step factors to study (default 0.7 0.35 0.175)")
@@ -253,7 +251,7 @@ def main() -> None:
     if csv.exists():  # resume: keep what an interrupted study finished
         rows = pd.read_csv(csv).to_dict("records")
     done = {(r["part"], r["varied"], r["nodes_per_stitch"], r["overlap_fraction"], r["dt_safety"]) for r in rows}
-    for part, study in (("damping", DAMPING), ("counting", COUNTING), ("twist", TWIST)):
+    for part, study in (("damping", DAMPING), ("counting", COUNTING)):
         if part not in args.parts:
             continue
         df = model_runs(args.size, args.tensions, out / f"{part}.csv", study)

@@ -186,19 +186,13 @@ def build_candidate_pairs(
                 lo[d] = min(lo[d], mid[k, d])
                 hi[d] = max(hi[d], mid[k, d])
         reach[k] = math.sqrt(half2) + edge_radius[k] + 0.5 * skin
-    dims = np.ones(3, dtype=np.int64)
+    extent = np.maximum(hi - lo, 0.0)  # 0 along an axis with no finite midpoint (hi - lo = -inf)
     cell = cell_size
-    while True:
-        volume = 1.0  # in cells, as a float: a far-flung yarn must not overflow the count
-        for d in range(3):
-            volume *= math.floor((hi[d] - lo[d] if hi[d] >= lo[d] else 0.0) / cell) + 1.0
-        if volume <= MAX_CELLS_PER_EDGE * ne + 64:
-            break
+    # counted as a float: a far-flung yarn must not overflow the count
+    while np.prod(np.floor(extent / cell) + 1.0) > MAX_CELLS_PER_EDGE * ne + 64:
         cell *= 1.5
-    n_cells = 1
-    for d in range(3):
-        dims[d] = int((hi[d] - lo[d] if hi[d] >= lo[d] else 0.0) / cell) + 1
-        n_cells *= dims[d]
+    dims = (extent / cell).astype(np.int64) + 1
+    n_cells = dims[0] * dims[1] * dims[2]
     inv = 1.0 / cell
     cells = np.empty((ne, 3), dtype=np.int64)
     start = np.zeros(n_cells + 1, dtype=np.int64)
