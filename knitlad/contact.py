@@ -15,11 +15,18 @@ import numba
 import numpy as np
 
 from knitlad import units
-from knitlad.kernels.contact import PAIR_RESULTS
+from knitlad.kernels.contact import (
+    MAX_OVERLAP,
+    N_STATS,
+    NORMAL_FORCE_SUM,
+    PAIR_RESULTS,
+    PEAK_OVERLAP,
+    SLIDING_PAIRS,
+    TOUCHING,
+    ContactParams,
+)
 from knitlad.state import RodState
 
-# parameter slots of Contacts.params (internal units)
-K_N, DAMP_N, K_T, DAMP_T, MU, SKIN = range(6)
 COUNTING = ("union", "all_pairs")
 
 
@@ -84,7 +91,7 @@ class Contacts(NamedTuple):
     keys: np.ndarray  # (cap,) i * ne + j
     slip: np.ndarray  # (cap, 3) tangential spring elongation u_t per pair
     n_pairs: np.ndarray  # (1,) valid pairs
-    status: np.ndarray  # (2,) [1 if the list must be rebuilt, pairs found at the last overflow]
+    status: np.ndarray  # (2,) slots STALE (the list must be rebuilt), PAIRS_NEEDED (at the last overflow)
     x_ref: np.ndarray  # (n, 3) positions at the last rebuild
     edge_radius: np.ndarray
     edge_prev: np.ndarray  # previous edge along the yarn, -1 at an open end (all -1: all_pairs counting)
@@ -95,8 +102,8 @@ class Contacts(NamedTuple):
     yarn_closed: np.ndarray  # arc indices wrap (rings)
     exclusion: np.ndarray  # (n_yarns,) edges excluded either side along a yarn
     edge_image: np.ndarray  # (ne,) bool: edge of a periodic image (image-image pairs are skipped)
-    params: np.ndarray  # K_N, DAMP_N, K_T, DAMP_T, MU, SKIN
-    stats: np.ndarray  # touching pairs, max overlap, sum f_n, sliding pairs (last evaluation); peak overlap since reset
+    params: ContactParams  # stiffnesses, dashpots, mu, skin (internal units)
+    stats: np.ndarray  # (N_STATS,) slots TOUCHING ... PEAK_OVERLAP of knitlad.kernels.contact
     threads: np.ndarray  # (1,) blocks the broad phase and the pair forces are split into (Numba threads)
     pair_results: np.ndarray  # (cap, PAIR_RESULTS) scratch of contact_forces
 
@@ -194,20 +201,20 @@ def make_contacts(state: RodState, model: ContactModel | None, capacity: int | N
     edge_radius = 0.5 * (state.radius[state.edge_a] + state.radius[state.edge_b])
     if model is None:
         cap = 0
-        params = np.zeros(6)
+        params = ContactParams(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         exclusion = np.zeros(state.n_yarns, dtype=np.int64)
     else:
         cap = capacity if capacity is not None else max(16, model.capacity_per_edge * ne)
         d_min = 2.0 * float(edge_radius.min())
         skin = model.skin / units.LENGTH if model.skin is not None else d_min
-        params = np.array([
-            model.stiffness * units.LENGTH / units.FORCE,
-            model.damping_ratio,
-            model.stiffness * model.tangential_stiffness_ratio * units.LENGTH / units.FORCE,
-            model.tangential_damping_ratio,
-            model.friction,
-            skin,
-        ])
+        params = ContactParams(
+            k_n=model.stiffness * units.LENGTH / units.FORCE,
+            damping_n=float(model.damping_ratio),
+            k_t=model.stiffness * model.tangential_stiffness_ratio * units.LENGTH / units.FORCE,
+            damping_t=float(model.tangential_damping_ratio),
+            mu=float(model.friction),
+            skin=float(skin),
+        )
         # exclusion: edges within `exclusion_diameters` d of arc, and always the adjacent edge
         # (per state yarn: an image is a copy of its master, whose id it carries as its physical yarn)
         own_yarn = state.node_yarn[state.edge_a]
@@ -235,7 +242,7 @@ def make_contacts(state: RodState, model: ContactModel | None, capacity: int | N
         exclusion=exclusion,
         edge_image=edge_image,
         params=params,
-        stats=np.zeros(5),
+        stats=np.zeros(N_STATS),
         threads=np.array([numba.get_num_threads()], dtype=np.int64),
         pair_results=np.zeros((cap, PAIR_RESULTS)),
     )
@@ -245,9 +252,25 @@ def make_contacts(state: RodState, model: ContactModel | None, capacity: int | N
         contacts.keys[:m] = previous.keys[:m]
         contacts.slip[:m] = previous.slip[:m]
         contacts.n_pairs[0] = m
-        contacts.params[:] = previous.params
-        contacts.stats[4] = previous.stats[4]
+        contacts.stats[PEAK_OVERLAP] = previous.stats[PEAK_OVERLAP]
+        contacts = contacts._replace(params=previous.params)
     return contacts
+
+
+class ContactStats(NamedTuple):
+    """What the contact kernel saw at its last evaluation (SI)."""
+
+    touching: int  # counted touching pairs
+    max_overlap_m: float
+    normal_force_sum_N: float
+    sliding: int  # pairs sliding (friction at the Coulomb limit)
+    candidates: int  # pairs in the candidate list
+
+    @staticmethod
+    def of(contacts: Contacts) -> "ContactStats":
+        st = contacts.stats
+        return ContactStats(int(st[TOUCHING]), float(st[MAX_OVERLAP] * units.LENGTH),
+                            float(st[NORMAL_FORCE_SUM] * units.FORCE), int(st[SLIDING_PAIRS]), int(contacts.n_pairs[0]))
 
 
 def contact_time_step(state: RodState, model: ContactModel | None, spin: bool = False) -> float:

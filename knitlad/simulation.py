@@ -14,8 +14,8 @@ import numba
 import numpy as np
 
 from knitlad import units
-from knitlad.contact import MU, ContactModel, Contacts, contact_time_step, make_contacts
-from knitlad.kernels.contact import refresh_contacts, touching_pairs_between
+from knitlad.contact import ContactModel, Contacts, ContactStats, contact_time_step, make_contacts
+from knitlad.kernels.contact import PAIRS_NEEDED, PEAK_OVERLAP, refresh_contacts, touching_pairs_between
 from knitlad.kernels.integrate import (
     compute_forces,
     fire_relax,
@@ -106,15 +106,16 @@ class Simulation:
         self.steps = 0
         self.time = 0.0  # internal ms
         self.max_speed = self._axial_wave_speed()
-        self._compute_forces()
+        self.compute_forces()
 
     def _grow_contacts(self) -> None:
         """Double the pair buffer (past what the last build needed), keeping the history."""
         c = self.contacts
-        cap = max(2 * c.pairs.shape[0], int(1.5 * c.status[1]))
+        cap = max(2 * c.pairs.shape[0], int(1.5 * c.status[PAIRS_NEEDED]))
         self.contacts = make_contacts(self.state, self.contact_model, capacity=cap, previous=c)
 
-    def _compute_forces(self) -> None:
+    def compute_forces(self) -> None:
+        """Forces and torques of the current state into ``self.work`` (growing the contact buffer if needed)."""
         while not compute_forces(self.state, self.work, self.contacts, self.twist, self.drag, self.dt):
             self._grow_contacts()
 
@@ -124,7 +125,7 @@ class Simulation:
             raise ValueError("this simulation has no contact model")
         if not (mu >= 0 and math.isfinite(mu)):
             raise ValueError(f"friction must be >= 0, got {mu!r}")
-        self.contacts.params[MU] = mu
+        self.contacts = self.contacts._replace(params=self.contacts.params._replace(mu=float(mu)))
 
     def set_drag(self, per_s: float) -> None:
         """A global viscous drag -gamma m v on every free node from the next step on [1/s] (0: none)."""
@@ -134,24 +135,17 @@ class Simulation:
 
     @property
     def friction(self) -> float:
-        return float(self.contacts.params[MU]) if self.contact_model is not None else 0.0
+        return float(self.contacts.params.mu) if self.contact_model is not None else 0.0
 
-    def contact_stats(self) -> dict[str, float]:
+    def contact_stats(self) -> ContactStats:
         """At the last force evaluation: touching pairs, largest overlap [m], sum of normal forces [N], sliding pairs, candidate pairs."""
-        st = self.contacts.stats
-        return {
-            "touching": int(st[0]),
-            "max_overlap_m": float(st[1] * units.LENGTH),
-            "normal_force_sum_N": float(st[2] * units.FORCE),
-            "sliding": int(st[3]),
-            "candidates": int(self.contacts.n_pairs[0]),
-        }
+        return ContactStats.of(self.contacts)
 
     def peak_overlap_m(self, reset: bool = False) -> float:
         """Largest overlap of two yarns [m] at any step since the last reset (``reset``: start a new window)."""
-        peak = float(self.contacts.stats[4] * units.LENGTH)
+        peak = float(self.contacts.stats[PEAK_OVERLAP] * units.LENGTH)
         if reset:
-            self.contacts.stats[4] = 0.0
+            self.contacts.stats[PEAK_OVERLAP] = 0.0
         return peak
 
     def fresh_contacts(self) -> Contacts:
@@ -169,8 +163,7 @@ class Simulation:
         if self.contact_model is None:
             return 0
         s, c = self.state, self.fresh_contacts()
-        return int(touching_pairs_between(s.x, s.edge_a, s.edge_b, s.edge_shift, c.edge_radius, c.edge_prev,
-                                          c.edge_next, c.edge_yarn, c.pairs, c.n_pairs[0], yarn_a, yarn_b))
+        return int(touching_pairs_between(s.x, s.edge_a, s.edge_b, s.edge_shift, c, yarn_a, yarn_b))
 
     def _axial_wave_speed(self) -> float:
         s = self.state
@@ -195,7 +188,7 @@ class Simulation:
             done = verlet_steps(self.state, self.work, self.contacts, self.dt, chunk, self.twist, self.drag)
             if done < chunk:
                 # the contact buffer overflowed inside step `done`: grow it and close that step
-                self._compute_forces()
+                self.compute_forces()
                 half_kick(self.state, self.work, 0.5 * self.dt, self.twist)
                 done += 1
             self.steps += done
@@ -248,7 +241,7 @@ class Simulation:
                 break
             self._grow_contacts()
         self._guard()
-        self._compute_forces()
+        self.compute_forces()
         return {
             "steps": int(steps),
             "max_force_N": float(fmax * units.FORCE),
@@ -259,9 +252,6 @@ class Simulation:
     # ------------------------------------------------------------------ read-out
     def positions_m(self) -> np.ndarray:
         return self.state.x * units.LENGTH
-
-    def velocities_m_s(self) -> np.ndarray:
-        return self.state.v * units.VELOCITY
 
     def forces_N(self) -> np.ndarray:
         """Net force on each node at the last evaluation [N]."""

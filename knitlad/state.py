@@ -370,12 +370,12 @@ def _initial_reference_directors(tangent: np.ndarray, edge_yarn: np.ndarray) -> 
     """Space-parallel reference frame along each yarn (Bishop frame), from a seed normal."""
     ne = tangent.shape[0]
     ref_u = np.zeros((ne, 3))
-    from knitlad.kernels.frames import _transport
+    from knitlad.kernels.frames import parallel_transport
 
     for k in range(ne):
         t = tangent[k]
         if k > 0 and edge_yarn[k] == edge_yarn[k - 1]:
-            u = np.array(_transport(*ref_u[k - 1], *tangent[k - 1], *t))
+            u = np.array(parallel_transport(*ref_u[k - 1], *tangent[k - 1], *t))
         else:
             seed = np.array([0.0, 0.0, 1.0]) if abs(t[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
             u = seed - seed.dot(t) * t

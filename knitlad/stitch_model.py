@@ -116,9 +116,9 @@ class StitchRun:
         with numba_threads(1):  # a few hundred nodes
             self.stretch()
             self.result.fx, self.result.fy = self.tensions()
-            self.sim._compute_forces()
+            self.sim.compute_forces()
         d = self.s.material.diameter
-        self.result.max_overlap_over_d = self.sim.contact_stats()["max_overlap_m"] / d
+        self.result.max_overlap_over_d = self.sim.contact_stats().max_overlap_m / d
         self.result.wall_s = time.perf_counter() - t0
         return self.result
 
@@ -164,9 +164,7 @@ def cell_energy(sim: Simulation, cell: PeriodicStitch) -> float:
     img = c.edge_image[pairs]
     for weight, mask in ((1.0, ~img[:, 0] & ~img[:, 1]), (0.5, img[:, 0] ^ img[:, 1])):
         p = np.ascontiguousarray(pairs[mask])
-        e += weight * contact_energy(s.x, s.edge_a, s.edge_b, s.edge_shift, c.edge_radius, c.edge_prev,
-                                     c.edge_next, p, p.shape[0], np.ascontiguousarray(slip[mask]),
-                                     c.params[0], c.params[2])
+        e += weight * contact_energy(s.x, s.edge_a, s.edge_b, s.edge_shift, c, p, np.ascontiguousarray(slip[mask]))
     return float(e)
 
 

@@ -60,7 +60,6 @@ class Material:
     line_density    rho_L    [kg/m]
     young_modulus   E        [Pa]
     poisson_ratio   nu       [-]   (sets the twist modulus G J = B / (1 + nu))
-    friction        mu       [-]   (yarn-yarn Coulomb coefficient)
     stitch_length   l0       [m]   (yarn length per stitch; sets the paper's scales)
     """
 
@@ -68,7 +67,6 @@ class Material:
     line_density: float = 15.8e-6
     young_modulus: float = 1.88e9
     poisson_ratio: float = 0.4
-    friction: float = 0.4
     stitch_length: float = 9.74e-3
 
     def __post_init__(self) -> None:
@@ -78,8 +76,6 @@ class Material:
                 raise ValueError(f"Material.{name} must be a positive finite number, got {value!r}")
         if not (-1.0 < self.poisson_ratio <= 0.5):
             raise ValueError(f"Material.poisson_ratio must lie in (-1, 0.5], got {self.poisson_ratio!r}")
-        if not (self.friction >= 0 and math.isfinite(self.friction)):
-            raise ValueError(f"Material.friction must be >= 0, got {self.friction!r}")
 
     # --- SI derived properties
     @property
@@ -133,17 +129,12 @@ class Material:
         """Bending time l0 / c_b [s]."""
         return self.stitch_length / self.c_b
 
-    def with_(self, **changes: float) -> "Material":
-        """A copy with some fields changed (the dataclass is frozen)."""
-        values = {k: getattr(self, k) for k in self.__dataclass_fields__}
-        values.update(changes)
-        return Material(**values)
-
 
 NYLON = Material()
 """The paper's Nylon monofilament (Monofil Madeira): d = 0.14 mm, rho_L = 15.8 mg/m,
-E = 1.88 GPa, l0 = 9.74 mm (d/l0 = 1/70), mu = 0.4. nu = 0.4 is our assumption
-(typical of polyamide); it only enters the twist modulus."""
+E = 1.88 GPa, l0 = 9.74 mm (d/l0 = 1/70). nu = 0.4 is our assumption (typical of
+polyamide); it only enters the twist modulus. The friction coefficient is a setting of
+each run (the paper's 0.4 by default), not of the material: a run stretches at mu = 0."""
 
 
 @dataclass(frozen=True)
@@ -184,7 +175,6 @@ class Scales:
             "E_Pa": m.young_modulus,
             "B_N_m2": m.bending_stiffness,
             "l0_m": m.stitch_length,
-            "mu": m.friction,
             "kappa0_per_m": m.kappa0,
             "f0_N": m.f0,
             "c_b_m_per_s": m.c_b,

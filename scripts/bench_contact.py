@@ -18,7 +18,7 @@ import numpy as np
 
 import knitlad as kl
 from knitlad.contact import ContactModel
-from knitlad.kernels.contact import refresh_contacts
+from knitlad.kernels.contact import STALE, refresh_contacts
 from knitlad.kernels.integrate import verlet_steps
 from knitlad.scenes.weave import plain_weave
 
@@ -37,7 +37,7 @@ def timed_rebuild(sim: kl.Simulation, repeats: int = 5) -> float:
     s, c = sim.state, sim.contacts
     best = float("inf")
     for _ in range(repeats):
-        c.status[0] = 1
+        c.status[STALE] = 1
         t = time.perf_counter()
         refresh_contacts(s.x, s.edge_a, s.edge_b, s.edge_shift, c)
         best = min(best, time.perf_counter() - t)
@@ -71,7 +71,7 @@ def main() -> None:
         t_rebuild = timed_rebuild(sim)
         rate = state.x.shape[0] / t_step
         rows.append((nseg, t_step))
-        print(f"{2 * n:6d} {nseg:9d} {sim.contact_stats()['touching']:9d} {t_step * 1e6:10.1f} "
+        print(f"{2 * n:6d} {nseg:9d} {sim.contact_stats().touching:9d} {t_step * 1e6:10.1f} "
               f"{t_step / nseg * 1e6:8.4f} {t_rebuild * 1e6:12.1f} {rate:21.3e} {state.x.shape[0] / t_bare:11.3e}")
     segs, times = np.array(rows).T
     slope = np.polyfit(np.log(segs), np.log(times), 1)[0]

@@ -7,7 +7,7 @@ import pytest
 
 import knitlad as kl
 from knitlad.contact import ContactModel, make_contacts
-from knitlad.kernels.contact import segment_closest_points
+from knitlad.kernels.contact import NORMAL_FORCE_SUM, TOUCHING, segment_closest_points
 from knitlad.scenes.weave import plain_weave
 
 D = kl.NYLON.diameter
@@ -57,7 +57,7 @@ def pressed_weave():
 def test_contact_forces_obey_newtons_third_law_and_exert_no_torque():
     state = pressed_weave()
     f, c = contact_forces_of(state, ContactModel(stiffness=1e3))
-    assert c.stats[0] >= 16  # every one of the 16 crossings touches
+    assert c.stats[TOUCHING] >= 16  # every one of the 16 crossings touches
     scale = np.abs(f).max()
     assert scale > 0
     np.testing.assert_allclose(f.sum(axis=0), 0.0, atol=1e-12 * scale * len(f))
@@ -139,7 +139,7 @@ def test_contact_count_and_forces_do_not_depend_on_the_cell_size(skin_d):
     state = pressed_weave()
     reference, c_ref = contact_forces_of(state, ContactModel(stiffness=1e3, skin=1.0 * D))
     f, c = contact_forces_of(state, ContactModel(stiffness=1e3, skin=skin_d * D))
-    assert c.stats[0] == c_ref.stats[0]
+    assert c.stats[TOUCHING] == c_ref.stats[TOUCHING]
     np.testing.assert_allclose(f, reference, rtol=0, atol=1e-12 * np.abs(reference).max())
 
 
@@ -165,12 +165,12 @@ def test_same_yarn_neighbours_are_excluded_but_distant_loops_of_one_yarn_touch()
     scene.add_yarn(pts)
     state = scene.build()
     f, c = contact_forces_of(state, ContactModel(stiffness=1e3))
-    assert c.stats[0] > 10  # the two arms touch along their length
+    assert c.stats[TOUCHING] > 10  # the two arms touch along their length
     # straight neighbours never interact: no force on a lone straight yarn
     scene2 = kl.Scene()
     scene2.add_yarn(pts[:n])
     f2, c2 = contact_forces_of(scene2.build(), ContactModel(stiffness=1e3))
-    assert c2.stats[0] == 0 and np.abs(f2).max() < 1e-9
+    assert c2.stats[TOUCHING] == 0 and np.abs(f2).max() < 1e-9
 
 
 def test_bad_contact_parameters_are_refused():
@@ -202,11 +202,11 @@ def test_union_counts_a_crossing_at_a_node_once_all_pairs_once_per_edge_of_the_n
     (mid-edge the two countings agree, force for force)."""
     _, c_union = crossing_at_a_node("union")
     _, c_all = crossing_at_a_node("all_pairs")
-    assert c_union.stats[0] == 1 and c_all.stats[0] == 2
-    assert c_all.stats[2] == pytest.approx(2 * c_union.stats[2], rel=1e-12)
+    assert c_union.stats[TOUCHING] == 1 and c_all.stats[TOUCHING] == 2
+    assert c_all.stats[NORMAL_FORCE_SUM] == pytest.approx(2 * c_union.stats[NORMAL_FORCE_SUM], rel=1e-12)
     f_mid, c_mid = crossing_at_a_node("all_pairs", offset=0.5)
     f_mid_union, c_mid_union = crossing_at_a_node("union", offset=0.5)
-    assert c_mid.stats[0] == c_mid_union.stats[0] == 1
+    assert c_mid.stats[TOUCHING] == c_mid_union.stats[TOUCHING] == 1
     np.testing.assert_allclose(f_mid, f_mid_union, rtol=0, atol=1e-12 * np.abs(f_mid).max())
 
 
@@ -245,7 +245,7 @@ def test_contact_forces_are_bit_for_bit_the_same_on_one_and_two_threads():
             sliding = 0
             for _ in range(30):
                 sim.step(10)
-                sliding = max(sliding, sim.contact_stats()["sliding"])
+                sliding = max(sliding, sim.contact_stats().sliding)
         if threads == 2:
             assert sim.contacts.n_pairs[0] >= 2 * MIN_PAIRS_PER_THREAD  # the parallel path ran
             assert sliding > 0

@@ -28,20 +28,35 @@ Every edge is a capsule (a cylinder of its yarn's radius with spherical caps).
 """
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
 
+from knitlad.kernels.options import INLINE_OPTS, NUMBA_OPTS, PARALLEL_OPTS
 from knitlad.kernels.vec import cross, dot
 
-NUMBA_OPTS = dict(cache=True, error_model="numpy", fastmath={"nsz", "arcp", "contract", "afn", "reassoc"})
-PARALLEL_OPTS = dict(NUMBA_OPTS, parallel=True)
-# the narrow-phase helpers, called once or twice per candidate pair and step, are inlined
-# into their callers at Numba IR level: as compiled calls returning tuples they cost twice the
-# pair's arithmetic (pair forces on 24 x 24: 150 -> 60-90 ns per pair; same results to the bit)
-INLINE_OPTS = dict(NUMBA_OPTS, inline="always")
 
 PARALLEL_EPS = 1e-10
+
+
+class ContactParams(NamedTuple):
+    """Contact parameters in internal units (:class:`knitlad.contact.ContactModel` in SI)."""
+
+    k_n: float  # normal stiffness [mN/mm]
+    damping_n: float  # normal dashpot, fraction of critical per contact [-]
+    k_t: float  # tangential (Cundall-Strack) stiffness [mN/mm]
+    damping_t: float  # tangential dashpot, fraction of critical [-]
+    mu: float  # Coulomb coefficient [-]
+    skin: float  # neighbour-list margin [mm]
+
+
+# slots of Contacts.stats, written by contact_forces at every evaluation
+TOUCHING, MAX_OVERLAP, NORMAL_FORCE_SUM, SLIDING_PAIRS, PEAK_OVERLAP = range(5)
+N_STATS = 5  # PEAK_OVERLAP is the deepest overlap since the caller last zeroed it
+# slots of Contacts.status: STALE = 1 when the candidate list must be rebuilt at the next
+# evaluation (set at start and on overflow); PAIRS_NEEDED = the pairs the last overflowing build found
+STALE, PAIRS_NEEDED = range(2)
 
 
 @njit(**INLINE_OPTS)
@@ -332,6 +347,9 @@ def pair_contact_forces(
 ):
     """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``.
 
+    The buffers and parameters of :class:`knitlad.contact.Contacts`, passed one by one:
+    Numba's parallel regions (:func:`_pair_contact_forces_in_blocks`) take no named tuple.
+
     ``out[p]``: the force (FORCE_X..Z), the closest-point parameters (S_PAIR, T_PAIR),
     the overlap (OVERLAP, 0 when apart or owned by a neighbouring edge), the normal
     force and 1 if sliding. Advances the slip history of each pair. Pairs are
@@ -460,37 +478,37 @@ def _pair_contact_forces_in_blocks(
     for blk in prange(n_blocks):
         pair_contact_forces(
             blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, omega, spin, mass, edge_a, edge_b,
-            edge_shift,
-            edge_radius, edge_prev, edge_next, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
+            edge_shift, edge_radius, edge_prev, edge_next, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
         )
 
 
 @njit(**NUMBA_OPTS)
-def contact_forces(
-    x, v, omega, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, n_pairs, slip,
-    k_n, damping_n, k_t, damping_t, mu, dt, F, torque, stats, pair_results, n_threads,
-):
-    """Add contact forces of the ``n_pairs`` candidate pairs to F; advance the slip history.
+def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F, torque):
+    """Add the contact forces of the candidate pairs of ``c`` (:class:`knitlad.contact.Contacts`) to F
+    (and, with ``spin``, the friction couples to ``torque``); advance the slip history.
 
-    ``damping_n``/``damping_t`` are damping ratios of the contact springs (gamma =
-    2 zeta sqrt(k m_eff)). ``stats`` (5,) receives: number of touching pairs,
-    largest overlap, normal-force sum, number of sliding pairs; and keeps the
-    peak overlap since the caller last zeroed ``stats[4]``. ``pair_results``
-    (capacity, PAIR_RESULTS) is scratch. The pairs are evaluated on up to
-    ``n_threads`` threads, then added to F one by one in pair order, so the
-    forces are bit for bit the same on any number of threads.
+    The damping parameters are damping ratios of the contact springs (gamma =
+    2 zeta sqrt(k m_eff)). ``c.stats`` receives, at slots TOUCHING, MAX_OVERLAP,
+    NORMAL_FORCE_SUM and SLIDING_PAIRS, the state of this evaluation, and keeps at
+    PEAK_OVERLAP the deepest overlap since the caller last zeroed it. The pairs are
+    evaluated on up to ``c.threads[0]`` threads into ``c.pair_results``, then added
+    to F one by one in pair order, so the forces are bit for bit the same on any
+    number of threads.
     """
-    n_blocks = min(n_threads, n_pairs // MIN_PAIRS_PER_THREAD)
+    n_pairs = c.n_pairs[0]
+    n_blocks = min(c.threads[0], n_pairs // MIN_PAIRS_PER_THREAD)
+    p = c.params
     if n_blocks > 1:
         _pair_contact_forces_in_blocks(
-            n_blocks, n_pairs, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev,
-            edge_next, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, pair_results,
+            n_blocks, n_pairs, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev,
+            c.edge_next, c.pairs, c.slip, p.k_n, p.damping_n, p.k_t, p.damping_t, p.mu, dt, c.pair_results,
         )
     else:
         pair_contact_forces(
-            0, n_pairs, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next,
-            pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, pair_results,
+            0, n_pairs, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next,
+            c.pairs, c.slip, p.k_n, p.damping_n, p.k_t, p.damping_t, p.mu, dt, c.pair_results,
         )
+    pairs, pair_results, stats = c.pairs, c.pair_results, c.stats
     n_touch = 0
     max_overlap = 0.0
     fn_sum = 0.0
@@ -528,19 +546,23 @@ def contact_forces(
         n_slide += int(pair_results[p, SLIDING])
         if overlap > max_overlap:
             max_overlap = overlap
-    stats[0] = n_touch
-    stats[1] = max_overlap
-    stats[2] = fn_sum
-    stats[3] = n_slide
+    stats[TOUCHING] = n_touch
+    stats[MAX_OVERLAP] = max_overlap
+    stats[NORMAL_FORCE_SUM] = fn_sum
+    stats[SLIDING_PAIRS] = n_slide
     # the peak over every evaluation since the caller last zeroed it: an interpenetration
     # lasting a few steps between two observations must not go unseen
-    if max_overlap > stats[4]:
-        stats[4] = max_overlap
+    if max_overlap > stats[PEAK_OVERLAP]:
+        stats[PEAK_OVERLAP] = max_overlap
 
 
 @njit(**NUMBA_OPTS)
-def contact_energy(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, n_pairs, slip, k_n, k_t):
-    """Stored contact energy: sum of k_n delta^2 / 2 + k_t |u_t|^2 / 2 over counted touching pairs."""
+def contact_energy(x, edge_a, edge_b, edge_shift, c, pairs, slip):
+    """Stored contact energy: sum of k_n delta^2 / 2 + k_t |u_t|^2 / 2 over the counted touching
+    ``pairs`` (m, 2) with their ``slip`` (m, 3) (``c.pairs[:n]``, ``c.slip[:n]``, or a subset)."""
+    edge_radius, edge_prev, edge_next = c.edge_radius, c.edge_prev, c.edge_next
+    k_n, k_t = c.params.k_n, c.params.k_t
+    n_pairs = pairs.shape[0]
     total = 0.0
     for p in range(n_pairs):
         i = pairs[p, 0]
@@ -557,10 +579,10 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
     """Rebuild the candidate list of ``c`` (a :class:`knitlad.contact.Contacts`) if stale
     or if a node moved by more than skin/2 since the last build (two segments then
     may have approached by up to skin). Returns False on overflow: the old list is
-    kept, ``c.status[1]`` holds the pairs needed, and the caller must grow the buffer.
+    kept, ``c.status[PAIRS_NEEDED]`` holds the pairs needed, and the caller must grow the buffer.
     """
-    skin = c.params[5]
-    if c.status[0] == 0 and max_displacement(x, c.x_ref) <= 0.5 * skin:
+    skin = c.params.skin
+    if c.status[STALE] == 0 and max_displacement(x, c.x_ref) <= 0.5 * skin:
         return True
     n_old = c.n_pairs[0]
     old_pairs = c.pairs[:n_old].copy()
@@ -586,30 +608,28 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
         c.pairs[:n_old] = old_pairs
         c.keys[:n_old] = old_keys
         c.slip[:n_old] = old_slip
-        c.status[0] = 1
-        c.status[1] = n
+        c.status[STALE] = 1
+        c.status[PAIRS_NEEDED] = n
         return False
     carry_history(old_keys, old_slip, n_old, c.keys, c.slip, n)
     c.n_pairs[0] = n
     c.x_ref[:] = x
-    c.status[0] = 0
+    c.status[STALE] = 0
     return True
 
 
 @njit(**NUMBA_OPTS)
-def touching_pairs_between(
-    x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, edge_yarn, pairs, n_pairs, yarn_a, yarn_b,
-):
-    """Number of counted touching pairs (overlap > 0) between an edge of ``yarn_a`` and one of ``yarn_b``."""
+def touching_pairs_between(x, edge_a, edge_b, edge_shift, c, yarn_a, yarn_b):
+    """Number of counted touching pairs (overlap > 0) of ``c`` between an edge of ``yarn_a`` and one of ``yarn_b``."""
     n = 0
-    for p in range(n_pairs):
-        i = pairs[p, 0]
-        j = pairs[p, 1]
-        ya = edge_yarn[i]
-        yb = edge_yarn[j]
+    for p in range(c.n_pairs[0]):
+        i = c.pairs[p, 0]
+        j = c.pairs[p, 1]
+        ya = c.edge_yarn[i]
+        yb = c.edge_yarn[j]
         if not ((ya == yarn_a and yb == yarn_b) or (ya == yarn_b and yb == yarn_a)):
             continue
-        overlap, _, _ = counted_overlap(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, i, j)
+        overlap, _, _ = counted_overlap(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, i, j)
         if overlap > 0.0:
             n += 1
     return n

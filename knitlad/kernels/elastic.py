@@ -13,10 +13,9 @@ import math
 
 from numba import njit
 
+from knitlad.kernels.options import NUMBA_OPTS
 from knitlad.kernels.vec import cross, dot
 
-# fast-math without "nnan"/"ninf", so the blow-up guard still sees NaN and infinity
-NUMBA_OPTS = dict(cache=True, error_model="numpy", fastmath={"nsz", "arcp", "contract", "afn", "reassoc"})
 
 
 @njit(**NUMBA_OPTS)
@@ -142,21 +141,30 @@ def bending_energy(e, elen, hinge_e0, hinge_e1, B_over_l):
 
 
 @njit(**NUMBA_OPTS)
-def _material_curvatures(e, elen, d1, d2, k0, k1):
-    """kb, chi, tangents and (kappa_1, kappa_2) at the hinge between edges k0, k1.
-
-    kappa_1 = kb.(d2^{h-1} + d2^h)/2, kappa_2 = -kb.(d1^{h-1} + d1^h)/2 (DER08 sec. 4.2).
-    """
+def _hinge_tangents(e, elen, k0, k1):
+    """Unit tangents t^{h-1}, t^h, chi = 1 + t^{h-1}.t^h and kb = 2 t^{h-1} x t^h / chi at the hinge of edges k0, k1."""
     i0 = 1.0 / elen[k0]
     i1 = 1.0 / elen[k1]
     t0x, t0y, t0z = e[k0, 0] * i0, e[k0, 1] * i0, e[k0, 2] * i0
     t1x, t1y, t1z = e[k1, 0] * i1, e[k1, 1] * i1, e[k1, 2] * i1
     chi = 1.0 + dot(t0x, t0y, t0z, t1x, t1y, t1z)
     cx, cy, cz = cross(t0x, t0y, t0z, t1x, t1y, t1z)
-    kbx, kby, kbz = 2.0 * cx / chi, 2.0 * cy / chi, 2.0 * cz / chi
-    k1_ = 0.5 * dot(kbx, kby, kbz, d2[k0, 0] + d2[k1, 0], d2[k0, 1] + d2[k1, 1], d2[k0, 2] + d2[k1, 2])
-    k2_ = -0.5 * dot(kbx, kby, kbz, d1[k0, 0] + d1[k1, 0], d1[k0, 1] + d1[k1, 1], d1[k0, 2] + d1[k1, 2])
-    return t0x, t0y, t0z, t1x, t1y, t1z, chi, kbx, kby, kbz, k1_, k2_
+    return t0x, t0y, t0z, t1x, t1y, t1z, chi, 2.0 * cx / chi, 2.0 * cy / chi, 2.0 * cz / chi
+
+
+@njit(**NUMBA_OPTS)
+def _material_curvature(kbx, kby, kbz, d1, d2, k0, k1):
+    """(kappa_1, kappa_2) = (kb.(d2^{h-1} + d2^h)/2, -kb.(d1^{h-1} + d1^h)/2) (DER08 sec. 4.2)."""
+    kap1 = 0.5 * dot(kbx, kby, kbz, d2[k0, 0] + d2[k1, 0], d2[k0, 1] + d2[k1, 1], d2[k0, 2] + d2[k1, 2])
+    kap2 = -0.5 * dot(kbx, kby, kbz, d1[k0, 0] + d1[k1, 0], d1[k0, 1] + d1[k1, 1], d1[k0, 2] + d1[k1, 2])
+    return kap1, kap2
+
+
+@njit(**NUMBA_OPTS)
+def _hinge_material_curvature(e, elen, d1, d2, k0, k1):
+    """(kappa_1, kappa_2) at the hinge between edges k0 and k1."""
+    _, _, _, _, _, _, _, kbx, kby, kbz = _hinge_tangents(e, elen, k0, k1)
+    return _material_curvature(kbx, kby, kbz, d1, d2, k0, k1)
 
 
 @njit(**NUMBA_OPTS)
@@ -181,9 +189,8 @@ def framed_bending_twisting_forces(
     for h in range(hinge_e0.shape[0]):
         k0 = hinge_e0[h]
         k1 = hinge_e1[h]
-        t0x, t0y, t0z, t1x, t1y, t1z, chi, kbx, kby, kbz, kap1, kap2 = _material_curvatures(
-            e, elen, d1, d2, k0, k1
-        )
+        t0x, t0y, t0z, t1x, t1y, t1z, chi, kbx, kby, kbz = _hinge_tangents(e, elen, k0, k1)
+        kap1, kap2 = _material_curvature(kbx, kby, kbz, d1, d2, k0, k1)
         ttx, tty, ttz = (t0x + t1x) / chi, (t0y + t1y) / chi, (t0z + t1z) / chi
         a1x, a1y, a1z = (d1[k0, 0] + d1[k1, 0]) / chi, (d1[k0, 1] + d1[k1, 1]) / chi, (d1[k0, 2] + d1[k1, 2]) / chi
         a2x, a2y, a2z = (d2[k0, 0] + d2[k1, 0]) / chi, (d2[k0, 1] + d2[k1, 1]) / chi, (d2[k0, 2] + d2[k1, 2]) / chi
@@ -225,9 +232,9 @@ def framed_bending_twisting_energy(
     for h in range(hinge_e0.shape[0]):
         k0 = hinge_e0[h]
         k1 = hinge_e1[h]
-        res = _material_curvatures(e, elen, d1, d2, k0, k1)
-        dk1 = res[10] - kappa_bar[h, 0]
-        dk2 = res[11] - kappa_bar[h, 1]
+        kap1, kap2 = _hinge_material_curvature(e, elen, d1, d2, k0, k1)
+        dk1 = kap1 - kappa_bar[h, 0]
+        dk2 = kap2 - kappa_bar[h, 1]
         eb += 0.5 * B_over_l[h] * (dk1 * dk1 + dk2 * dk2)
         m = theta[k1] - theta[k0] + ref_twist[h] - twist_bar[h]
         et += 0.5 * GJ_over_l[h] * m * m
@@ -238,6 +245,4 @@ def framed_bending_twisting_energy(
 def material_curvatures(e, elen, d1, d2, hinge_e0, hinge_e1, out):
     """(kappa_1, kappa_2) per hinge into ``out`` (nh, 2): used to set a rest shape."""
     for h in range(hinge_e0.shape[0]):
-        res = _material_curvatures(e, elen, d1, d2, hinge_e0[h], hinge_e1[h])
-        out[h, 0] = res[10]
-        out[h, 1] = res[11]
+        out[h, 0], out[h, 1] = _hinge_material_curvature(e, elen, d1, d2, hinge_e0[h], hinge_e1[h])

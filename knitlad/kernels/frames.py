@@ -12,14 +12,13 @@ import math
 
 from numba import njit
 
+from knitlad.kernels.options import NUMBA_OPTS
 from knitlad.kernels.vec import cross, dot
 
-# fast-math without "nnan"/"ninf", so the blow-up guard still sees NaN and infinity
-NUMBA_OPTS = dict(cache=True, error_model="numpy", fastmath={"nsz", "arcp", "contract", "afn", "reassoc"})
 
 
 @njit(**NUMBA_OPTS)
-def _transport(ux, uy, uz, ax, ay, az, bx, by, bz):
+def parallel_transport(ux, uy, uz, ax, ay, az, bx, by, bz):
     """Parallel transport of u from unit tangent a to unit tangent b."""
     nx, ny, nz = cross(ax, ay, az, bx, by, bz)
     s = math.sqrt(nx * nx + ny * ny + nz * nz)
@@ -51,7 +50,7 @@ def transport_reference_frames(e, elen, tangent, ref_u):
     for k in range(e.shape[0]):
         inv = 1.0 / elen[k]
         bx, by, bz = e[k, 0] * inv, e[k, 1] * inv, e[k, 2] * inv
-        ux, uy, uz = _transport(ref_u[k, 0], ref_u[k, 1], ref_u[k, 2], tangent[k, 0], tangent[k, 1], tangent[k, 2], bx, by, bz)
+        ux, uy, uz = parallel_transport(ref_u[k, 0], ref_u[k, 1], ref_u[k, 2], tangent[k, 0], tangent[k, 1], tangent[k, 2], bx, by, bz)
         # remove the round-off drift out of the normal plane, then renormalise
         p = dot(ux, uy, uz, bx, by, bz)
         ux -= p * bx
@@ -72,7 +71,7 @@ def update_reference_twist(tangent, ref_u, hinge_e0, hinge_e1, ref_twist):
     for h in range(hinge_e0.shape[0]):
         k0 = hinge_e0[h]
         k1 = hinge_e1[h]
-        px, py, pz = _transport(
+        px, py, pz = parallel_transport(
             ref_u[k0, 0], ref_u[k0, 1], ref_u[k0, 2],
             tangent[k0, 0], tangent[k0, 1], tangent[k0, 2],
             tangent[k1, 0], tangent[k1, 1], tangent[k1, 2],

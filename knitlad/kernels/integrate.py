@@ -9,6 +9,7 @@ import math
 
 from numba import njit, prange
 
+from knitlad.kernels.options import NUMBA_OPTS, PARALLEL_OPTS
 from knitlad.kernels.contact import contact_energy, contact_forces, refresh_contacts
 from knitlad.kernels.elastic import (
     bending_energy,
@@ -25,9 +26,6 @@ from knitlad.kernels.frames import (
     update_reference_twist,
 )
 
-# fast-math without "nnan"/"ninf", so the blow-up guard still sees NaN and infinity
-NUMBA_OPTS = dict(cache=True, error_model="numpy", fastmath={"nsz", "arcp", "contract", "afn", "reassoc"})
-PARALLEL_OPTS = dict(NUMBA_OPTS, parallel=True)
 
 
 @njit(**PARALLEL_OPTS)
@@ -49,8 +47,8 @@ def elastic_forces_by_yarn(s, w):
 def compute_forces(s, w, c, twist, drag, dt):
     """Total force on every node (``w.force``) and torque on every edge (``w.torque``).
 
-    ``c``: contact buffers (:class:`knitlad.contact.Contacts`; capacity 0 = no
-    contact). ``twist``: framed DER bending + twisting, else isotropic bending of a
+    ``c``: contact buffers (:class:`knitlad.contact.Contacts`; a scene without contact
+    has buffers of capacity 0). ``twist``: framed DER bending + twisting, else isotropic bending of a
     rod straight at rest. ``drag`` [1/ms]: a global viscous drag -drag m v, used
     only while relaxing. ``dt``: the step over which contact slip accumulates.
     Returns False if the contact buffer overflowed (forces incomplete).
@@ -81,12 +79,7 @@ def compute_forces(s, w, c, twist, drag, dt):
     if c.pairs.shape[0] > 0:
         if not refresh_contacts(s.x, s.edge_a, s.edge_b, s.edge_shift, c):
             return False
-        p = c.params
-        contact_forces(
-            s.x, s.v, s.omega, twist, s.mass, s.edge_a, s.edge_b, s.edge_shift, c.edge_radius, c.edge_prev,
-            c.edge_next, c.pairs, c.n_pairs[0], c.slip,
-            p[0], p[1], p[2], p[3], p[4], dt, w.force, w.torque, c.stats, c.pair_results, c.threads[0],
-        )
+        contact_forces(s.x, s.v, s.omega, twist, s.mass, s.edge_a, s.edge_b, s.edge_shift, c, dt, w.force, w.torque)
     rail_forces(s.rail_node, s.rail_axis, w.force)
     return True
 
@@ -132,10 +125,8 @@ def potential_energy(s, w, c, twist):
         et = 0.0
     ec = 0.0
     if c.pairs.shape[0] > 0:
-        ec = contact_energy(
-            s.x, s.edge_a, s.edge_b, s.edge_shift, c.edge_radius, c.edge_prev, c.edge_next,
-            c.pairs, c.n_pairs[0], c.slip, c.params[0], c.params[2],
-        )
+        n = c.n_pairs[0]
+        ec = contact_energy(s.x, s.edge_a, s.edge_b, s.edge_shift, c, c.pairs[:n], c.slip[:n])
     ext = 0.0
     for i in range(s.x.shape[0]):
         ext -= s.f_ext[i, 0] * s.x[i, 0] + s.f_ext[i, 1] * s.x[i, 1] + s.f_ext[i, 2] * s.x[i, 2]

@@ -32,7 +32,7 @@ How the course ends are held (``Jersey.edge``):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -165,7 +165,6 @@ class KnitScene:
     node_t: np.ndarray  # centreline parameter of each node (+-inf on tails)
     left_end: np.ndarray  # (courses, held) node indices of the held left end of each free course
     right_end: np.ndarray
-    meta: dict = field(default_factory=dict)
 
     def course_nodes(self, k: int) -> slice:
         """Node slice of free course k (0 = bottom)."""

@@ -62,7 +62,7 @@ def test_slider_sticks_below_mu_N_at_the_offset_of_its_tangential_spring():
     pull = 0.45 * 0.4 * PRESS
     sim, nodes = slider(mu=0.4, pull=pull)
     slid = []
-    sim.run(1.0e-3, observe=lambda s: slid.append(s.contact_stats()["sliding"]), observe_every_s=1e-6)
+    sim.run(1.0e-3, observe=lambda s: slid.append(s.contact_stats().sliding), observe_every_s=1e-6)
     moved = com(sim, nodes)[0][0] - 0.25 * D
     k_t = sim.contact_model.stiffness * sim.contact_model.tangential_stiffness_ratio
     assert max(slid) == 0

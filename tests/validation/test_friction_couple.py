@@ -48,8 +48,8 @@ def test_a_spinning_yarn_is_spun_down_by_the_friction_torque_r_mu_fn():
         sim.step(20)
         times.append(sim.time_s)
         spins.append(float((s.twist_inertia[ea] * s.omega[ea]).sum()) * units.MASS * units.LENGTH**2 / units.TIME)
-        normal.append(sim.contact_stats()["normal_force_sum_N"])
-    assert sim.contact_stats()["sliding"] >= 1
+        normal.append(sim.contact_stats().normal_force_sum_N)
+    assert sim.contact_stats().sliding >= 1
     rate = np.polyfit(times[10:], spins[10:], 1)[0]  # after the tangential spring has loaded
     expected = -R * MU * np.mean(normal[10:])
     assert expected < 0
@@ -64,7 +64,7 @@ def test_a_yarn_rolling_on_another_feels_no_friction_one_skidding_does(direction
     sliding = 0
     for _ in range(20):
         sim.step(5)
-        sliding = max(sliding, sim.contact_stats()["sliding"])
+        sliding = max(sliding, sim.contact_stats().sliding)
     spin_change = abs(sim.state.omega[ea].mean() / units.TIME - omega) / omega
     if rolls:
         assert sliding == 0 and spin_change < 1e-9

@@ -45,7 +45,7 @@ def test_a_yarn_does_not_touch_its_own_continuation_across_the_seam():
     """The image along x continues the yarn: its first edge is the neighbour of the last edge."""
     cell, sim = straight_cell(20, 5e-3, 5e-3, 1.0e-3, contact=ContactModel.for_force(0.3, D))
     sim.step(1)
-    assert sim.contact_stats()["touching"] == 0
+    assert sim.contact_stats().touching == 0
 
 
 def test_the_axial_tension_of_a_stretched_periodic_yarn_is_EA_times_strain():
