@@ -1,7 +1,7 @@
 """knitlad: discrete elastic rods with frictional contact, for knitted fabric."""
 
 from knitlad.simulation import Simulation, SimulationBlowUp, UnstableTimeStep
-from knitlad.state import RodState, Scene
+from knitlad.state import RodModel, Rods, RodState, Scene
 from knitlad.units import NYLON, Material, Scales
 
 __version__ = "0.1.0"
@@ -9,7 +9,9 @@ __version__ = "0.1.0"
 __all__ = [
     "Material",
     "NYLON",
+    "RodModel",
     "RodState",
+    "Rods",
     "Scales",
     "Scene",
     "Simulation",

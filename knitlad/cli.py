@@ -1,19 +1,29 @@
-"""Command line: ``knitlad demo`` (later ``cut``, ``sweep``, ``stitch``, ``loop``, ``plot``).
+"""Command line: ``knitlad cut``, ``sweep``, ``plot``, ``stitch``, ``diagram``, ``loop``, ``demo``, ``scales``.
 
+The options of ``cut``, ``loop`` and ``stitch`` are the fields of their pydantic
+configs (:mod:`knitlad.config`: default, unit and description declared once).
 Bad input gets one line on stderr naming the option and why, and exit code 2,
 before anything runs.
 """
 
 from __future__ import annotations
 
+import functools
+import inspect
 import sys
 import time
+import types
+import typing
 
 import typer
+
+from knitlad import config as _config
+from knitlad.config import cli_option, one_line
 
 app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,  # help texts carry units in [brackets]: no markup
     no_args_is_help=True,
     help="knitlad: discrete elastic rods with frictional contact, for the laddering of knitted fabric.",
 )
@@ -83,69 +93,114 @@ class _StageProgress:
             sys.stderr.write("\n")
 
 
+def _option_type(annotation):
+    """The command-line type of a config field's annotation (a Literal is read as text, pydantic checks it)."""
+    args = [a for a in typing.get_args(annotation) if a is not type(None)]
+    if typing.get_origin(annotation) is typing.Literal:
+        return str
+    if args and typing.get_origin(annotation) in (typing.Union, types.UnionType):
+        return _option_type(args[0])
+    return annotation
+
+
+def config_options(model, exclude: tuple[str, ...] = ()):
+    """Give a command one option per field of the pydantic config ``model`` (its default, unit and
+    description are the field's: declared once, in :mod:`knitlad.config`).
+
+    The command receives ``options``: the fields given on the command line (None for those
+    not given, so the config's defaults apply). A bad value is one line naming the option, exit 2.
+    """
+
+    def decorate(func):
+        own = [p for p in inspect.signature(func).parameters.values() if p.name != "options"]
+        derived = []
+        for name, f in model.model_fields.items():
+            if name in exclude:
+                continue
+            flag = cli_option(model, name)
+            typ = _option_type(f.annotation)
+            help_text = f.description + (f" [default: {f.default}]" if f.default is not None else "")
+            decls = [f"{flag}/--no-{flag[2:]}"] if typ is bool else [flag]
+            derived.append(inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, annotation=typing.Optional[typ],
+                                             default=typer.Option(None, *decls, help=help_text, show_default=False)))
+
+        @functools.wraps(func)
+        def command(**kwargs):
+            options = {name: kwargs.pop(name) for name in list(kwargs) if name in model.model_fields}
+            return func(options={k: v for k, v in options.items() if v is not None}, **kwargs)
+
+        params = own + derived
+        command.__signature__ = inspect.Signature(params)
+        command.__annotations__ = {p.name: p.annotation for p in params}
+        del command.__wrapped__  # typer must read the new signature, not the function's own
+        return command
+
+    return decorate
+
+
+def validated(model, options: dict, names: dict | None = None):
+    """The config ``model(**options)``; a bad value is one line naming the option, exit 2."""
+    from pydantic import ValidationError
+
+    try:
+        return model(**options)
+    except ValidationError as e:
+        field, _, reason = one_line(e).partition(": ")
+        if field == "config":
+            fail(reason)
+        option = (names or {}).get(field) or (cli_option(model, field) if field in model.model_fields else field)
+        fail(f"{option}: {reason}")
+
+
 @app.command()
+@config_options(_config.CutConfig, exclude=("n_x", "n_y"))
 def cut(
-    fx: float = typer.Option(None, "--fx", help="Target tension per thread f_x^ini (force control). Default 13.6 unless --lx is given."),
-    lx: float = typer.Option(None, "--lx", help="Stretch l_x/l0 (position control) instead of --fx."),
-    ly: float = typer.Option(0.25, "--ly", help="Stretch l_y/l0."),
-    mu: float = typer.Option(0.4, "--mu", help="Friction coefficient during laddering."),
     stitches: str = typer.Option("42", "--stitches", help="Fabric size: N (N x N) or NXxNY."),
-    preset: str = typer.Option("default", "--preset", help="Accuracy preset: fast, default or accurate (docs/accuracy.md); sets the resolution."),
-    resolution: int = typer.Option(None, "--resolution", help="Nodes per stitch (default: the preset's, 16/24/48)."),
-    max_time_ms: float = typer.Option(30.0, "--max-time-ms", help="Longest laddering time after the cut [ms]."),
     out: str = typer.Option(None, "--out", help="Output folder (HDF5 + PNG); default runs/cut-<time>."),
-    twist: bool = typer.Option(False, "--twist", help="Yarns carry twist during the laddering: friction also turns them (the friction couple)."),
-    drag: float = typer.Option(0.0, "--drag", help="Global drag on every node during the laddering [1/s]; 0 is the physics (docs/accuracy.md: 2e3 matches the paper's DER velocities)."),
     json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
+    options: dict = None,
 ) -> None:
-    """The laddering experiment: stretch at mu = 0, relax, switch friction on, cut a loop, follow the ladder."""
+    """The laddering experiment: stretch at mu = 0, relax, switch friction on, cut a loop, follow the ladder.
+
+    Without --fx or --lx, force control to f_x^ini = 13.6 (the paper's Fig. 3c,d).
+    """
     import json
     from pathlib import Path
 
-    from pydantic import ValidationError
-
-    from knitlad.config import CutConfig, one_line, parse_stitches
-
     try:
-        n_x, n_y = parse_stitches(stitches)
+        n_x, n_y = _config.parse_stitches(stitches)
     except ValueError as e:
         fail(f"--stitches: {e}")
-    if fx is None and lx is None:
-        fx = 13.6
-    try:
-        cfg = CutConfig(fx=fx, lx=lx, ly=ly, mu=mu, n_x=n_x, n_y=n_y, resolution=resolution, preset=preset,
-                        max_time_ms=max_time_ms, drag_per_s=drag, twist=twist)
-    except ValidationError as e:
-        field, _, reason = one_line(e).partition(": ")
-        option = {"n_x": "--stitches", "n_y": "--stitches", "max_time_ms": "--max-time-ms",
-                  "drag_per_s": "--drag"}.get(field, f"--{field}")
-        fail(f"{option}: {reason}" if field != "config" else reason)
+    if options.get("fx") is None and options.get("lx") is None:
+        options["fx"] = 13.6
+    cfg = validated(_config.CutConfig, {**options, "n_x": n_x, "n_y": n_y}, {"n_x": "--stitches", "n_y": "--stitches"})
     out_dir = Path(out) if out else Path("runs") / time.strftime("cut-%Y%m%d-%H%M%S")
     from knitlad.io.hdf5 import write_ladder_result
+    from knitlad.observers import Interpenetration
     from knitlad.plots import spatio_temporal_diagram
-    from knitlad.protocol import LadderRun
+    from knitlad.protocol import run_ladder
     from knitlad.simulation import SimulationBlowUp
+    from knitlad.stretching import OutOfReach
 
     progress = _StageProgress()
-    run = LadderRun(cfg.settings(), progress=progress)
     try:
-        result = run.run()
+        result = run_ladder(cfg.settings(), progress=progress)
     except KeyboardInterrupt:
         progress.close()
         typer.echo("knitlad: interrupted; nothing written", err=True)
         raise typer.Exit(130)
-    except (RuntimeError, SimulationBlowUp) as e:  # the run failed (not bad input): one line, exit 1
+    except (OutOfReach, Interpenetration, SimulationBlowUp) as e:  # the run failed (not bad input): one line, exit 1
         progress.close()
         typer.echo(f"knitlad: run failed: {e}", err=True)
         raise typer.Exit(1)
     progress.close()
-    h5 = write_ladder_result(out_dir / "ladder.h5", result, run.sim.state.yarn_start)
+    h5 = write_ladder_result(out_dir / "ladder.h5", result)
     png = spatio_temporal_diagram(result, out_dir / "spatio_temporal.png")
     summary = result.summary()
     if not result.fx_within_tolerance:
         typer.echo(
-            f"knitlad: warning: f_x^ini = {result.fx_ini:.3f} is not within 2 % of the target {cfg.fx} "
-            "(the relaxed tension could not be matched); the run went on from there",
+            f"knitlad: warning: f_x^ini = {result.fx_ini:.3f} is not within {100 * cfg.fx_tolerance:g} % of the "
+            f"target {cfg.fx} (the relaxed tension could not be matched); the run went on from there",
             err=True,
         )
     if json_out:
@@ -164,39 +219,18 @@ def cut(
     )
 
 
-def _validated(model, option_names: dict | None = None, **values):
-    """Build a pydantic config from CLI values; a bad one is one line naming the option, exit 2."""
-    from pydantic import ValidationError
-
-    from knitlad.config import one_line
-
-    try:
-        return model(**values)
-    except ValidationError as e:
-        field, _, reason = one_line(e).partition(": ")
-        option = (option_names or {}).get(field, "--" + field.replace("_", "-"))
-        fail(f"{option}: {reason}" if field != "config" else reason)
-
-
 @app.command()
+@config_options(_config.LoopConfig)
 def loop(
-    fx: float = typer.Option(8.0, "--fx", help="Tension per thread f_x pulling the loop's ends."),
-    mu: float = typer.Option(0.4, "--mu", help="Friction coefficient after the release."),
-    lx: float = typer.Option(0.30, "--lx", help="Column width l_x/l0 (<= 0.34: the loops must overlap)."),
-    ly: float = typer.Option(0.25, "--ly", help="Row spacing l_y/l0."),
-    preset: str = typer.Option("default", "--preset", help="Accuracy preset: fast, default or accurate (docs/accuracy.md); sets the resolution."),
-    resolution: int = typer.Option(None, "--resolution", help="Nodes per stitch (default: the preset's, 24/36/48)."),
-    max_time_ms: float = typer.Option(1.0, "--max-time-ms", help="Longest time after the release [ms]."),
     json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
+    options: dict = None,
 ) -> None:
     """Single-loop model (paper Fig. 5b): a loop under tension f_x lets go of the row above once the row below is removed."""
     import json
 
-    from knitlad.config import LoopConfig
     from knitlad.loop_model import LoopRun
 
-    cfg = _validated(LoopConfig, fx=fx, mu=mu, lx=lx, ly=ly, resolution=resolution, preset=preset,
-                     max_time_ms=max_time_ms)
+    cfg = validated(_config.LoopConfig, options)
     try:
         result = LoopRun(cfg.settings()).run()
     except RuntimeError as e:
@@ -215,22 +249,17 @@ def loop(
 
 
 @app.command()
+@config_options(_config.StitchConfig)
 def stitch(
-    lx: float = typer.Option(0.35, "--lx", help="Cell width l_x/l0."),
-    ly: float = typer.Option(0.25, "--ly", help="Cell height l_y/l0."),
-    preset: str = typer.Option("default", "--preset", help="Accuracy preset: fast, default or accurate (docs/accuracy.md); sets the resolution."),
-    resolution: int = typer.Option(None, "--resolution", help="Nodes per stitch (default: the preset's, 24/36/64)."),
-    d_over_l0: float = typer.Option(1 / 70, "--d-over-l0", help="Yarn diameter over stitch length."),
     json_out: bool = typer.Option(False, "--json", help='Print {"fx": ..., "fy": ...} and the rest as JSON.'),
+    options: dict = None,
 ) -> None:
     """Periodised jersey stitch: tensions per thread f_x, f_y at imposed (l_x, l_y), relaxed at mu = 0."""
     import json
 
-    from knitlad.config import StitchConfig
     from knitlad.stitch_model import StitchRun
 
-    cfg = _validated(StitchConfig, {"d_over_l0": "--d-over-l0"}, lx=lx, ly=ly, resolution=resolution, preset=preset,
-                     d_over_l0=d_over_l0)
+    cfg = validated(_config.StitchConfig, options)
     settings = cfg.settings()
     try:
         result = StitchRun(settings).run()
@@ -259,12 +288,13 @@ def diagram(
     import pandas as pd
 
     from knitlad.config import StitchConfig
+    from knitlad.io.atomic import atomic_path
     from knitlad.plots import zero_tension_curve_plot
     from knitlad.stitch_model import zero_tension_lx
 
     values = ly or [0.20, 0.22, 0.24, 0.26, 0.28, 0.30]
     for v in values:
-        _validated(StitchConfig, {"d_over_l0": "--d-over-l0"}, ly=v, resolution=resolution, d_over_l0=d_over_l0)
+        validated(StitchConfig, dict(ly=v, resolution=resolution, d_over_l0=d_over_l0))
     material = StitchConfig(d_over_l0=d_over_l0).settings().material
     rows = []
     for v in values:
@@ -278,9 +308,8 @@ def diagram(
     out_dir = Path(out)
     out_dir.mkdir(parents=True, exist_ok=True)
     df = pd.DataFrame(rows)
-    tmp = out_dir / "fx0_curve.csv.tmp"
-    df.to_csv(tmp, index=False)
-    tmp.replace(out_dir / "fx0_curve.csv")
+    with atomic_path(out_dir / "fx0_curve.csv") as tmp:
+        df.to_csv(tmp, index=False)
     png = zero_tension_curve_plot(df, d_over_l0, out_dir / "fx0_curve.png")
     typer.echo(f"wrote {out_dir / 'fx0_curve.csv'} and {png}")
 

@@ -42,30 +42,55 @@ class _WithPreset(BaseModel):
 
 
 class CutConfig(_WithPreset):
-    """One laddering run (``knitlad cut``)."""
+    """One laddering run (``knitlad cut``, sweep scene ``ladder``): the one declaration of each of its settings.
 
-    # fields added after sweeps of this scene were first run, each with the value that
-    # reproduces the runs before it: at that value they stay out of a job's id
-    # (knitlad.sweep.job_id), so a finished job keeps its id and is not run again
-    ADDED_LATER: ClassVar[dict[str, object]] = {"drag_per_s": 0.0, "twist": False}
+    The first group are the options of ``knitlad cut``; the second the model's choices,
+    each a measurement (README, docs/accuracy.md), settable from Python and sweeps.
+    """
+
+    # fields added after sweeps of this scene were first run: at their default they stay out
+    # of a job's id (knitlad.sweep.job_id), so a finished job keeps its id and is not run again
+    ADDED_LATER: ClassVar[tuple[str, ...]] = (
+        "drag_per_s", "twist", "d_over_l0", "contact_force_f0", "overlap_fraction", "contact_counting", "edge",
+        "contact_damping_ratio", "stretch_damping_ratio", "stretch_increment", "steps_per_increment",
+        "fx_tolerance", "dt_safety")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
     ly: float = Field(0.25, gt=0.2, lt=0.5, description="stretch l_y/l0 [-]")
     mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient during laddering [-]")
     n_x: int = Field(42, ge=4, le=200, description="stitches per course [-]")
-    n_y: int = Field(42, ge=6, le=200, description="courses [-]")
+    n_y: int = Field(42, ge=4, le=200, description="courses [-]")
     resolution: int = Field(24, ge=12, le=280, description="nodes per stitch (segment = l0/resolution) [-]; default: the preset's")
     max_time_ms: float = Field(30.0, gt=0, description="longest laddering time simulated after the cut [ms]")
     arrest_ms: float = Field(2.0, gt=0, description="the ladder has stopped when no cell changed for this long [ms]")
     observe_every_us: float = Field(20.0, gt=0, description="interval between front/tension samples [us]")
     frame_every_us: float = Field(100.0, gt=0, description="interval between stored position frames [us]")
-    drag_per_s: float = Field(0.0, ge=0, le=1e5, description=(
+    drag_per_s: float = Field(0.0, ge=0, le=1e5, json_schema_extra={"cli": "--drag"}, description=(
         "global drag -gamma m v on every node during the laddering [1/s]; 0 is the physics. 2e3 brings the "
         "42 x 42 runs to the paper's two DER velocities (docs/accuracy.md); 3e4 stops the ladder"))
     twist: bool = Field(False, description=(
         "the yarns carry twist during the laddering, so friction also turns them (the friction couple) [-]; "
         "about 1.5 x the laddering's cost"))
+    # --- the model's choices
+    d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description="yarn diameter over stitch length d/l0 [-] (the paper: 1/70)")
+    contact_force_f0: float = Field(20.0, gt=0, description=(
+        "contact stiffness: a contact carrying this force overlaps by overlap_fraction d [f0]"))
+    overlap_fraction: float = Field(0.05, gt=0, lt=1, description="overlap at contact_force_f0, over d [-]")
+    contact_counting: Literal["union", "all_pairs"] = Field("union", description=(
+        "contact counting of the laddering dynamics: union (exact friction) or all_pairs (conserves energy) [-]"))
+    edge: Literal["clamped", "tail"] = Field("clamped", description=(
+        "course ends: clamped at the edge sinkers (position and tangent) or held at straight tails [-]"))
+    contact_damping_ratio: float = Field(0.3, ge=0, description=(
+        "normal and tangential contact dashpots of the laddering dynamics, fraction of critical [-]"))
+    stretch_damping_ratio: float = Field(0.2, ge=0, description=(
+        "the yarn's axial dashpot during the laddering, fraction of critical [-]"))
+    stretch_increment: float = Field(0.005, gt=0, le=0.05, description="affine stretch per relaxation round [l/l0]")
+    steps_per_increment: int = Field(750, ge=1, description="FIRE steps per relaxation round [-]")
+    fx_tolerance: float = Field(0.02, gt=0, lt=1, description="force control: accepted relative error of f_x^ini [-]")
+    dt_safety: float = Field(0.35, gt=0, le=1, description=(
+        "time step of the laddering dynamics, fraction of the stability limit [-]; 0.35, not 0.7: from one "
+        "stretched 16 x 16 knit at f_x^ini 3.92, v_lad was 0.312 at 0.7, 0.270 at 0.35, 0.266 at 0.175"))
 
     @model_validator(mode="after")
     def one_control(self) -> "CutConfig":
@@ -75,15 +100,33 @@ class CutConfig(_WithPreset):
             raise ValueError("give fx (force control) or lx (position control)")
         return self
 
+    def stretch_settings(self):
+        from knitlad.protocol import StretchSettings
+
+        return StretchSettings(
+            n_x=self.n_x, n_y=self.n_y, lx_over_l0=self.lx, fx_target=self.fx, ly_over_l0=self.ly,
+            nodes_per_stitch=self.resolution, contact_force_f0=self.contact_force_f0,
+            overlap_fraction=self.overlap_fraction, edge=self.edge, stretch_increment=self.stretch_increment,
+            steps_per_increment=self.steps_per_increment, fx_tolerance=self.fx_tolerance,
+            material=material_for(self.d_over_l0),
+        )
+
+    def dynamics_settings(self):
+        from knitlad.contact import Counting
+        from knitlad.protocol import DynamicsSettings
+
+        return DynamicsSettings(
+            mu=self.mu, contact_counting=Counting(self.contact_counting),
+            contact_damping_ratio=self.contact_damping_ratio, stretch_damping_ratio=self.stretch_damping_ratio,
+            dt_safety=self.dt_safety, drag_per_s=self.drag_per_s, twist=self.twist,
+            observe_every_s=self.observe_every_us * 1e-6, arrest_s=self.arrest_ms * 1e-3,
+            max_time_s=self.max_time_ms * 1e-3, frame_every_s=self.frame_every_us * 1e-6,
+        )
+
     def settings(self):
         from knitlad.protocol import LadderSettings
 
-        return LadderSettings(
-            n_x=self.n_x, n_y=self.n_y, lx_over_l0=self.lx, fx_target=self.fx, ly_over_l0=self.ly, mu=self.mu,
-            nodes_per_stitch=self.resolution, max_time_s=self.max_time_ms * 1e-3, arrest_s=self.arrest_ms * 1e-3,
-            observe_every_s=self.observe_every_us * 1e-6, frame_every_s=self.frame_every_us * 1e-6,
-            drag_per_s=self.drag_per_s, twist=self.twist,
-        )
+        return LadderSettings(self.stretch_settings(), self.dynamics_settings())
 
 
 class LoopConfig(_WithPreset):
@@ -142,9 +185,16 @@ def parse_stitches(text: str) -> tuple[int, int]:
     return n_x, int(m.group(2)) if m.group(2) else n_x
 
 
-def one_line(error: ValidationError) -> str:
-    """The first validation error as 'field: reason'."""
+def one_line(error: ValidationError, prefix: tuple = ()) -> str:
+    """The first validation error as 'field: reason' (the field's path joined by dots, after ``prefix``)."""
     e = error.errors()[0]
-    where = ".".join(str(p) for p in e.get("loc", ())) or "config"
+    # pydantic names the member of a union it tried ("list[any]", "Range"): not part of the user's path
+    loc = [str(p) for p in prefix + tuple(e.get("loc", ())) if not (isinstance(p, str) and p in ("list[any]", "Range"))]
     msg = e.get("msg", str(error)).removeprefix("Value error, ")
-    return f"{where}: {msg}"
+    return f"{'.'.join(loc) or 'config'}: {msg}"
+
+
+def cli_option(model: type[BaseModel], field: str) -> str:
+    """The command-line option of a config field: ``--field-name`` unless the field names its own (``cli``)."""
+    extra = model.model_fields[field].json_schema_extra or {}
+    return extra.get("cli", "--" + field.replace("_", "-"))

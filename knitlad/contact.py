@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from enum import Enum
 from typing import NamedTuple
 
 import numba
@@ -25,9 +26,22 @@ from knitlad.kernels.contact import (
     TOUCHING,
     ContactParams,
 )
-from knitlad.state import RodState
+from knitlad.state import RodModel, Rods
 
-COUNTING = ("union", "all_pairs")
+
+class Counting(str, Enum):
+    """How touching capsules of two yarns count (see :mod:`knitlad.kernels.contact`).
+
+    UNION: a yarn is the union of its capsules, a contact at a node shared by two edges
+    counts once (exact friction; not conservative where a crossing sits at a node).
+    ALL_PAIRS: every touching edge pair counts (a sum of pair potentials, conservative).
+    """
+
+    UNION = "union"
+    ALL_PAIRS = "all_pairs"
+
+
+COUNTING = tuple(c.value for c in Counting)
 
 
 @dataclass(frozen=True)
@@ -59,7 +73,7 @@ class ContactModel:
     exclusion_diameters: float = 2.5
     contacts_per_node: int = 2
     capacity_per_edge: int = 4
-    counting: str = "union"
+    counting: Counting = Counting.UNION
 
     def __post_init__(self) -> None:
         if not (self.stiffness > 0 and math.isfinite(self.stiffness)):
@@ -73,6 +87,7 @@ class ContactModel:
             raise ValueError("tangential_stiffness_ratio must be > 0")
         if self.counting not in COUNTING:
             raise ValueError(f"counting must be one of {', '.join(COUNTING)}, got {self.counting!r}")
+        object.__setattr__(self, "counting", Counting(self.counting))
         if self.skin is not None and not self.skin > 0:
             raise ValueError(f"skin must be > 0 m, got {self.skin!r}")
 
@@ -82,6 +97,12 @@ class ContactModel:
         if not 0 < overlap_fraction < 1:
             raise ValueError("overlap_fraction must lie in (0, 1)")
         return ContactModel(stiffness=force_N / (overlap_fraction * diameter_m), **kwargs)
+
+    @staticmethod
+    def for_knit(material, contact_force_f0: float = 20.0, overlap_fraction: float = 0.05, **kwargs) -> "ContactModel":
+        """The knit scenes' contact: a contact carrying ``contact_force_f0`` f0 overlaps by ``overlap_fraction`` d."""
+        return ContactModel.for_force(contact_force_f0 * material.f0, material.diameter,
+                                      overlap_fraction=overlap_fraction, **kwargs)
 
 
 class Contacts(NamedTuple):
@@ -94,8 +115,9 @@ class Contacts(NamedTuple):
     status: np.ndarray  # (2,) slots STALE (the list must be rebuilt), PAIRS_NEEDED (at the last overflow)
     x_ref: np.ndarray  # (n, 3) positions at the last rebuild
     edge_radius: np.ndarray
-    edge_prev: np.ndarray  # previous edge along the yarn, -1 at an open end (all -1: all_pairs counting)
-    edge_next: np.ndarray  # next edge along the yarn, -1 at an open end (all -1: all_pairs counting)
+    edge_prev: np.ndarray  # previous edge along the yarn, -1 at an open end
+    edge_next: np.ndarray  # next edge along the yarn, -1 at an open end
+    union: bool  # Counting.UNION (else ALL_PAIRS)
     edge_yarn: np.ndarray  # physical yarn (see contact_topology)
     edge_local: np.ndarray  # arc index along the physical yarn
     yarn_edges: np.ndarray
@@ -108,19 +130,19 @@ class Contacts(NamedTuple):
     pair_results: np.ndarray  # (cap, PAIR_RESULTS) scratch of contact_forces
 
 
-def edge_topology(state: RodState) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def edge_topology(m: RodModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Yarn of each edge, its index within the yarn, edges per yarn, closed flags."""
-    edge_yarn = state.node_yarn[state.edge_a]
-    n_yarns = state.n_yarns
+    edge_yarn = m.node_yarn[m.edge_a]
+    n_yarns = m.n_yarns
     yarn_edges = np.bincount(edge_yarn, minlength=n_yarns).astype(np.int64)
     first = np.concatenate([[0], np.cumsum(yarn_edges)[:-1]])
     edge_local = np.arange(edge_yarn.shape[0]) - first[edge_yarn]
-    yarn_nodes = np.diff(state.yarn_start)
+    yarn_nodes = np.diff(m.yarn_start)
     yarn_closed = yarn_edges == yarn_nodes
     return edge_yarn.astype(np.int64), edge_local.astype(np.int64), yarn_edges, yarn_closed
 
 
-def contact_topology(state: RodState):
+def contact_topology(m: RodModel):
     """What the contact kernels need to know about the yarns, periodic images included.
 
     Returns (edge_yarn, edge_arc, yarn_edges, yarn_wraps, edge_prev, edge_next, edge_image):
@@ -137,25 +159,25 @@ def contact_topology(state: RodState):
       where that image is not in the scene.
     * ``edge_image``: the edge belongs to a periodic image.
     """
-    edge_yarn, edge_local, yarn_edges, yarn_closed = edge_topology(state)
-    n_yarns = state.n_yarns
+    edge_yarn, edge_local, yarn_edges, yarn_closed = edge_topology(m)
+    n_yarns = m.n_yarns
     first_edge = np.concatenate([[0], np.cumsum(yarn_edges)[:-1]]).astype(np.int64)
     last_edge = first_edge + yarn_edges - 1
     period = np.zeros((n_yarns, 3))
-    period[yarn_closed] = state.edge_shift[last_edge[yarn_closed]]
+    period[yarn_closed] = m.edge_shift[last_edge[yarn_closed]]
     periodised = yarn_closed & np.any(period != 0, axis=1)
     master = np.arange(n_yarns)
     shift = np.zeros((n_yarns, 3))
     is_image = np.zeros(n_yarns, dtype=bool)
-    if state.image_node.size:
-        first_node = state.yarn_start[:-1]
-        where = {int(n): g for g, n in enumerate(state.image_node)}
+    if m.image_node.size:
+        first_node = m.yarn_start[:-1]
+        where = {int(n): g for g, n in enumerate(m.image_node)}
         for y in range(n_yarns):
             g = where.get(int(first_node[y]))
             if g is not None:
                 is_image[y] = True
-                master[y] = state.node_yarn[state.image_master[g]]
-                shift[y] = state.image_shift[g]
+                master[y] = m.node_yarn[m.image_master[g]]
+                shift[y] = m.image_shift[g]
     key = {}  # (master, lattice shift) -> yarn
     for y in range(n_yarns):
         key[(int(master[y]), tuple(np.round(shift[y], 9)))] = y
@@ -188,21 +210,22 @@ def contact_topology(state: RodState):
     return out_yarn, edge_arc, yarn_edges, wraps, prev, nxt, is_image[edge_yarn]
 
 
-def make_contacts(state: RodState, model: ContactModel | None, capacity: int | None = None,
+def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None = None,
                   previous: Contacts | None = None) -> Contacts:
-    """Contact buffers for ``state``; empty (capacity 0) when ``model`` is None.
+    """Contact buffers for ``rods``; empty (capacity 0) when ``model`` is None.
 
     With ``previous`` (a buffer that overflowed), its valid pairs, slips and
     parameters are copied so the friction history and a changed mu survive the
     growth; the new buffer is rebuilt at the next step.
     """
-    ne = state.edge_a.shape[0]
-    edge_yarn, edge_local, yarn_edges, yarn_closed, edge_prev, edge_next, edge_image = contact_topology(state)
-    edge_radius = 0.5 * (state.radius[state.edge_a] + state.radius[state.edge_b])
+    m = rods.model
+    ne = m.edge_a.shape[0]
+    edge_yarn, edge_local, yarn_edges, yarn_closed, edge_prev, edge_next, edge_image = contact_topology(m)
+    edge_radius = 0.5 * (m.radius[m.edge_a] + m.radius[m.edge_b])
     if model is None:
         cap = 0
         params = ContactParams(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-        exclusion = np.zeros(state.n_yarns, dtype=np.int64)
+        exclusion = np.zeros(m.n_yarns, dtype=np.int64)
     else:
         cap = capacity if capacity is not None else max(16, model.capacity_per_edge * ne)
         d_min = 2.0 * float(edge_radius.min())
@@ -217,24 +240,21 @@ def make_contacts(state: RodState, model: ContactModel | None, capacity: int | N
         )
         # exclusion: edges within `exclusion_diameters` d of arc, and always the adjacent edge
         # (per state yarn: an image is a copy of its master, whose id it carries as its physical yarn)
-        own_yarn = state.node_yarn[state.edge_a]
-        seg = np.bincount(own_yarn, weights=state.rest_length, minlength=state.n_yarns) / np.maximum(yarn_edges, 1)
-        d_yarn = 2.0 * np.bincount(own_yarn, weights=edge_radius, minlength=state.n_yarns) / np.maximum(yarn_edges, 1)
+        own_yarn = m.node_yarn[m.edge_a]
+        seg = np.bincount(own_yarn, weights=m.rest_length, minlength=m.n_yarns) / np.maximum(yarn_edges, 1)
+        d_yarn = 2.0 * np.bincount(own_yarn, weights=edge_radius, minlength=m.n_yarns) / np.maximum(yarn_edges, 1)
         exclusion = np.maximum(1, np.ceil(model.exclusion_diameters * d_yarn / seg)).astype(np.int64)
-        if model.counting == "all_pairs":
-            # no neighbouring edge can own a contact, so owns_contact keeps every touching pair
-            edge_prev = np.full_like(edge_prev, -1)
-            edge_next = np.full_like(edge_next, -1)
     contacts = Contacts(
         pairs=np.zeros((cap, 2), dtype=np.int64),
         keys=np.zeros(cap, dtype=np.int64),
         slip=np.zeros((cap, 3)),
         n_pairs=np.zeros(1, dtype=np.int64),
         status=np.array([1, 0], dtype=np.int64),
-        x_ref=state.x.copy(),
+        x_ref=rods.state.x.copy(),
         edge_radius=edge_radius,
         edge_prev=edge_prev,
         edge_next=edge_next,
+        union=model is None or model.counting == Counting.UNION,
         edge_yarn=edge_yarn,
         edge_local=edge_local,
         yarn_edges=yarn_edges,
@@ -273,7 +293,7 @@ class ContactStats(NamedTuple):
                             float(st[NORMAL_FORCE_SUM] * units.FORCE), int(st[SLIDING_PAIRS]), int(contacts.n_pairs[0]))
 
 
-def contact_time_step(state: RodState, model: ContactModel | None, spin: bool = False) -> float:
+def contact_time_step(m: RodModel, model: ContactModel | None, spin: bool = False) -> float:
     """Critical time step [ms] of the contact springs: 2/omega with omega^2 = 2 z (k_n + k_t) / m_min.
 
     ``spin``: the yarns carry twist, so the tangential spring also turns each edge about
@@ -286,14 +306,14 @@ def contact_time_step(state: RodState, model: ContactModel | None, spin: bool = 
     k_t = k_n * model.tangential_stiffness_ratio
     # counting every pair, a contact at a node shared by two edges of each yarn is four pairs,
     # each with its full lever weight on that node: four times the stiffness union counting puts there
-    z = model.contacts_per_node * (4 if model.counting == "all_pairs" else 1)
-    free = ~state.held
-    omega2 = 2.0 * z * (k_n + k_t) / float(state.mass[free].min()) if np.any(free) else 0.0
+    z = model.contacts_per_node * (4 if model.counting == Counting.ALL_PAIRS else 1)
+    free = ~m.held
+    omega2 = 2.0 * z * (k_n + k_t) / float(m.mass[free].min()) if np.any(free) else 0.0
     if spin:
-        turning = ~state.theta_held
+        turning = ~m.theta_held
         if np.any(turning):
-            r = 0.5 * (state.radius[state.edge_a] + state.radius[state.edge_b])
-            omega2 += 2.0 * z * k_t * float(np.max(r[turning] ** 2 / state.twist_inertia[turning]))
+            r = 0.5 * (m.radius[m.edge_a] + m.radius[m.edge_b])
+            omega2 += 2.0 * z * k_t * float(np.max(r[turning] ** 2 / m.twist_inertia[turning]))
     if omega2 == 0.0:
         return math.inf
     zeta = max(model.damping_ratio, model.tangential_damping_ratio)

@@ -25,9 +25,8 @@ def cantilever_demo(n_nodes: int = 41, length_m: float = 0.02) -> list[dict]:
 
     # release from the loaded shape and time the oscillation
     t = time.perf_counter()
-    sim.state.f_ext[:] = 0.0
     period = 2 * math.pi / c.first_frequency()
-    sim = Simulation(sim.state, drag_per_s=0.0)
+    sim = Simulation(sim.rods.replace_model(f_ext=0.0 * sim.model.f_ext), drag_per_s=0.0)
     tips: list[tuple[float, float]] = []
     sim.run(4.5 * period, observe=lambda s: tips.append((s.time_s, s.state.x[-1, 1])), observe_every_s=period / 100)
     ups = [

@@ -109,10 +109,9 @@ class LoopRun:
         geometry = Jersey(n_x=1, n_y=1, l_x=settings.lx_over_l0 * l0, l_y=settings.ly_over_l0 * l0,
                           nodes_per_stitch=settings.nodes_per_stitch, material=m, edge="tail")
         self.scene: LoopScene = build_single_loop(geometry, settings.fx * m.f0)
-        contact = ContactModel.for_force(settings.contact_force_f0 * m.f0, m.diameter,
-                                         overlap_fraction=settings.overlap_fraction, friction=0.0)
-        self.sim = Simulation(self.scene.state, contact=contact, safety=settings.dt_safety)
-        self.result = LoopResult(settings, nodes=self.scene.state.x.shape[0])
+        contact = ContactModel.for_knit(m, settings.contact_force_f0, settings.overlap_fraction, friction=0.0)
+        self.sim = Simulation(self.scene.rods, contact=contact, safety=settings.dt_safety)
+        self.result = LoopResult(settings, nodes=self.scene.rods.model.n_nodes)
 
     def relax(self) -> None:
         """FIRE to the hooked equilibrium under the end forces (mu = 0)."""
@@ -125,8 +124,8 @@ class LoopRun:
 
     def remove_lower_row(self) -> None:
         """Take the lower row far away (it is held, so it simply moves there)."""
-        s, sc = self.sim.state, self.scene
-        nodes = slice(int(s.yarn_start[sc.lower]), int(s.yarn_start[sc.lower + 1]))
+        s, sc, start = self.sim.state, self.scene, self.sim.model.yarn_start
+        nodes = slice(int(start[sc.lower]), int(start[sc.lower + 1]))
         s.x[nodes, 1] -= 10.0 * (s.x[:, 1].max() - s.x[:, 1].min())
         s.v[nodes] = 0.0
 
@@ -139,9 +138,9 @@ class LoopRun:
         if res.contacts_before == 0:
             raise RuntimeError("the loop does not touch the upper row after relaxation: nothing to release")
         self.remove_lower_row()
-        s = self.sim.state
-        loop = slice(int(s.yarn_start[sc.loop]), int(s.yarn_start[sc.loop + 1]))
-        upper = slice(int(s.yarn_start[sc.upper]), int(s.yarn_start[sc.upper + 1]))
+        s, start = self.sim.state, self.sim.model.yarn_start
+        loop = slice(int(start[sc.loop]), int(start[sc.loop + 1]))
+        upper = slice(int(start[sc.upper]), int(start[sc.upper + 1]))
         t_start = self.sim.time_s
         n_obs = max(1, int(round(self.s.observe_every_s / self.sim.dt_s)))
         every_topology = max(1, int(round(self.s.topology_every_s / self.s.observe_every_s)))

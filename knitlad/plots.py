@@ -6,10 +6,11 @@ Every figure is written atomically (temporary file, then rename).
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
+
+from knitlad.io.atomic import atomic_path
 
 
 def _pyplot():
@@ -22,10 +23,9 @@ def _pyplot():
 
 
 def _save(fig, path: Path) -> Path:
-    tmp = path.with_name(path.name + ".tmp.png")
-    fig.savefig(tmp)
+    with atomic_path(path, suffix=path.suffix) as tmp:
+        fig.savefig(tmp)
     _pyplot().close(fig)
-    os.replace(tmp, path)
     return path
 
 
@@ -57,18 +57,18 @@ def _title(fx_ini: float, v: float) -> str:
 def spatio_temporal_diagram(result, path: str | Path) -> Path:
     """The diagram of a :class:`knitlad.protocol.LadderResult`."""
     return draw_spatio_temporal(result.times_s, result.front_up, result.front_down, result.column_history,
-                                result.settings.n_y // 2, _title(result.fx_ini, result.v_lad_over_cb), path)
+                                result.settings.stretch.n_y // 2, _title(result.fx_ini, result.v_lad_over_cb), path)
 
 
 def spatio_temporal_from_file(h5_path: str | Path, path: str | Path) -> Path:
     """The diagram of a run stored by :func:`knitlad.io.hdf5.write_ladder_result`."""
-    import json
-
     import h5py
 
+    from knitlad.io.hdf5 import read_attrs, run_settings
+
+    settings = run_settings(read_attrs(h5_path))
     with h5py.File(h5_path, "r") as f:
         s = f["series"]
-        settings = json.loads(f.attrs["settings_json"])
         hist = s["laddering_column_cells"][()] if "laddering_column_cells" in s else []
         return draw_spatio_temporal(s["time"][()], s["front_up"][()], s["front_down"][()], hist,
                                     settings["n_y"] // 2, _title(float(f.attrs["fx_ini"]), float(f.attrs["v_lad_over_cb"])),

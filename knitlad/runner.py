@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Callable
 
 from knitlad import __version__
+from knitlad.io.atomic import atomic_path
 from knitlad.io.hdf5 import read_attrs, write_ladder_result, write_record
 from knitlad.io.summary import SCENE_SUMMARY_KEYS, write_summary
 from knitlad.sweep import Job
@@ -78,16 +79,15 @@ def run_job(job: Job, jobs_dir: str, threads: int | None = 1) -> dict:
 
 def _run_ladder(job: Job):
     """The laddering experiment; returns its summary and a writer of its HDF5 file."""
-    from knitlad.protocol import LadderRun
+    from knitlad.protocol import run_ladder
 
-    run = LadderRun(job.scene_config().settings())
-    result = run.run()
+    result = run_ladder(job.scene_config().settings())
     if not job.output.frames:
         result.frames, result.frame_times_s = [], []
     compression = None if job.output.compression == "none" else job.output.compression
 
     def write(path: Path, record: dict) -> None:
-        write_ladder_result(path, result, run.sim.state.yarn_start, compression=compression, attrs=record)
+        write_ladder_result(path, result, compression=compression, attrs=record)
 
     return result.summary(), write
 
@@ -221,11 +221,11 @@ def compile_kernels() -> None:
     Run once in the parent before a pool starts, so that on a fresh clone the
     workers load the cache instead of each compiling the same kernels.
     """
-    from knitlad.protocol import LadderRun, LadderSettings
+    from knitlad.config import CutConfig
+    from knitlad.protocol import run_ladder
 
-    s = LadderSettings(n_x=4, n_y=6, lx_over_l0=0.30, fx_target=None, nodes_per_stitch=12,
-                       steps_per_increment=5, max_time_s=5e-6, observe_every_s=5e-6, arrest_s=5e-6)
-    LadderRun(s).run()
+    run_ladder(CutConfig(n_x=4, n_y=6, lx=0.30, resolution=12, steps_per_increment=5, max_time_ms=5e-3,
+                         observe_every_us=5.0, arrest_ms=5e-3).settings())
 
 
 Runner = Callable[[Job, str, int], dict]
@@ -255,9 +255,8 @@ def run_sweep(
     for stale in jobs_dir.glob("*.tmp"):  # left by a job killed while writing
         stale.unlink()
     if config_text is not None:
-        tmp = out / "sweep.yaml.tmp"
-        tmp.write_text(config_text)
-        os.replace(tmp, out / "sweep.yaml")
+        with atomic_path(out / "sweep.yaml") as tmp:
+            tmp.write_text(config_text)
     outcome = SweepOutcome()
     todo = []
     for job in jobs:

@@ -1,4 +1,4 @@
-"""The public driver: run a :class:`~knitlad.state.RodState` in time or to equilibrium.
+"""The public driver: run :class:`~knitlad.state.Rods` (a model and its state) in time or to equilibrium.
 
 Units at the edges: methods whose names end in ``_si`` or take ``*_s`` / ``*_N``
 arguments speak SI; the state itself is in internal units (:mod:`knitlad.units`).
@@ -26,7 +26,7 @@ from knitlad.kernels.integrate import (
     potential_energy,
     verlet_steps,
 )
-from knitlad.state import RodState, Workspace
+from knitlad.state import Rods, Workspace
 from knitlad.timestep import DEFAULT_SAFETY, TimeStepLimits, critical_time_steps
 
 
@@ -59,7 +59,8 @@ class Simulation:
 
     Parameters
     ----------
-    state: the scene (from :meth:`knitlad.state.Scene.build`); modified in place.
+    rods: the scene (from :meth:`knitlad.state.Scene.build`): its model, and the state that
+        this simulation advances in place (``sim.state``; pass ``rods.copy()`` to keep it).
     dt_s: time step [s]; default ``safety`` x the stability limit. A larger one
         than the limit is refused with :class:`UnstableTimeStep`.
     safety: fraction of the stability limit used when ``dt_s`` is not given.
@@ -70,7 +71,7 @@ class Simulation:
 
     def __init__(
         self,
-        state: RodState,
+        rods: Rods,
         dt_s: float | None = None,
         safety: float = DEFAULT_SAFETY,
         drag_per_s: float = 0.0,
@@ -79,13 +80,15 @@ class Simulation:
     ) -> None:
         if not 0.0 < safety <= 1.0:
             raise ValueError(f"safety must lie in (0, 1], got {safety}")
-        self.state = state
-        self.work = Workspace.for_state(state)
+        self.rods = rods
+        self.model = rods.model
+        self.state = rods.state
+        self.twist = rods.twist
+        self.work = Workspace.for_model(self.model)
         self.contact_model = contact
-        self.contacts: Contacts = make_contacts(state, contact)
-        self.twist = bool(np.any(state.GJ_over_l) or np.any(state.kappa_bar))
-        contact_limit = contact_time_step(state, contact, spin=self.twist)
-        self.limits: TimeStepLimits = critical_time_steps(state, self.twist, contact_limit)
+        self.contacts: Contacts = make_contacts(rods, contact)
+        contact_limit = contact_time_step(self.model, contact, spin=self.twist)
+        self.limits: TimeStepLimits = critical_time_steps(self.model, self.twist, contact_limit)
         if dt_s is None:
             self.dt = safety * self.limits.combined
         else:
@@ -112,11 +115,12 @@ class Simulation:
         """Double the pair buffer (past what the last build needed), keeping the history."""
         c = self.contacts
         cap = max(2 * c.pairs.shape[0], int(1.5 * c.status[PAIRS_NEEDED]))
-        self.contacts = make_contacts(self.state, self.contact_model, capacity=cap, previous=c)
+        self.contacts = make_contacts(self.rods, self.contact_model, capacity=cap, previous=c)
 
     def compute_forces(self) -> None:
         """Forces and torques of the current state into ``self.work`` (growing the contact buffer if needed)."""
-        while not compute_forces(self.state, self.work, self.contacts, self.twist, self.drag, self.dt):
+        while not compute_forces(self.model, self.state, self.work, self.contacts, self.twist, self.has_contact,
+                                 self.drag, self.dt):
             self._grow_contacts()
 
     def set_friction(self, mu: float) -> None:
@@ -132,6 +136,22 @@ class Simulation:
         if not (per_s >= 0 and math.isfinite(per_s)):
             raise ValueError(f"drag must be >= 0 per second, got {per_s!r}")
         self.drag = per_s * units.TIME
+
+    @property
+    def has_contact(self) -> bool:
+        """Yarn-yarn contact is on (a contact model was given)."""
+        return self.contact_model is not None
+
+    def replace_model(self, **arrays) -> None:
+        """Replace model arrays of the same shapes (e.g. a periodic cell's shifts) from the next step on."""
+        self.rods = self.rods.replace_model(**arrays)
+        self.model = self.rods.model
+
+    def set_external_forces(self, forces_N) -> None:
+        """Replace the constant external forces [N], (n, 3), from the next step on (a new model)."""
+        f = np.asarray(forces_N, dtype=float) / units.FORCE
+        self.replace_model(f_ext=np.broadcast_to(f, self.model.f_ext.shape))
+        self.compute_forces()
 
     @property
     def friction(self) -> float:
@@ -150,11 +170,11 @@ class Simulation:
 
     def fresh_contacts(self) -> Contacts:
         """The contact buffers with a candidate list valid at the current positions."""
-        s = self.state
-        follow_images(s.x, s.v, s.image_node, s.image_master, s.image_shift)
+        m, s = self.model, self.state
+        follow_images(s.x, s.v, m.image_node, m.image_master, m.image_shift)
         if self.contact_model is None:
             return self.contacts  # empty buffers: nothing to refresh
-        while not refresh_contacts(s.x, s.edge_a, s.edge_b, s.edge_shift, self.contacts):
+        while not refresh_contacts(s.x, m.edge_a, m.edge_b, m.edge_shift, self.contacts):
             self._grow_contacts()
         return self.contacts
 
@@ -162,13 +182,13 @@ class Simulation:
         """Pairs of edges of yarns ``yarn_a`` and ``yarn_b`` touching at the current positions."""
         if self.contact_model is None:
             return 0
-        s, c = self.state, self.fresh_contacts()
-        return int(touching_pairs_between(s.x, s.edge_a, s.edge_b, s.edge_shift, c, yarn_a, yarn_b))
+        m, c = self.model, self.fresh_contacts()
+        return int(touching_pairs_between(self.state.x, m.edge_a, m.edge_b, m.edge_shift, c, yarn_a, yarn_b))
 
     def _axial_wave_speed(self) -> float:
-        s = self.state
-        rho = s.mass.sum() / max(s.rest_length.sum(), 1e-300)
-        c = np.sqrt(s.EA / rho) if s.EA.size else np.array([1.0])
+        m = self.model
+        rho = m.mass.sum() / max(m.rest_length.sum(), 1e-300)
+        c = np.sqrt(m.EA / rho) if m.EA.size else np.array([1.0])
         return float(np.max(c))
 
     # ------------------------------------------------------------------ dynamics
@@ -185,11 +205,12 @@ class Simulation:
         left = int(n_steps)
         while left > 0:
             chunk = min(left, self.guard_every)
-            done = verlet_steps(self.state, self.work, self.contacts, self.dt, chunk, self.twist, self.drag)
+            done = verlet_steps(self.model, self.state, self.work, self.contacts, self.dt, chunk, self.twist,
+                                self.has_contact, self.drag)
             if done < chunk:
                 # the contact buffer overflowed inside step `done`: grow it and close that step
                 self.compute_forces()
-                half_kick(self.state, self.work, 0.5 * self.dt, self.twist)
+                half_kick(self.model, self.state, self.work, 0.5 * self.dt, self.twist)
                 done += 1
             self.steps += done
             self.time += done * self.dt
@@ -216,7 +237,7 @@ class Simulation:
     def _guard(self) -> None:
         node, kind = first_bad_node(self.state.x, self.state.v, self.max_speed)
         if node >= 0:
-            yarn, local = self.state.yarn_of(node)
+            yarn, local = self.model.yarn_of(node)
             what = "non-finite position or velocity" if kind == 1 else (
                 f"speed above the axial wave speed {self.max_speed * units.VELOCITY:.0f} m/s"
             )
@@ -235,7 +256,8 @@ class Simulation:
         ttol = (torque_tol_Nm if torque_tol_Nm is not None else force_tol_N * 1e-3) / (units.FORCE * units.LENGTH)
         while True:
             steps, fmax, tmax = fire_relax(
-                self.state, self.work, self.contacts, 0.5 * self.dt, self.dt, int(max_steps), ftol, ttol, self.twist
+                self.model, self.state, self.work, self.contacts, 0.5 * self.dt, self.dt, int(max_steps), ftol, ttol,
+                self.twist, self.has_contact,
             )
             if steps >= 0:
                 break
@@ -264,7 +286,7 @@ class Simulation:
         balances every other force on it: R = -F_rest.
         """
         r = -self.work.force * units.FORCE
-        r[~self.state.held] = 0.0
+        r[~self.model.held] = 0.0
         return r
 
     def energy_history(self, samples: int, every_s: float) -> tuple[np.ndarray, np.ndarray]:
@@ -282,8 +304,9 @@ class Simulation:
 
     def energies_J(self) -> dict[str, float]:
         """Kinetic, stretching, bending, twisting, contact (stored), external-potential and total energy [J]."""
-        es, eb, et, ec, ext = potential_energy(self.state, self.work, self.contacts, self.twist)
-        ek = kinetic_energy(self.state)
+        es, eb, et, ec, ext = potential_energy(self.model, self.state, self.work, self.contacts, self.twist,
+                                               self.has_contact)
+        ek = kinetic_energy(self.model, self.state)
         e = {"kinetic": ek, "stretching": es, "bending": eb, "twisting": et, "contact": ec, "external": ext}
         e["total"] = sum(e.values())
         return {k: float(v) * units.ENERGY for k, v in e.items()}

@@ -16,16 +16,23 @@ import numpy as np
 
 from knitlad import units
 from knitlad.kernels.elastic import edge_vectors, material_curvatures
-from knitlad.kernels.frames import material_frames, update_reference_twist
+from knitlad.kernels.frames import material_frames, parallel_transport, update_reference_twist
 from knitlad.units import Material
 
 
-class RodState(NamedTuple):
-    """Arrays of every yarn at once (internal units). Kernels receive this tuple."""
+# The axis each array runs along (said once per field, read by cut_edge and the HDF5 writer):
+NODE, EDGE, HINGE, YARN, RAIL, IMAGE = "node", "edge", "hinge", "yarn", "rail", "image"
+
+
+class RodModel(NamedTuple):
+    """What a scene builds: topology, parameters and constraints of every yarn (internal units).
+
+    A model does not change while a simulation runs; a change of the scene (a cut, twist
+    switched on, other dashpots) builds a new model (:func:`cut_edge`, :func:`with_twist`,
+    ``model._replace``). The axis of each array is in :data:`MODEL_AXES`.
+    """
 
     # nodes (n,)
-    x: np.ndarray  # (n, 3) positions
-    v: np.ndarray  # (n, 3) velocities
     mass: np.ndarray  # (n,) lumped masses
     radius: np.ndarray  # (n,) yarn radius at the node (contact)
     held: np.ndarray  # (n,) bool: position prescribed, x(t) = x + t * v_prescribed
@@ -45,12 +52,8 @@ class RodState(NamedTuple):
     rest_length: np.ndarray
     EA: np.ndarray
     stretch_damping: np.ndarray  # dashpot coefficient c (mN ms / mm)
-    theta: np.ndarray  # twist angle of the material frame
-    omega: np.ndarray  # d theta / dt
     twist_inertia: np.ndarray  # rho_L d^2/8 |e_bar|
     theta_held: np.ndarray  # bool: twist angle clamped
-    ref_u: np.ndarray  # (ne, 3) reference director
-    tangent: np.ndarray  # (ne, 3) unit tangent at the last frame update
     # hinges (nh,)
     hinge_e0: np.ndarray
     hinge_e1: np.ndarray
@@ -58,11 +61,10 @@ class RodState(NamedTuple):
     GJ_over_l: np.ndarray
     kappa_bar: np.ndarray  # (nh, 2) natural material curvature (integrated, dimensionless)
     twist_bar: np.ndarray  # natural twist (integrated)
-    ref_twist: np.ndarray
 
     @property
     def n_nodes(self) -> int:
-        return self.x.shape[0]
+        return self.mass.shape[0]
 
     @property
     def n_yarns(self) -> int:
@@ -73,8 +75,59 @@ class RodState(NamedTuple):
         y = int(self.node_yarn[node])
         return y, int(node - self.yarn_start[y])
 
+
+class RodState(NamedTuple):
+    """What changes in time (internal units): positions, velocities, twist angles and frames."""
+
+    x: np.ndarray  # (n, 3) positions
+    v: np.ndarray  # (n, 3) velocities
+    theta: np.ndarray  # (ne,) twist angle of the material frame
+    omega: np.ndarray  # (ne,) d theta / dt
+    ref_u: np.ndarray  # (ne, 3) reference director
+    tangent: np.ndarray  # (ne, 3) unit tangent at the last frame update
+    ref_twist: np.ndarray  # (nh,) reference twist, kept continuous in time
+
     def copy(self) -> "RodState":
         return RodState(*(np.array(a, copy=True) for a in self))
+
+
+MODEL_AXES = {
+    **dict.fromkeys(("mass", "radius", "held", "v_prescribed", "f_ext", "node_yarn"), NODE),
+    "yarn_start": YARN, "rail_node": RAIL, "rail_axis": RAIL,
+    **dict.fromkeys(("image_node", "image_master", "image_shift"), IMAGE),
+    **dict.fromkeys(("edge_a", "edge_b", "edge_shift", "rest_length", "EA", "stretch_damping", "twist_inertia",
+                     "theta_held"), EDGE),
+    **dict.fromkeys(("hinge_e0", "hinge_e1", "B_over_l", "GJ_over_l", "kappa_bar", "twist_bar"), HINGE),
+}
+STATE_AXES = {"x": NODE, "v": NODE, "theta": EDGE, "omega": EDGE, "ref_u": EDGE, "tangent": EDGE,
+              "ref_twist": HINGE}
+
+
+@dataclass(frozen=True)
+class Rods:
+    """A built scene: its model, its state and its mode.
+
+    ``twist``: the yarns carry material frames and twist (framed DER bending with natural
+    curvature, twisting, the friction couple); else isotropic bending of rods straight
+    at rest, with the twist angles unused. Said here, never inferred from the arrays.
+    """
+
+    model: RodModel
+    state: RodState
+    twist: bool = False
+
+    def copy(self) -> "Rods":
+        """A copy whose state can run on its own (the model is shared: it is never changed in place)."""
+        return Rods(self.model, self.state.copy(), self.twist)
+
+    def replace_model(self, **arrays) -> "Rods":
+        """The same state with some model arrays replaced (same shapes), e.g. other dashpots or loads."""
+        for name, value in arrays.items():
+            old = getattr(self.model, name)
+            if np.shape(value) != old.shape:
+                raise ValueError(f"{name}: shape {np.shape(value)} where the model has {old.shape}")
+        return Rods(self.model._replace(**{k: np.array(v, dtype=getattr(self.model, k).dtype) for k, v in arrays.items()}),
+                    self.state, self.twist)
 
 
 class Workspace(NamedTuple):
@@ -90,12 +143,12 @@ class Workspace(NamedTuple):
     yarn_hinges: np.ndarray  # (n_yarns + 1,) first hinge of each yarn
 
     @staticmethod
-    def for_state(state: RodState) -> "Workspace":
-        ne = state.edge_a.shape[0]
-        n = state.x.shape[0]
-        yarns = np.arange(state.n_yarns + 1)
-        edge_yarn = state.node_yarn[state.edge_a]
-        hinge_yarn = edge_yarn[state.hinge_e1]
+    def for_model(model: RodModel) -> "Workspace":
+        ne = model.edge_a.shape[0]
+        n = model.n_nodes
+        yarns = np.arange(model.n_yarns + 1)
+        edge_yarn = model.node_yarn[model.edge_a]
+        hinge_yarn = edge_yarn[model.hinge_e1]
         return Workspace(
             np.zeros((ne, 3)), np.zeros(ne), np.zeros((ne, 3)), np.zeros((ne, 3)), np.zeros((n, 3)), np.zeros(ne),
             np.searchsorted(edge_yarn, yarns).astype(np.int64), np.searchsorted(hinge_yarn, yarns).astype(np.int64),
@@ -117,7 +170,7 @@ class _Yarn:
 
 
 class Scene:
-    """Build a :class:`RodState` from yarn centrelines given in SI units.
+    """Build :class:`Rods` (a model and its initial state) from yarn centrelines given in SI units.
 
     Example::
 
@@ -125,7 +178,7 @@ class Scene:
         y = scene.add_yarn(points)            # (k, 3) array in metres
         scene.hold(y, [0, 1])                 # clamp the first two nodes
         scene.apply_force(y, -1, (0, -1e-3, 0))  # 1 mN downward at the tip
-        state = scene.build()
+        rods = scene.build()                  # rods.model, rods.state
     """
 
     def __init__(self, material: Material | None = None) -> None:
@@ -231,8 +284,8 @@ class Scene:
         y = self._yarn(yarn)
         y.forces[self._node_index(y, node)] = np.asarray(force, dtype=float)
 
-    def build(self, twist: bool | None = None, stretch_damping_ratio: float = 0.2) -> RodState:
-        """Assemble the state in internal units.
+    def build(self, twist: bool | None = None, stretch_damping_ratio: float = 0.2) -> Rods:
+        """Assemble the model and the initial state in internal units.
 
         ``twist``: carry material frames and twist (needed for natural curvature
         or twist loads); default: on only if some yarn has ``natural_curvature="rest"``.
@@ -248,93 +301,81 @@ class Scene:
             raise ValueError("natural_curvature='rest' needs build(twist=True): a curvature lives in the material frame")
         if stretch_damping_ratio < 0:
             raise ValueError("stretch_damping_ratio must be >= 0")
-
-        L = units.LENGTH
         counts = [y.points.shape[0] for y in self._yarns]
         yarn_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        n = int(yarn_start[-1])
-        x = np.vstack([y.points for y in self._yarns]) / L
-        node_yarn = np.repeat(np.arange(len(counts)), counts).astype(np.int64)
+        x = np.vstack([y.points for y in self._yarns]) / units.LENGTH
+        topology = self._topology(yarn_start)
+        parameters = self._parameters(x, topology, twist, stretch_damping_ratio)
+        model = RodModel(**topology, **parameters, **self._constraints(yarn_start, topology["edge_a"].shape[0]))
+        frames = _initial_frames(x, model, twist, [y.natural_curvature == "rest" for y in self._yarns])
+        kappa_bar, twist_bar, state = frames
+        return Rods(model._replace(kappa_bar=kappa_bar, twist_bar=twist_bar), state, bool(twist))
 
-        edge_a, edge_b, edge_shift, edge_yarn = [], [], [], []
-        hinge_e0, hinge_e1 = [], []
+    def _topology(self, yarn_start: np.ndarray) -> dict:
+        """Edges (joining consecutive nodes; a closed yarn's last edge back to its first node plus
+        its period) and bending hinges (consecutive edge pairs), yarn by yarn."""
+        counts = np.diff(yarn_start)
+        edge_a, edge_b, edge_shift, hinge_e0, hinge_e1 = [], [], [], [], []
         for iy, y in enumerate(self._yarns):
-            s = int(yarn_start[iy])
-            k = counts[iy]
+            s, k = int(yarn_start[iy]), int(counts[iy])
             first_edge = len(edge_a)
             ne = k if y.closed else k - 1
             for j in range(ne):
                 edge_a.append(s + j)
                 edge_b.append(s + (j + 1) % k)
-                edge_shift.append(y.period / L if (y.closed and j == k - 1) else np.zeros(3))
-                edge_yarn.append(iy)
+                edge_shift.append(y.period / units.LENGTH if (y.closed and j == k - 1) else np.zeros(3))
             for j in range(1 if not y.closed else 0, ne):
                 hinge_e0.append(first_edge + (j - 1) % ne)
                 hinge_e1.append(first_edge + j)
-        edge_a = np.array(edge_a, dtype=np.int64)
-        edge_b = np.array(edge_b, dtype=np.int64)
-        edge_shift = np.array(edge_shift, dtype=float).reshape(-1, 3)
-        edge_yarn = np.array(edge_yarn, dtype=np.int64)
-        hinge_e0 = np.array(hinge_e0, dtype=np.int64)
-        hinge_e1 = np.array(hinge_e1, dtype=np.int64)
-        ne = edge_a.shape[0]
-        nh = hinge_e0.shape[0]
+        return dict(
+            node_yarn=np.repeat(np.arange(len(counts)), counts).astype(np.int64), yarn_start=yarn_start,
+            edge_a=np.array(edge_a, dtype=np.int64), edge_b=np.array(edge_b, dtype=np.int64),
+            edge_shift=np.array(edge_shift, dtype=float).reshape(-1, 3),
+            hinge_e0=np.array(hinge_e0, dtype=np.int64), hinge_e1=np.array(hinge_e1, dtype=np.int64),
+        )
 
+    def _parameters(self, x: np.ndarray, top: dict, twist: bool, stretch_damping_ratio: float) -> dict:
+        """Masses, stiffnesses, dashpots and inertias from the materials and the rest shape ``x``."""
+        edge_a, edge_b, hinge_e0, hinge_e1 = top["edge_a"], top["edge_b"], top["hinge_e0"], top["hinge_e1"]
+        ne, nh, n = edge_a.shape[0], hinge_e0.shape[0], x.shape[0]
         e = np.zeros((ne, 3))
-        elen = np.zeros(ne)
-        edge_vectors(x, edge_a, edge_b, edge_shift, e, elen)
-        rest_length = elen.copy()
-
+        rest_length = np.zeros(ne)
+        edge_vectors(x, edge_a, edge_b, top["edge_shift"], e, rest_length)
+        edge_yarn = top["node_yarn"][edge_a]
         mats = [y.material for y in self._yarns]
         rho = np.array([m.line_density / units.LINE_DENSITY for m in mats])[edge_yarn]
         EA = np.array([m.stretching_stiffness / units.FORCE for m in mats])[edge_yarn]
-        d = np.array([m.diameter / L for m in mats])
+        d = np.array([m.diameter / units.LENGTH for m in mats])
         mass = np.zeros(n)
         np.add.at(mass, edge_a, 0.5 * rho * rest_length)
         np.add.at(mass, edge_b, 0.5 * rho * rest_length)
         # critical damping of the two-node axial mode: c = 2 zeta sqrt(k m_a m_b / (m_a + m_b))
         reduced = mass[edge_a] * mass[edge_b] / (mass[edge_a] + mass[edge_b])
-        stretch_damping = 2.0 * stretch_damping_ratio * np.sqrt(EA / rest_length * reduced)
-        twist_inertia = rho * d[edge_yarn] ** 2 / 8.0 * rest_length
-
         voronoi = 0.5 * (rest_length[hinge_e0] + rest_length[hinge_e1])
         hinge_yarn = edge_yarn[hinge_e1] if nh else np.zeros(0, dtype=np.int64)
         B = np.array([m.bending_stiffness / units.BENDING_STIFFNESS for m in mats])
         GJ = np.array([m.twisting_stiffness / units.BENDING_STIFFNESS for m in mats])
-        B_over_l = B[hinge_yarn] / voronoi
-        GJ_over_l = (GJ[hinge_yarn] / voronoi) if twist else np.zeros(nh)
+        return dict(
+            mass=mass, radius=0.5 * d[top["node_yarn"]], rest_length=rest_length, EA=EA,
+            stretch_damping=2.0 * stretch_damping_ratio * np.sqrt(EA / rest_length * reduced),
+            twist_inertia=rho * d[edge_yarn] ** 2 / 8.0 * rest_length,
+            B_over_l=B[hinge_yarn] / voronoi, GJ_over_l=(GJ[hinge_yarn] / voronoi) if twist else np.zeros(nh),
+            kappa_bar=np.zeros((nh, 2)), twist_bar=np.zeros(nh),
+        )
 
-        tangent = e / elen[:, None]
-        ref_u = _initial_reference_directors(tangent, edge_yarn)
-        ref_twist = np.zeros(nh)
-        if twist:
-            update_reference_twist(tangent, ref_u, hinge_e0, hinge_e1, ref_twist)
-
-        kappa_bar = np.zeros((nh, 2))
-        twist_bar = np.zeros(nh)
-        theta = np.zeros(ne)
-        if twist:
-            d1 = np.zeros((ne, 3))
-            d2 = np.zeros((ne, 3))
-            material_frames(tangent, ref_u, theta, d1, d2)
-            rest_curv = np.zeros((nh, 2))
-            material_curvatures(e, elen, d1, d2, hinge_e0, hinge_e1, rest_curv)
-            curved = np.array([y.natural_curvature == "rest" for y in self._yarns])[hinge_yarn]
-            kappa_bar[curved] = rest_curv[curved]
-            twist_bar[curved] = ref_twist[curved]
-
+    def _constraints(self, yarn_start: np.ndarray, ne: int) -> dict:
+        """Held nodes and their velocities, loads, rails, periodic images and clamped twist angles."""
+        n = int(yarn_start[-1])
         held = np.zeros(n, dtype=bool)
         v_prescribed = np.zeros((n, 3))
         f_ext = np.zeros((n, 3))
         theta_held = np.zeros(ne, dtype=bool)
-        rail_node, rail_axis = [], []
-        image_node, image_master, image_shift = [], [], []
+        rail_node, rail_axis, image_node, image_master, image_shift = [], [], [], [], []
         first_edge = 0
         for iy, y in enumerate(self._yarns):
-            s = int(yarn_start[iy])
+            s, k = int(yarn_start[iy]), y.points.shape[0]
             if y.image_of is not None:
                 m, shift = y.image_of
-                k = y.points.shape[0]
                 image_node.extend(range(s, s + k))
                 image_master.extend(range(int(yarn_start[m]), int(yarn_start[m]) + k))
                 image_shift.extend([shift / units.LENGTH] * k)
@@ -349,29 +390,49 @@ class Scene:
                 f_ext[s + j] = f / units.FORCE
             for j in y.twist_held:
                 theta_held[first_edge + j] = True
-            first_edge += counts[iy] if y.closed else counts[iy] - 1
-
-        radius = 0.5 * d[node_yarn]
-        return RodState(
-            x=x, v=np.zeros((n, 3)), mass=mass, radius=radius, held=held, v_prescribed=v_prescribed,
-            f_ext=f_ext, node_yarn=node_yarn, yarn_start=yarn_start,
+            first_edge += k if y.closed else k - 1
+        return dict(
+            held=held, v_prescribed=v_prescribed, f_ext=f_ext, theta_held=theta_held,
             rail_node=np.array(rail_node, dtype=np.int64), rail_axis=np.array(rail_axis, dtype=float).reshape(-1, 3),
             image_node=np.array(image_node, dtype=np.int64), image_master=np.array(image_master, dtype=np.int64),
             image_shift=np.array(image_shift, dtype=float).reshape(-1, 3),
-            edge_a=edge_a, edge_b=edge_b, edge_shift=edge_shift, rest_length=rest_length, EA=EA,
-            stretch_damping=stretch_damping, theta=theta, omega=np.zeros(ne), twist_inertia=twist_inertia,
-            theta_held=theta_held, ref_u=ref_u, tangent=tangent,
-            hinge_e0=hinge_e0, hinge_e1=hinge_e1, B_over_l=B_over_l, GJ_over_l=GJ_over_l,
-            kappa_bar=kappa_bar, twist_bar=twist_bar, ref_twist=ref_twist,
         )
+
+
+def _initial_frames(x: np.ndarray, model: RodModel, twist: bool, curved_yarns: list[bool]):
+    """(kappa_bar, twist_bar, state): Bishop reference frames along the yarns, and for yarns with
+    ``natural_curvature="rest"`` the rest curvatures and twists of the built shape."""
+    ne, nh = model.edge_a.shape[0], model.hinge_e0.shape[0]
+    e = np.zeros((ne, 3))
+    elen = np.zeros(ne)
+    edge_vectors(x, model.edge_a, model.edge_b, model.edge_shift, e, elen)
+    tangent = e / elen[:, None]
+    edge_yarn = model.node_yarn[model.edge_a]
+    ref_u = _initial_reference_directors(tangent, edge_yarn)
+    ref_twist = np.zeros(nh)
+    kappa_bar = np.zeros((nh, 2))
+    twist_bar = np.zeros(nh)
+    theta = np.zeros(ne)
+    if twist:
+        update_reference_twist(tangent, ref_u, model.hinge_e0, model.hinge_e1, ref_twist)
+        d1 = np.zeros((ne, 3))
+        d2 = np.zeros((ne, 3))
+        material_frames(tangent, ref_u, theta, d1, d2)
+        rest_curv = np.zeros((nh, 2))
+        material_curvatures(e, elen, d1, d2, model.hinge_e0, model.hinge_e1, rest_curv)
+        hinge_yarn = edge_yarn[model.hinge_e1] if nh else np.zeros(0, dtype=np.int64)
+        curved = np.array(curved_yarns)[hinge_yarn]
+        kappa_bar[curved] = rest_curv[curved]
+        twist_bar[curved] = ref_twist[curved]
+    state = RodState(x=x, v=np.zeros_like(x), theta=theta, omega=np.zeros(ne), ref_u=ref_u, tangent=tangent,
+                     ref_twist=ref_twist)
+    return kappa_bar, twist_bar, state
 
 
 def _initial_reference_directors(tangent: np.ndarray, edge_yarn: np.ndarray) -> np.ndarray:
     """Space-parallel reference frame along each yarn (Bishop frame), from a seed normal."""
     ne = tangent.shape[0]
     ref_u = np.zeros((ne, 3))
-    from knitlad.kernels.frames import parallel_transport
-
     for k in range(ne):
         t = tangent[k]
         if k > 0 and edge_yarn[k] == edge_yarn[k - 1]:
@@ -384,43 +445,40 @@ def _initial_reference_directors(tangent: np.ndarray, edge_yarn: np.ndarray) -> 
     return ref_u
 
 
-def cut_edge(state: RodState, edge: int) -> RodState:
-    """A new state with ``edge`` removed: its open yarn becomes two yarns at that point.
+def cut_edge(rods: Rods, edge: int) -> Rods:
+    """A new scene with ``edge`` removed: its open yarn becomes two yarns at that point.
 
     Node arrays are unchanged (same indices); the edge and the bending hinges that
-    used it disappear, so the two new ends are free.
+    used it disappear, so the two new ends are free. Every array is cut along the
+    axis :data:`MODEL_AXES` / :data:`STATE_AXES` gives it, so a new field cannot be missed.
     """
-    ne = state.edge_a.shape[0]
+    m = rods.model
+    ne = m.edge_a.shape[0]
     if not 0 <= edge < ne:
         raise IndexError(f"no edge {edge}")
-    a, b = int(state.edge_a[edge]), int(state.edge_b[edge])
-    y = int(state.node_yarn[a])
-    if b != a + 1 or np.any(state.edge_shift[edge] != 0):
+    a, b = int(m.edge_a[edge]), int(m.edge_b[edge])
+    if b != a + 1 or np.any(m.edge_shift[edge] != 0):
         raise ValueError("only an inner edge of an open yarn can be cut")
-    keep_e = np.ones(ne, dtype=bool)
-    keep_e[edge] = False
-    remap = np.cumsum(keep_e) - 1
-    keep_h = (state.hinge_e0 != edge) & (state.hinge_e1 != edge)
-    yarn_start = np.insert(state.yarn_start, y + 1, b)
-    node_yarn = np.repeat(np.arange(yarn_start.shape[0] - 1), np.diff(yarn_start)).astype(np.int64)
-    fields = state._asdict()
-    for name in ("edge_a", "edge_b", "edge_shift", "rest_length", "EA", "stretch_damping", "theta", "omega",
-                 "twist_inertia", "theta_held", "ref_u", "tangent"):
-        fields[name] = np.array(fields[name][keep_e], copy=True)
-    for name in ("B_over_l", "GJ_over_l", "kappa_bar", "twist_bar", "ref_twist"):
-        fields[name] = np.array(fields[name][keep_h], copy=True)
-    fields["hinge_e0"] = remap[state.hinge_e0[keep_h]].astype(np.int64)
-    fields["hinge_e1"] = remap[state.hinge_e1[keep_h]].astype(np.int64)
-    fields["yarn_start"] = yarn_start.astype(np.int64)
-    fields["node_yarn"] = node_yarn
-    for name in ("x", "v", "mass", "radius", "held", "v_prescribed", "f_ext", "rail_node", "rail_axis",
-                 "image_node", "image_master", "image_shift"):
-        fields[name] = np.array(fields[name], copy=True)
-    return RodState(**fields)
+    keep = {EDGE: np.ones(ne, dtype=bool), HINGE: (m.hinge_e0 != edge) & (m.hinge_e1 != edge)}
+    keep[EDGE][edge] = False
+
+    def cut(array: np.ndarray, axis: str) -> np.ndarray:
+        return np.array(array[keep[axis]] if axis in keep else array, copy=True)
+
+    model = {name: cut(getattr(m, name), MODEL_AXES[name]) for name in RodModel._fields}
+    remap = np.cumsum(keep[EDGE]) - 1  # old edge index -> new
+    model["hinge_e0"] = remap[model["hinge_e0"]].astype(np.int64)
+    model["hinge_e1"] = remap[model["hinge_e1"]].astype(np.int64)
+    y = int(m.node_yarn[a])
+    yarn_start = np.insert(m.yarn_start, y + 1, b).astype(np.int64)
+    model["yarn_start"] = yarn_start
+    model["node_yarn"] = np.repeat(np.arange(yarn_start.shape[0] - 1), np.diff(yarn_start)).astype(np.int64)
+    state = RodState(**{name: cut(getattr(rods.state, name), STATE_AXES[name]) for name in RodState._fields})
+    return Rods(RodModel(**model), state, rods.twist)
 
 
-def with_twist(state: RodState, twist_over_bending: float) -> RodState:
-    """A copy of a twist-free state (``build(twist=False)``) that carries twist from here on.
+def with_twist(rods: Rods, twist_over_bending: float) -> Rods:
+    """A copy of a twist-free scene (``build(twist=False)``) that carries twist from here on.
 
     For yarns straight at rest, twist decouples from the centreline while nothing
     loads it; a frictional contact does (its force acts on the yarn's surface), so
@@ -430,21 +488,20 @@ def with_twist(state: RodState, twist_over_bending: float) -> RodState:
     and every force is unchanged. ``twist_over_bending``: GJ / B of the yarns
     (1 / (1 + nu), :attr:`knitlad.units.Material.twisting_stiffness`).
     """
-    if np.any(state.GJ_over_l) or np.any(state.kappa_bar):
-        raise ValueError("the state already carries twist")
+    if rods.twist:
+        raise ValueError("the scene already carries twist")
     if not twist_over_bending > 0:
         raise ValueError(f"twist_over_bending must be > 0, got {twist_over_bending!r}")
-    fields = state.copy()._asdict()
-    ne = state.edge_a.shape[0]
+    m, s = rods.model, rods.state
+    ne = m.edge_a.shape[0]
     e = np.zeros((ne, 3))
     elen = np.zeros(ne)
-    edge_vectors(state.x, state.edge_a, state.edge_b, state.edge_shift, e, elen)
+    edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, e, elen)
     tangent = e / elen[:, None]
-    ref_u = _initial_reference_directors(tangent, state.node_yarn[state.edge_a])
-    ref_twist = np.zeros(state.hinge_e0.shape[0])
-    update_reference_twist(tangent, ref_u, state.hinge_e0, state.hinge_e1, ref_twist)
-    fields.update(
-        tangent=tangent, ref_u=ref_u, ref_twist=ref_twist, twist_bar=ref_twist.copy(),
-        theta=np.zeros(ne), omega=np.zeros(ne), GJ_over_l=state.B_over_l * twist_over_bending,
-    )
-    return RodState(**fields)
+    ref_u = _initial_reference_directors(tangent, m.node_yarn[m.edge_a])
+    ref_twist = np.zeros(m.hinge_e0.shape[0])
+    update_reference_twist(tangent, ref_u, m.hinge_e0, m.hinge_e1, ref_twist)
+    model = m._replace(GJ_over_l=m.B_over_l * twist_over_bending, twist_bar=ref_twist.copy())
+    state = s.copy()._replace(tangent=tangent, ref_u=ref_u, ref_twist=ref_twist, theta=np.zeros(ne),
+                              omega=np.zeros(ne))
+    return Rods(model, state, twist=True)

@@ -3,8 +3,8 @@
 The stitch (:mod:`knitlad.scenes.stitch`) is built at l_x = min(l_x, 0.30 l0),
 l_y = min(l_y, 0.25 l0) (wider or taller, Crane's loops of successive courses
 no longer overlap), then the cell is stretched affinely in steps of at most
-0.005 l0, each relaxed by FIRE at mu = 0, as the fabric is in
-:mod:`knitlad.protocol`.
+0.005 l0, each relaxed by FIRE at mu = 0, by the same stretch as the fabric
+(:mod:`knitlad.stretching`).
 
 The tensions are derivatives of the energy of one cell at equilibrium,
 
@@ -30,13 +30,13 @@ from knitlad import units
 from knitlad.contact import ContactModel
 from knitlad.kernels.contact import contact_energy
 from knitlad.kernels.elastic import bending_energy, edge_vectors, stretching_energy
-from knitlad.scenes.jersey import Jersey, widest_fitting_width
+from knitlad.scenes.jersey import BUILD_LX, Jersey, widest_fitting_width
 from knitlad.scenes.stitch import PeriodicStitch, build_periodic_stitch
 from knitlad.simulation import Simulation, numba_threads
+from knitlad.stretching import stretch_to
 from knitlad.units import NYLON, Material
 
-BUILD_LX = 0.30
-BUILD_LY = 0.25
+BUILD_LY = 0.25  # tallest l_y/l0 the stitch is built at
 
 
 @dataclass
@@ -76,9 +76,8 @@ class StitchRun:
         self.ly = min(settings.ly_over_l0, BUILD_LY)
         self.lx, geometry = self._build_geometry()
         self.cell: PeriodicStitch = build_periodic_stitch(geometry)
-        contact = ContactModel.for_force(settings.contact_force_f0 * m.f0, m.diameter,
-                                         overlap_fraction=settings.overlap_fraction, friction=0.0)
-        self.sim = Simulation(self.cell.state, contact=contact)
+        contact = ContactModel.for_knit(m, settings.contact_force_f0, settings.overlap_fraction, friction=0.0)
+        self.sim = Simulation(self.cell.rods, contact=contact)
         self.result = StitchResult(settings)
 
     def _build_geometry(self) -> tuple[float, Jersey]:
@@ -90,23 +89,30 @@ class StitchRun:
         return lx, Jersey(n_x=1, n_y=1, l_x=lx * m.stitch_length, l_y=self.ly * m.stitch_length,
                           nodes_per_stitch=s.nodes_per_stitch, material=m)
 
-    def _relax(self, steps: int, tol_f0: float) -> bool:
+    def _relax(self, steps: int, tol_f0: float) -> dict:
         info = self.sim.relax(force_tol_N=tol_f0 * self.s.material.f0, max_steps=steps)
         self.result.relax_steps += info["steps"]
-        return info["converged"]
+        return info
+
+    # the stitch as a box of knitlad.stretching: deformed affinely, relaxed, read for f_x
+    def deform(self, lx: float, ly: float) -> None:
+        l0 = self.s.material.stitch_length / units.LENGTH
+        self.lx, self.ly = lx, ly
+        self.cell.set_cell(self.sim, lx * l0, ly * l0)
+
+    def relax(self) -> dict:
+        """One round at the stretch's tolerance (1e-2 f0)."""
+        return self._relax(self.s.relax_steps, 1e-2)
+
+    def tension(self) -> float:
+        return self.tensions()[0]
 
     def stretch(self) -> None:
-        s, l0 = self.s, self.s.material.stitch_length / units.LENGTH
-        self._relax(s.relax_steps, 1e-2)
-        span = max(s.lx_over_l0 - self.lx, s.ly_over_l0 - self.ly)
-        n = max(0, int(math.ceil(span / s.stretch_increment - 1e-9)))
-        lx0, ly0 = self.lx, self.ly
-        for k in range(1, n + 1):
-            self.lx = lx0 + (s.lx_over_l0 - lx0) * k / n
-            self.ly = ly0 + (s.ly_over_l0 - ly0) * k / n
-            self.cell.set_cell(self.lx * l0, self.ly * l0)
-            self._relax(s.relax_steps, 1e-2)
-        self.result.converged = self._relax(20 * s.relax_steps, s.force_tol_f0)
+        """Relax as built, stretch affinely to the target (knitlad.stretching), relax to ``force_tol_f0``."""
+        s = self.s
+        self.relax()
+        stretch_to(self, s.lx_over_l0, s.ly_over_l0, s.stretch_increment, min_increments=0)
+        self.result.converged = self._relax(20 * s.relax_steps, s.force_tol_f0)["converged"]
 
     def tensions(self) -> tuple[float, float]:
         return cell_tensions(self.sim, self.cell, self.s.material.f0)
@@ -150,13 +156,13 @@ def zero_tension_lx(ly_over_l0: float, lo: float = 0.22, hi: float = 0.40, tol: 
 
 def cell_energy(sim: Simulation, cell: PeriodicStitch) -> float:
     """E_cell [internal: mN mm] at the current positions (see the module docstring)."""
-    s, c = sim.state, sim.fresh_contacts()
+    m, x, c = sim.model, sim.state.x, sim.fresh_contacts()
     w = sim.work
-    edge_vectors(s.x, s.edge_a, s.edge_b, s.edge_shift, w.e, w.elen)
+    edge_vectors(x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen)
     real = cell.real_edges
-    e = stretching_energy(w.elen[real], s.rest_length[real], s.EA[real])
+    e = stretching_energy(w.elen[real], m.rest_length[real], m.EA[real])
     h = cell.real_hinges
-    e += bending_energy(w.e, w.elen, s.hinge_e0[h], s.hinge_e1[h], s.B_over_l[h])
+    e += bending_energy(w.e, w.elen, m.hinge_e0[h], m.hinge_e1[h], m.B_over_l[h])
     if c.pairs.shape[0] == 0:
         return float(e)
     n = int(c.n_pairs[0])
@@ -164,14 +170,13 @@ def cell_energy(sim: Simulation, cell: PeriodicStitch) -> float:
     img = c.edge_image[pairs]
     for weight, mask in ((1.0, ~img[:, 0] & ~img[:, 1]), (0.5, img[:, 0] ^ img[:, 1])):
         p = np.ascontiguousarray(pairs[mask])
-        e += weight * contact_energy(s.x, s.edge_a, s.edge_b, s.edge_shift, c, p, np.ascontiguousarray(slip[mask]))
+        e += weight * contact_energy(x, m.edge_a, m.edge_b, m.edge_shift, c, p, np.ascontiguousarray(slip[mask]))
     return float(e)
 
 
 def cell_tensions(sim: Simulation, cell: PeriodicStitch, f0_N: float, rel_step: float = 1e-5) -> tuple[float, float]:
     """(f_x, f_y): central differences of E_cell under affine stretches of the cell, over f0."""
-    st = sim.state
-    saved = [a.copy() for a in (st.x, st.edge_shift, st.image_shift)]
+    x_saved, model_saved = sim.state.x.copy(), sim.model
     lx, ly = cell.lx, cell.ly
     f0 = f0_N / units.FORCE
     out = []
@@ -179,10 +184,10 @@ def cell_tensions(sim: Simulation, cell: PeriodicStitch, f0_N: float, rel_step: 
         energies = []
         for sign in (1, -1):
             h = sign * rel_step
-            cell.set_cell(lx * (1 + h) if axis == 0 else lx, ly * (1 + h) if axis == 1 else ly)
+            cell.set_cell(sim, lx * (1 + h) if axis == 0 else lx, ly * (1 + h) if axis == 1 else ly)
             energies.append(cell_energy(sim, cell))
-            for a, b in zip((st.x, st.edge_shift, st.image_shift), saved):
-                a[:] = b
+            sim.state.x[:] = x_saved
+            sim.replace_model(edge_shift=model_saved.edge_shift, image_shift=model_saved.image_shift)
             cell.lx, cell.ly = lx, ly
         length = lx if axis == 0 else ly
         out.append((energies[0] - energies[1]) / (2 * rel_step * length) / f0)

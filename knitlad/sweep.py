@@ -41,7 +41,7 @@ from pydantic import (
     model_validator,
 )
 
-from knitlad.config import CutConfig, LoopConfig, StitchConfig
+from knitlad.config import CutConfig, LoopConfig, StitchConfig, one_line
 
 SCENES: dict[str, type[BaseModel]] = {"ladder": CutConfig, "loop": LoopConfig, "stitch": StitchConfig}
 COMPRESSIONS = ("gzip", "lzf", "none")
@@ -96,7 +96,7 @@ class Sweep(BaseModel):
                 try:
                     values = Range.model_validate(values)
                 except ValidationError as e:
-                    raise ValueError(f"{name}: {_first_error(e).replace('config: ', '')}") from None
+                    raise ValueError(f"{name}: {one_line(e).replace('config: ', '')}") from None
             elif not isinstance(values, list):
                 raise ValueError(f"{name}: give a list of values or a range {{start, stop, num or step}}, got {values!r}")
             out[name] = values
@@ -153,22 +153,14 @@ class Job(BaseModel):
 
 def job_id(scene: str, params: dict, output: Output) -> str:
     """Hash of the resolved parameters, less those a scene added later left at their neutral value."""
-    neutral = getattr(SCENES[scene], "ADDED_LATER", {})
+    model = SCENES[scene]
+    neutral = {name: model.model_fields[name].default for name in getattr(model, "ADDED_LATER", ())}
     params = {k: v for k, v in params.items() if not (k in neutral and v == neutral[k])}
     blob = json.dumps({"scene": scene, "params": params, "output": output.model_dump()}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
 
 # --------------------------------------------------------------------- loading
-def _where(loc: tuple) -> str:
-    return ".".join(str(p) for p in loc if not (isinstance(p, str) and p in ("list[any]", "Range"))) or "config"
-
-
-def _first_error(error: ValidationError, prefix: tuple = ()) -> str:
-    e = error.errors()[0]
-    return f"{_where(prefix + tuple(e.get('loc', ())))}: {e.get('msg', str(error)).removeprefix('Value error, ')}"
-
-
 def load_sweep(path: str | Path) -> tuple[SweepConfig, list[Job]]:
     """Read, validate and expand a sweep file; every problem raises SweepError('key: reason')."""
     path = Path(path)
@@ -187,7 +179,7 @@ def load_sweep(path: str | Path) -> tuple[SweepConfig, list[Job]]:
     try:
         cfg = SweepConfig.model_validate(raw)
     except ValidationError as e:
-        raise SweepError(_first_error(e)) from None
+        raise SweepError(one_line(e)) from None
     return cfg, expand(cfg)
 
 
@@ -229,7 +221,7 @@ def expand(cfg: SweepConfig) -> list[Job]:
                 where = f"fixed.{field}"
             else:
                 where = "fixed"  # a rule across fields (e.g. neither fx nor lx given)
-            raise SweepError(f"{where}: {err.get('msg', str(e)).removeprefix('Value error, ')}") from None
+            raise SweepError(f"{where}: {one_line(e).partition(': ')[2]}") from None
         job = Job(scene=cfg.scene, params=resolved.model_dump(), output=cfg.output)
         if job.id in seen:
             raise SweepError("sweep.axes: two jobs are identical (a value repeats)")

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from knitlad.state import RodState
+from knitlad.state import RodModel
 
 DEFAULT_SAFETY = 0.7
 
@@ -35,48 +35,48 @@ class TimeStepLimits:
         return min(parts, key=parts.get)
 
 
-def stiffness_row_sums(state: RodState, twist: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def stiffness_row_sums(model: RodModel, twist: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Gershgorin row sums of the stretching and bending stiffness per node, and of twist per edge."""
-    n = state.x.shape[0]
-    k = state.EA / state.rest_length
+    n = model.n_nodes
+    k = model.EA / model.rest_length
     stretch = np.zeros(n)
-    np.add.at(stretch, state.edge_a, 2.0 * k)
-    np.add.at(stretch, state.edge_b, 2.0 * k)
+    np.add.at(stretch, model.edge_a, 2.0 * k)
+    np.add.at(stretch, model.edge_b, 2.0 * k)
     # bending: E ~ (B/2l_h) |x_p - 2 x_c + x_n|^2 / (l0 l1); row sums of the (1,-2,1) outer product
-    l0 = state.rest_length[state.hinge_e0]
-    l1 = state.rest_length[state.hinge_e1]
-    kb = 4.0 * state.B_over_l / (l0 * l1)
+    l0 = model.rest_length[model.hinge_e0]
+    l1 = model.rest_length[model.hinge_e1]
+    kb = 4.0 * model.B_over_l / (l0 * l1)
     bend = np.zeros(n)
-    np.add.at(bend, state.edge_a[state.hinge_e0], kb * 1.0)
-    np.add.at(bend, state.edge_b[state.hinge_e0], kb * 2.0)
-    np.add.at(bend, state.edge_b[state.hinge_e1], kb * 1.0)
-    twist_rows = np.zeros(state.theta.shape[0])
+    np.add.at(bend, model.edge_a[model.hinge_e0], kb * 1.0)
+    np.add.at(bend, model.edge_b[model.hinge_e0], kb * 2.0)
+    np.add.at(bend, model.edge_b[model.hinge_e1], kb * 1.0)
+    twist_rows = np.zeros(model.edge_a.shape[0])
     if twist:
-        np.add.at(twist_rows, state.hinge_e0, 2.0 * state.GJ_over_l)
-        np.add.at(twist_rows, state.hinge_e1, 2.0 * state.GJ_over_l)
+        np.add.at(twist_rows, model.hinge_e0, 2.0 * model.GJ_over_l)
+        np.add.at(twist_rows, model.hinge_e1, 2.0 * model.GJ_over_l)
     return stretch, bend, twist_rows
 
 
-def critical_time_steps(state: RodState, twist: bool, contact: float = math.inf) -> TimeStepLimits:
+def critical_time_steps(model: RodModel, twist: bool, contact: float = math.inf) -> TimeStepLimits:
     """Stability limits dt_crit = 2 / omega_max; ``contact`` is the contact springs' own limit."""
-    stretch, bend, twist_rows = stiffness_row_sums(state, twist)
-    free = ~state.held  # none free: the twist (and contact) limits may still apply
-    m = state.mass[free]
+    stretch, bend, twist_rows = stiffness_row_sums(model, twist)
+    free = ~model.held  # none free: the twist (and contact) limits may still apply
+    mass = model.mass[free]
 
     def limit(rows: np.ndarray, mass: np.ndarray) -> float:
         w2 = np.max(rows / mass) if rows.size else 0.0
         return 2.0 / math.sqrt(w2) if w2 > 0 else math.inf
 
     zeta = 0.0
-    if state.stretch_damping.size:
-        crit = 2.0 * np.sqrt(state.EA / state.rest_length * 0.5 * state.mass[state.edge_a])
-        zeta = float(np.max(state.stretch_damping / crit))
+    if model.stretch_damping.size:
+        crit = 2.0 * np.sqrt(model.EA / model.rest_length * 0.5 * model.mass[model.edge_a])
+        zeta = float(np.max(model.stretch_damping / crit))
     damping_factor = math.sqrt(1.0 + zeta * zeta) - zeta
-    dt_s = limit(stretch[free], m) * damping_factor
-    dt_b = limit(bend[free], m)
-    dt_all = limit(stretch[free] + bend[free], m) * damping_factor
-    free_edges = ~state.theta_held
-    dt_t = limit(twist_rows[free_edges], state.twist_inertia[free_edges]) if twist else math.inf
+    dt_s = limit(stretch[free], mass) * damping_factor
+    dt_b = limit(bend[free], mass)
+    dt_all = limit(stretch[free] + bend[free], mass) * damping_factor
+    free_edges = ~model.theta_held
+    dt_t = limit(twist_rows[free_edges], model.twist_inertia[free_edges]) if twist else math.inf
     # contact and rod stiffness add: 1/dt^2 add in quadrature (omega^2 adds)
     dt_combined = 1.0 / math.sqrt(1.0 / dt_all**2 + 1.0 / contact**2) if math.isfinite(contact) else dt_all
     return TimeStepLimits(dt_s, dt_b, dt_t, contact, min(dt_combined, dt_t))

@@ -1,8 +1,8 @@
-"""HDF5 output of a laddering run, written atomically (temporary file, then rename).
+"""HDF5 files of knitlad, each written atomically (:func:`knitlad.io.atomic.atomic_path`).
 
-Layout::
+A laddering run (``ladder.h5``, a sweep's ``jobs/<id>.h5``)::
 
-    /attrs              summary (f_x^ini, f_x^fin, n_lad/n_y, v_lad/c_b, ...), knitlad version,
+    /attrs              summary (f_x^ini, f_x^fin, n_lad/n_y, v_lad/c_b, mu, twist, ...), knitlad version,
                         the settings (JSON) and the scales (SI) of units.Scales.as_attributes
     /frames/positions   (n_frames, n_nodes, 3) float32 [m]
     /frames/time        (n_frames,) [s]
@@ -12,25 +12,33 @@ Layout::
     /series/laddering_column_cells  (n_obs, n_y) bool
     /final/laddered     (n_y, n_x) bool
     /topology/yarn_start
+
+A stretched knit (:class:`knitlad.protocol.StretchedKnit`, ``stretched.h5``): its scalars
+and settings as attributes, ``/model/*`` and ``/state/*`` (the arrays of
+:class:`knitlad.state.RodModel` and :class:`~knitlad.state.RodState`, internal units)
+and ``/knit/*`` (the course bookkeeping of :class:`knitlad.scenes.jersey.KnitScene`).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import enum
 import json
-import os
 from pathlib import Path
 
 import h5py
 import numpy as np
 
 from knitlad import __version__
+from knitlad.io.atomic import atomic_path
 from knitlad.units import Scales
 
 
 def _jsonable(obj):
     if dataclasses.is_dataclass(obj):
         return {f.name: _jsonable(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+    if isinstance(obj, enum.Enum):
+        return obj.value
     if isinstance(obj, (np.floating, np.integer)):
         return obj.item()
     return obj
@@ -41,21 +49,20 @@ def _set_attrs(f: h5py.File, attrs: dict) -> None:
         f.attrs[key] = json.dumps(value) if isinstance(value, (list, dict)) else ("" if value is None else value)
 
 
-def write_ladder_result(
-    path: str | Path, result, yarn_start: np.ndarray, compression: str | None = "gzip", attrs: dict | None = None
-) -> Path:
-    """Write one run to ``path`` atomically; ``attrs`` adds file attributes (a sweep's job record)."""
+def _write_run_attrs(f: h5py.File, settings, material) -> None:
+    f.attrs["knitlad_version"] = __version__
+    f.attrs["settings_json"] = json.dumps(_jsonable(settings), default=str)
+    for key, value in Scales(material).as_attributes().items():
+        f.attrs[f"scale_{key}"] = value
+
+
+def write_ladder_result(path: str | Path, result, compression: str | None = "gzip", attrs: dict | None = None) -> Path:
+    """Write one run (:class:`knitlad.protocol.LadderResult`); ``attrs`` adds file attributes (a sweep's job record)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    settings = result.settings
-    with h5py.File(tmp, "w") as f:
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
         _set_attrs(f, result.summary())
         _set_attrs(f, attrs or {})
-        f.attrs["knitlad_version"] = __version__
-        f.attrs["settings_json"] = json.dumps(_jsonable(settings), default=str)
-        for key, value in Scales(settings.material).as_attributes().items():
-            f.attrs[f"scale_{key}"] = value
+        _write_run_attrs(f, result.settings, result.settings.material)
         if result.frames:
             g = f.create_group("frames")
             g.create_dataset("positions", data=np.stack(result.frames), compression=compression)
@@ -69,20 +76,16 @@ def write_ladder_result(
             g.create_dataset("laddering_column_cells", data=np.array(result.column_history))
         if result.final_laddered is not None:
             f.create_dataset("final/laddered", data=result.final_laddered)
-        f.create_dataset("topology/yarn_start", data=yarn_start)
-    os.replace(tmp, path)
+        f.create_dataset("topology/yarn_start", data=result.yarn_start)
     return path
 
 
 def write_record(path: str | Path, attrs: dict) -> Path:
     """A file holding attributes only (a failed sweep job: its config, status and error), atomically."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    with h5py.File(tmp, "w") as f:
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
         _set_attrs(f, attrs)
         f.attrs["knitlad_version"] = __version__
-    os.replace(tmp, path)
     return path
 
 
@@ -102,3 +105,64 @@ def read_attrs(path: str | Path) -> dict:
                 value = value.item()
             out[key] = value
     return out
+
+
+def run_settings(attrs: dict) -> dict:
+    """The flat settings of a run file (stretch and dynamics together), also of files whose
+    settings were one flat mapping."""
+    settings = attrs.get("settings_json") or {}
+    if isinstance(settings, str):
+        settings = json.loads(settings)
+    if "stretch" in settings:
+        return {**settings["stretch"], **settings["dynamics"]}
+    return settings
+
+
+# ------------------------------------------------------------------ stretched knits
+_KNIT_SCALARS = ("box_lx", "box_ly", "fx_ini", "lx_over_l0", "ly_over_l0", "fx_within_tolerance", "relax_steps",
+                 "peak_overlap_over_d", "dt_s", "wall_s")
+
+
+def write_stretched_knit(path: str | Path, knit) -> Path:
+    """Write a :class:`knitlad.protocol.StretchedKnit` so that :func:`read_stretched_knit` gives it back exactly."""
+    path = Path(path)
+    k = knit.knit
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
+        _write_run_attrs(f, knit.settings, knit.settings.material)
+        f.attrs["geometry_json"] = json.dumps(_jsonable(k.geometry))
+        f.attrs["H"] = k.H
+        for name in _KNIT_SCALARS:
+            f.attrs[name] = getattr(knit, name)
+        for group, arrays in (("model", k.rods.model), ("state", k.rods.state)):
+            g = f.create_group(group)
+            for name, value in arrays._asdict().items():
+                g.create_dataset(name, data=value)
+        g = f.create_group("knit")
+        for name in ("courses", "bars", "node_t", "left_end", "right_end"):
+            g.create_dataset(name, data=np.asarray(getattr(k, name)))
+    return path
+
+
+def read_stretched_knit(path: str | Path):
+    """The :class:`knitlad.protocol.StretchedKnit` of a file of :func:`write_stretched_knit`."""
+    from knitlad.protocol import StretchedKnit, StretchSettings
+    from knitlad.scenes.jersey import Jersey, KnitScene
+    from knitlad.state import RodModel, Rods, RodState
+    from knitlad.units import Material
+
+    with h5py.File(path, "r") as f:
+        settings = json.loads(f.attrs["settings_json"])
+        material = Material(**settings.pop("material"))
+        geometry = json.loads(f.attrs["geometry_json"])
+        geometry["material"] = material
+        model = RodModel(**{name: f["model"][name][()] for name in RodModel._fields})
+        state = RodState(**{name: f["state"][name][()] for name in RodState._fields})
+        g = f["knit"]
+        knit = KnitScene(geometry=Jersey(**geometry), rods=Rods(model, state, twist=False), H=float(f.attrs["H"]),
+                         courses=[int(c) for c in g["courses"][()]], bars=[int(b) for b in g["bars"][()]],
+                         node_t=g["node_t"][()], left_end=g["left_end"][()], right_end=g["right_end"][()])
+        scalars = {name: f.attrs[name].item() if isinstance(f.attrs[name], np.generic) else f.attrs[name]
+                   for name in _KNIT_SCALARS}
+    scalars["fx_within_tolerance"] = bool(scalars["fx_within_tolerance"])
+    scalars["relax_steps"] = int(scalars["relax_steps"])
+    return StretchedKnit(settings=StretchSettings(material=material, **settings), knit=knit, **scalars)

@@ -8,10 +8,11 @@ n_lad/n_y, v_lad/c_b, measured l_x/l0 and l_y/l0, wall times, ...).
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pandas as pd
+
+from knitlad.io.atomic import atomic_path
 
 SUMMARY_KEYS = (
     "fx_ini", "fx_fin", "n_lad", "n_lad_over_ny", "v_lad_over_cb", "lx_over_l0", "ly_over_l0",
@@ -34,16 +35,14 @@ def write_summary(out_dir: str | Path, rows: list[dict]) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     df = summary_frame(rows)
     path = out / "summary.csv"
-    tmp = out / "summary.csv.tmp"
-    df.to_csv(tmp, index=False)
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        df.to_csv(tmp, index=False)
     try:
         import pyarrow  # noqa: F401
     except ImportError:
         return path
-    tmp = out / "summary.parquet.tmp"
-    df.to_parquet(tmp, index=False)
-    os.replace(tmp, out / "summary.parquet")
+    with atomic_path(out / "summary.parquet") as tmp:
+        df.to_parquet(tmp, index=False)
     return path
 
 

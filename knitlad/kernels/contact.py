@@ -20,9 +20,9 @@ Every edge is a capsule (a cylinder of its yarn's radius with spherical caps).
   edges of a yarn is counted once (:func:`owns_contact`): without this, a yarn
   sliding over a chain of capsules feels a bump at every node (two pairs share
   the load there), and the normal dashpot turns the bumps into a drag. The rule
-  is not conservative (a count that jumps where two distance minima merge); with
-  ``edge_prev = edge_next = -1`` no edge has a neighbour to defer to and every
-  touching pair counts: a sum of pair potentials, which is (``counting="all_pairs"``).
+  is not conservative (a count that jumps where two distance minima merge). With
+  ``Contacts.union`` False every touching pair counts: a sum of pair potentials,
+  which is (``counting="all_pairs"``).
 * Forces go to the two nodes of each segment by the lever rule ((1 - s), s),
   which keeps the force and its moment about the contact point.
 """
@@ -143,11 +143,12 @@ def owns_contact(x, edge_a, edge_b, edge_shift, i, j, s, t, edge_prev, edge_next
 
 
 @njit(**INLINE_OPTS)
-def counted_overlap(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, i, j):
-    """(overlap, s, t) of the pair (i, j); overlap <= 0 when apart or owned by a neighbouring edge."""
+def counted_overlap(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, i, j):
+    """(overlap, s, t) of the pair (i, j); overlap <= 0 when apart or, with ``union`` counting,
+    owned by a neighbouring edge (else every touching pair counts: ``all_pairs``)."""
     dist, s, t = segment_distance(x, edge_a, edge_b, edge_shift, i, j)
     overlap = edge_radius[i] + edge_radius[j] - dist
-    if overlap > 0.0 and not owns_contact(x, edge_a, edge_b, edge_shift, i, j, s, t, edge_prev, edge_next):
+    if union and overlap > 0.0 and not owns_contact(x, edge_a, edge_b, edge_shift, i, j, s, t, edge_prev, edge_next):
         overlap = 0.0
     return overlap, s, t
 
@@ -342,8 +343,8 @@ MIN_PAIRS_PER_THREAD = 1000
 
 @njit(**NUMBA_OPTS)
 def pair_contact_forces(
-    lo, hi, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs, slip,
-    k_n, damping_n, k_t, damping_t, mu, dt, out,
+    lo, hi, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs,
+    slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
 ):
     """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``.
 
@@ -364,7 +365,7 @@ def pair_contact_forces(
     for p in range(lo, hi):
         i = pairs[p, 0]
         j = pairs[p, 1]
-        overlap, s, t = counted_overlap(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, i, j)
+        overlap, s, t = counted_overlap(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, i, j)
         if overlap <= 0.0:
             slip[p, 0] = 0.0
             slip[p, 1] = 0.0
@@ -472,13 +473,14 @@ def pair_contact_forces(
 
 @njit(**PARALLEL_OPTS)
 def _pair_contact_forces_in_blocks(
-    n_blocks, n_pairs, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, pairs,
-    slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
+    n_blocks, n_pairs, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union,
+    pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
 ):
     for blk in prange(n_blocks):
         pair_contact_forces(
             blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, omega, spin, mass, edge_a, edge_b,
-            edge_shift, edge_radius, edge_prev, edge_next, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
+            edge_shift, edge_radius, edge_prev, edge_next, union, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt,
+            out,
         )
 
 
@@ -501,12 +503,12 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
     if n_blocks > 1:
         _pair_contact_forces_in_blocks(
             n_blocks, n_pairs, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev,
-            c.edge_next, c.pairs, c.slip, p.k_n, p.damping_n, p.k_t, p.damping_t, p.mu, dt, c.pair_results,
+            c.edge_next, c.union, c.pairs, c.slip, p.k_n, p.damping_n, p.k_t, p.damping_t, p.mu, dt, c.pair_results,
         )
     else:
         pair_contact_forces(
             0, n_pairs, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next,
-            c.pairs, c.slip, p.k_n, p.damping_n, p.k_t, p.damping_t, p.mu, dt, c.pair_results,
+            c.union, c.pairs, c.slip, p.k_n, p.damping_n, p.k_t, p.damping_t, p.mu, dt, c.pair_results,
         )
     pairs, pair_results, stats = c.pairs, c.pair_results, c.stats
     n_touch = 0
@@ -567,7 +569,7 @@ def contact_energy(x, edge_a, edge_b, edge_shift, c, pairs, slip):
     for p in range(n_pairs):
         i = pairs[p, 0]
         j = pairs[p, 1]
-        overlap, _, _ = counted_overlap(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, i, j)
+        overlap, _, _ = counted_overlap(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, c.union, i, j)
         if overlap > 0.0:
             total += 0.5 * k_n * overlap * overlap
             total += 0.5 * k_t * (slip[p, 0] ** 2 + slip[p, 1] ** 2 + slip[p, 2] ** 2)
@@ -629,7 +631,8 @@ def touching_pairs_between(x, edge_a, edge_b, edge_shift, c, yarn_a, yarn_b):
         yb = c.edge_yarn[j]
         if not ((ya == yarn_a and yb == yarn_b) or (ya == yarn_b and yb == yarn_a)):
             continue
-        overlap, _, _ = counted_overlap(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, i, j)
+        overlap, _, _ = counted_overlap(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, c.union,
+                                        i, j)
         if overlap > 0.0:
             n += 1
     return n

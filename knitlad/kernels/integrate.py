@@ -1,8 +1,12 @@
 """Time stepping: force assembly, velocity Verlet, FIRE relaxation, blow-up guard.
 
 All loops over steps run inside Numba so a small scene pays no Python cost per
-step. ``s`` is a :class:`knitlad.state.RodState`, ``w`` a
-:class:`knitlad.state.Workspace`.
+step. ``m`` is a :class:`knitlad.state.RodModel` (read only), ``s`` a
+:class:`knitlad.state.RodState` (advanced in place), ``w`` a
+:class:`knitlad.state.Workspace`, ``c`` the contact buffers
+(:class:`knitlad.contact.Contacts`). The modes are arguments, never read off the
+arrays: ``twist`` (framed DER with twist, else isotropic bending of rods straight at
+rest) and ``contact`` (yarn-yarn contact on).
 """
 
 import math
@@ -29,7 +33,7 @@ from knitlad.kernels.frames import (
 
 
 @njit(**PARALLEL_OPTS)
-def elastic_forces_by_yarn(s, w):
+def elastic_forces_by_yarn(m, s, w):
     """Stretching and isotropic bending, yarn by yarn in parallel.
 
     A yarn's edges and hinges only touch its own nodes, so threads never write
@@ -37,50 +41,48 @@ def elastic_forces_by_yarn(s, w):
     """
     for y in prange(w.yarn_edges.shape[0] - 1):
         e0, e1 = w.yarn_edges[y], w.yarn_edges[y + 1]
-        edge_vectors(s.x, s.edge_a, s.edge_b, s.edge_shift, w.e, w.elen, e0, e1)
-        stretching_forces(w.e, w.elen, s.v, s.edge_a, s.edge_b, s.rest_length, s.EA, s.stretch_damping, w.force, e0, e1)
-        bending_forces(w.e, w.elen, s.edge_a, s.edge_b, s.hinge_e0, s.hinge_e1, s.B_over_l, w.force,
+        edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen, e0, e1)
+        stretching_forces(w.e, w.elen, s.v, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force, e0, e1)
+        bending_forces(w.e, w.elen, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1, m.B_over_l, w.force,
                        w.yarn_hinges[y], w.yarn_hinges[y + 1])
 
 
 @njit(**NUMBA_OPTS)
-def compute_forces(s, w, c, twist, drag, dt):
+def compute_forces(m, s, w, c, twist, contact, drag, dt):
     """Total force on every node (``w.force``) and torque on every edge (``w.torque``).
 
-    ``c``: contact buffers (:class:`knitlad.contact.Contacts`; a scene without contact
-    has buffers of capacity 0). ``twist``: framed DER bending + twisting, else isotropic bending of a
-    rod straight at rest. ``drag`` [1/ms]: a global viscous drag -drag m v, used
+    ``twist``, ``contact``: the modes (module docstring). ``drag`` [1/ms]: a global viscous drag -drag m v, used
     only while relaxing. ``dt``: the step over which contact slip accumulates.
     Returns False if the contact buffer overflowed (forces incomplete).
     """
-    follow_images(s.x, s.v, s.image_node, s.image_master, s.image_shift)
+    follow_images(s.x, s.v, m.image_node, m.image_master, m.image_shift)
     for i in range(s.x.shape[0]):
         for k in range(3):
-            w.force[i, k] = s.f_ext[i, k]
+            w.force[i, k] = m.f_ext[i, k]
     if drag != 0.0:
         for i in range(s.x.shape[0]):
-            if s.held[i]:
+            if m.held[i]:
                 continue  # drag on a held node would leak into its reaction force
             for k in range(3):
-                w.force[i, k] -= drag * s.mass[i] * s.v[i, k]
+                w.force[i, k] -= drag * m.mass[i] * s.v[i, k]
     w.torque[:] = 0.0
     if twist:
-        edge_vectors(s.x, s.edge_a, s.edge_b, s.edge_shift, w.e, w.elen)
-        stretching_forces(w.e, w.elen, s.v, s.edge_a, s.edge_b, s.rest_length, s.EA, s.stretch_damping, w.force)
+        edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen)
+        stretching_forces(w.e, w.elen, s.v, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force)
         transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u)
-        update_reference_twist(s.tangent, s.ref_u, s.hinge_e0, s.hinge_e1, s.ref_twist)
+        update_reference_twist(s.tangent, s.ref_u, m.hinge_e0, m.hinge_e1, s.ref_twist)
         material_frames(s.tangent, s.ref_u, s.theta, w.d1, w.d2)
         framed_bending_twisting_forces(
-            w.e, w.elen, w.d1, w.d2, s.edge_a, s.edge_b, s.hinge_e0, s.hinge_e1,
-            s.B_over_l, s.GJ_over_l, s.kappa_bar, s.ref_twist, s.twist_bar, s.theta, w.force, w.torque,
+            w.e, w.elen, w.d1, w.d2, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1,
+            m.B_over_l, m.GJ_over_l, m.kappa_bar, s.ref_twist, m.twist_bar, s.theta, w.force, w.torque,
         )
     else:
-        elastic_forces_by_yarn(s, w)
-    if c.pairs.shape[0] > 0:
-        if not refresh_contacts(s.x, s.edge_a, s.edge_b, s.edge_shift, c):
+        elastic_forces_by_yarn(m, s, w)
+    if contact:
+        if not refresh_contacts(s.x, m.edge_a, m.edge_b, m.edge_shift, c):
             return False
-        contact_forces(s.x, s.v, s.omega, twist, s.mass, s.edge_a, s.edge_b, s.edge_shift, c, dt, w.force, w.torque)
-    rail_forces(s.rail_node, s.rail_axis, w.force)
+        contact_forces(s.x, s.v, s.omega, twist, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt, w.force, w.torque)
+    rail_forces(m.rail_node, m.rail_axis, w.force)
     return True
 
 
@@ -107,74 +109,74 @@ def rail_forces(rail_node, rail_axis, force):
 
 
 @njit(**NUMBA_OPTS)
-def potential_energy(s, w, c, twist):
+def potential_energy(m, s, w, c, twist, contact):
     """(stretching, bending, twisting, contact, external) energies [uJ] at the current state."""
-    follow_images(s.x, s.v, s.image_node, s.image_master, s.image_shift)
-    edge_vectors(s.x, s.edge_a, s.edge_b, s.edge_shift, w.e, w.elen)
-    es = stretching_energy(w.elen, s.rest_length, s.EA)
+    follow_images(s.x, s.v, m.image_node, m.image_master, m.image_shift)
+    edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen)
+    es = stretching_energy(w.elen, m.rest_length, m.EA)
     if twist:
         transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u)
-        update_reference_twist(s.tangent, s.ref_u, s.hinge_e0, s.hinge_e1, s.ref_twist)
+        update_reference_twist(s.tangent, s.ref_u, m.hinge_e0, m.hinge_e1, s.ref_twist)
         material_frames(s.tangent, s.ref_u, s.theta, w.d1, w.d2)
         eb, et = framed_bending_twisting_energy(
-            w.e, w.elen, w.d1, w.d2, s.hinge_e0, s.hinge_e1,
-            s.B_over_l, s.GJ_over_l, s.kappa_bar, s.ref_twist, s.twist_bar, s.theta,
+            w.e, w.elen, w.d1, w.d2, m.hinge_e0, m.hinge_e1,
+            m.B_over_l, m.GJ_over_l, m.kappa_bar, s.ref_twist, m.twist_bar, s.theta,
         )
     else:
-        eb = bending_energy(w.e, w.elen, s.hinge_e0, s.hinge_e1, s.B_over_l)
+        eb = bending_energy(w.e, w.elen, m.hinge_e0, m.hinge_e1, m.B_over_l)
         et = 0.0
     ec = 0.0
-    if c.pairs.shape[0] > 0:
+    if contact:
         n = c.n_pairs[0]
-        ec = contact_energy(s.x, s.edge_a, s.edge_b, s.edge_shift, c, c.pairs[:n], c.slip[:n])
+        ec = contact_energy(s.x, m.edge_a, m.edge_b, m.edge_shift, c, c.pairs[:n], c.slip[:n])
     ext = 0.0
     for i in range(s.x.shape[0]):
-        ext -= s.f_ext[i, 0] * s.x[i, 0] + s.f_ext[i, 1] * s.x[i, 1] + s.f_ext[i, 2] * s.x[i, 2]
+        ext -= m.f_ext[i, 0] * s.x[i, 0] + m.f_ext[i, 1] * s.x[i, 1] + m.f_ext[i, 2] * s.x[i, 2]
     return es, eb, et, ec, ext
 
 
 @njit(**NUMBA_OPTS)
-def kinetic_energy(s):
+def kinetic_energy(m, s):
     """(1/2) sum m v^2 + (1/2) sum I omega^2 [uJ]."""
     k = 0.0
     for i in range(s.x.shape[0]):
-        k += 0.5 * s.mass[i] * (s.v[i, 0] ** 2 + s.v[i, 1] ** 2 + s.v[i, 2] ** 2)
+        k += 0.5 * m.mass[i] * (s.v[i, 0] ** 2 + s.v[i, 1] ** 2 + s.v[i, 2] ** 2)
     for j in range(s.theta.shape[0]):
-        k += 0.5 * s.twist_inertia[j] * s.omega[j] ** 2
+        k += 0.5 * m.twist_inertia[j] * s.omega[j] ** 2
     return k
 
 
 @njit(**NUMBA_OPTS)
-def half_kick(s, w, half_dt, twist):
+def half_kick(m, s, w, half_dt, twist):
     for i in range(s.x.shape[0]):
-        if not s.held[i]:
-            inv_m = half_dt / s.mass[i]
+        if not m.held[i]:
+            inv_m = half_dt / m.mass[i]
             s.v[i, 0] += w.force[i, 0] * inv_m
             s.v[i, 1] += w.force[i, 1] * inv_m
             s.v[i, 2] += w.force[i, 2] * inv_m
     if twist:
         for j in range(s.theta.shape[0]):
-            if not s.theta_held[j]:
-                s.omega[j] += half_dt * w.torque[j] / s.twist_inertia[j]
+            if not m.theta_held[j]:
+                s.omega[j] += half_dt * w.torque[j] / m.twist_inertia[j]
 
 
 @njit(**NUMBA_OPTS)
-def _drift(s, dt, twist):
+def _drift(m, s, dt, twist):
     for i in range(s.x.shape[0]):
-        if s.held[i]:
+        if m.held[i]:
             for c in range(3):
-                s.v[i, c] = s.v_prescribed[i, c]
+                s.v[i, c] = m.v_prescribed[i, c]
         for c in range(3):
             s.x[i, c] += dt * s.v[i, c]
     if twist:
         for j in range(s.theta.shape[0]):
-            if s.theta_held[j]:
+            if m.theta_held[j]:
                 s.omega[j] = 0.0
             s.theta[j] += dt * s.omega[j]
 
 
 @njit(**NUMBA_OPTS)
-def verlet_steps(s, w, c, dt, n_steps, twist, drag):
+def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, drag):
     """Advance ``n_steps`` of velocity Verlet (kick-drift-kick); return the steps completed.
 
     Expects ``w.force``/``w.torque`` to hold the forces of the current state
@@ -185,34 +187,34 @@ def verlet_steps(s, w, c, dt, n_steps, twist, drag):
     :func:`compute_forces` and ``half_kick(dt/2)`` to finish it.
     """
     # the closing half-kick of one step and the opening one of the next are fused
-    half_kick(s, w, 0.5 * dt, twist)
+    half_kick(m, s, w, 0.5 * dt, twist)
     for step in range(n_steps):
-        _drift(s, dt, twist)
-        if not compute_forces(s, w, c, twist, drag, dt):
+        _drift(m, s, dt, twist)
+        if not compute_forces(m, s, w, c, twist, contact, drag, dt):
             return step
-        half_kick(s, w, dt if step < n_steps - 1 else 0.5 * dt, twist)
+        half_kick(m, s, w, dt if step < n_steps - 1 else 0.5 * dt, twist)
     return n_steps
 
 
 @njit(**NUMBA_OPTS)
-def max_free_force(s, w, twist):
+def max_free_force(m, w, twist):
     """(max |F| over free nodes [mN], max |torque| over free edges [mN mm])."""
     fmax = 0.0
-    for i in range(s.x.shape[0]):
-        if not s.held[i]:
+    for i in range(w.force.shape[0]):
+        if not m.held[i]:
             f = math.sqrt(w.force[i, 0] ** 2 + w.force[i, 1] ** 2 + w.force[i, 2] ** 2)
             if f > fmax:
                 fmax = f
     tmax = 0.0
     if twist:
-        for j in range(s.theta.shape[0]):
-            if not s.theta_held[j] and abs(w.torque[j]) > tmax:
+        for j in range(w.torque.shape[0]):
+            if not m.theta_held[j] and abs(w.torque[j]) > tmax:
                 tmax = abs(w.torque[j])
     return fmax, tmax
 
 
 @njit(**NUMBA_OPTS)
-def fire_relax(s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, twist):
+def fire_relax(m, s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, twist, contact):
     """FIRE energy minimisation (Bitzek et al. 2006, with the FIRE 2.0 back-step of
     Guenole et al. 2020) over free node positions and free twist angles.
 
@@ -233,19 +235,19 @@ def fire_relax(s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, twis
         for k in range(3):
             s.v[i, k] = 0.0
     s.omega[:] = 0.0
-    if not compute_forces(s, w, c, twist, 0.0, dt):
+    if not compute_forces(m, s, w, c, twist, contact, 0.0, dt):
         return -1, 0.0, 0.0
-    fmax, tmax = max_free_force(s, w, twist)
+    fmax, tmax = max_free_force(m, w, twist)
     step = 0
     while step < max_steps and (fmax > force_tol or tmax > torque_tol):
         step += 1
         power = 0.0
         for i in range(s.x.shape[0]):
-            if not s.held[i]:
+            if not m.held[i]:
                 power += w.force[i, 0] * s.v[i, 0] + w.force[i, 1] * s.v[i, 1] + w.force[i, 2] * s.v[i, 2]
         if twist:
             for j in range(s.theta.shape[0]):
-                if not s.theta_held[j]:
+                if not m.theta_held[j]:
                     power += w.torque[j] * s.omega[j]
         if power > 0.0:
             n_pos += 1
@@ -257,7 +259,7 @@ def fire_relax(s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, twis
             dt = max(dt * f_dec, dt_min)
             alpha = alpha0
             for i in range(s.x.shape[0]):
-                if not s.held[i]:
+                if not m.held[i]:
                     for k in range(3):
                         s.x[i, k] -= 0.5 * dt * s.v[i, k]
                         s.v[i, k] = 0.0
@@ -269,14 +271,14 @@ def fire_relax(s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, twis
         vv = 0.0
         ff = 0.0
         for i in range(s.x.shape[0]):
-            if not s.held[i]:
+            if not m.held[i]:
                 for k in range(3):
-                    s.v[i, k] += dt * w.force[i, k] / s.mass[i]
+                    s.v[i, k] += dt * w.force[i, k] / m.mass[i]
                     vv += s.v[i, k] ** 2
                     ff += w.force[i, k] ** 2
         scale = alpha * math.sqrt(vv / ff) if ff > 0.0 else 0.0
         for i in range(s.x.shape[0]):
-            if not s.held[i]:
+            if not m.held[i]:
                 for k in range(3):
                     s.v[i, k] = (1.0 - alpha) * s.v[i, k] + scale * w.force[i, k]
                     s.x[i, k] += dt * s.v[i, k]
@@ -284,18 +286,18 @@ def fire_relax(s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, twis
             oo = 0.0
             tt = 0.0
             for j in range(s.theta.shape[0]):
-                if not s.theta_held[j]:
-                    s.omega[j] += dt * w.torque[j] / s.twist_inertia[j]
+                if not m.theta_held[j]:
+                    s.omega[j] += dt * w.torque[j] / m.twist_inertia[j]
                     oo += s.omega[j] ** 2
                     tt += w.torque[j] ** 2
             tscale = alpha * math.sqrt(oo / tt) if tt > 0.0 else 0.0
             for j in range(s.theta.shape[0]):
-                if not s.theta_held[j]:
+                if not m.theta_held[j]:
                     s.omega[j] = (1.0 - alpha) * s.omega[j] + tscale * w.torque[j]
                     s.theta[j] += dt * s.omega[j]
-        if not compute_forces(s, w, c, twist, 0.0, dt):
+        if not compute_forces(m, s, w, c, twist, contact, 0.0, dt):
             return -1, 0.0, 0.0
-        fmax, tmax = max_free_force(s, w, twist)
+        fmax, tmax = max_free_force(m, w, twist)
     for i in range(s.x.shape[0]):
         for k in range(3):
             s.v[i, k] = 0.0

@@ -1,1 +1,1 @@
-"""Scenes build a :class:`knitlad.state.RodState` for one kind of experiment."""
+"""Scenes build :class:`knitlad.state.Rods` (a model and its state) for one kind of experiment."""

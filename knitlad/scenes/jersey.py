@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from knitlad.state import RodState, Scene
+from knitlad.state import Rods, Scene
 from knitlad.units import NYLON, Material
 
 
@@ -45,6 +45,9 @@ class CourseTooWide(ValueError):
 
 CRANE_A = 1.5
 EDGES = ("clamped", "tail")  # how the course ends are held: see the module docstring
+# widest l_x/l0 at which the knit and the periodised stitch are built: wider, Crane's loops
+# of successive courses barely overlap; they are stretched from there
+BUILD_LX = 0.30
 
 
 @dataclass(frozen=True)
@@ -158,7 +161,7 @@ class KnitScene:
     """The built knit: its state plus the bookkeeping the protocol and observers need."""
 
     geometry: Jersey
-    state: RodState
+    rods: Rods
     H: float
     courses: list[int]  # yarn index of each free course, bottom to top
     bars: list[int]  # yarn indices of the held edge courses
@@ -169,7 +172,7 @@ class KnitScene:
     def course_nodes(self, k: int) -> slice:
         """Node slice of free course k (0 = bottom)."""
         y = self.courses[k]
-        return slice(int(self.state.yarn_start[y]), int(self.state.yarn_start[y + 1]))
+        return slice(int(self.rods.model.yarn_start[y]), int(self.rods.model.yarn_start[y + 1]))
 
 
 def discrete_loop_half_height(geometry: Jersey) -> float:
@@ -215,8 +218,8 @@ def build_jersey(geometry: Jersey, stretch_damping_ratio: float = 0.2) -> KnitSc
             left.append(offset + np.arange(held))
             right.append(offset + last - np.arange(held))
         offset += pts.shape[0]
-    state = scene.build(twist=False, stretch_damping_ratio=stretch_damping_ratio)
+    rods = scene.build(twist=False, stretch_damping_ratio=stretch_damping_ratio)
     return KnitScene(
-        geometry=geometry, state=state, H=H, courses=courses, bars=bars, node_t=np.concatenate(ts),
+        geometry=geometry, rods=rods, H=H, courses=courses, bars=bars, node_t=np.concatenate(ts),
         left_end=np.array(left), right_end=np.array(right),
     )

@@ -38,13 +38,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from knitlad.scenes.jersey import Jersey, discrete_loop_half_height
-from knitlad.state import RodState, Scene
+from knitlad.state import Rods, Scene
 
 
 @dataclass
 class LoopScene:
     geometry: Jersey
-    state: RodState
+    rods: Rods
     lower: int  # yarn index of the held lower row (removed to start the ladder)
     loop: int  # the free row whose release is timed
     upper: int  # the held row above it
@@ -69,5 +69,5 @@ def build_single_loop(geometry: Jersey, tension_N: float) -> LoopScene:
         else:
             scene.hold(y, range(pts.shape[0]))
         yarns.append(y)
-    state = scene.build(twist=False)
-    return LoopScene(geometry, state, lower=yarns[0], loop=yarns[1], upper=yarns[2], tension_N=tension_N)
+    rods = scene.build(twist=False)
+    return LoopScene(geometry, rods, lower=yarns[0], loop=yarns[1], upper=yarns[2], tension_N=tension_N)

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from knitlad.state import RodState, Scene
+from knitlad.state import Rods, Scene
 from knitlad.units import NYLON, Material
 
 
@@ -37,7 +37,7 @@ class Cantilever:
         tip_force: tuple[float, float, float] = (0.0, 0.0, 0.0),
         twist: bool = False,
         stretch_damping_ratio: float = 0.2,
-    ) -> RodState:
+    ) -> Rods:
         scene = Scene(self.material)
         y = scene.add_yarn(self.points(), natural_curvature="straight")
         scene.hold(y, [0, 1])

@@ -18,7 +18,7 @@ import numpy as np
 
 from knitlad import units
 from knitlad.scenes.jersey import Jersey, discrete_loop_half_height
-from knitlad.state import RodState, Scene
+from knitlad.state import Rods, Scene
 
 IMAGES_X = 2  # images up to 2 cells away along x: a loop bulges past its cell (Crane's a = 3/2)
 IMAGES_Y = 1
@@ -27,30 +27,29 @@ IMAGES_Y = 1
 @dataclass
 class PeriodicStitch:
     geometry: Jersey
-    state: RodState
+    rods: Rods
     yarn: int  # the real yarn (the images are the other yarns)
     lx: float  # current cell [internal length]
     ly: float
 
-    def set_cell(self, lx: float, ly: float) -> None:
-        """Deform the cell affinely to (lx, ly) [internal]: nodes, the seam and the image shifts."""
-        s = self.state
-        rx, ry = lx / self.lx, ly / self.ly
-        for a in (s.x, s.edge_shift, s.image_shift):
-            a[:, 0] *= rx
-            a[:, 1] *= ry
+    def set_cell(self, sim, lx: float, ly: float) -> None:
+        """Deform the cell of ``sim`` (a :class:`knitlad.simulation.Simulation` of this stitch) affinely to
+        (lx, ly) [internal]: the nodes, and a model with the seam and the image shifts of the new cell."""
+        scale = np.array([lx / self.lx, ly / self.ly, 1.0])
+        sim.state.x[:] *= scale
+        sim.replace_model(edge_shift=sim.model.edge_shift * scale, image_shift=sim.model.image_shift * scale)
         self.lx, self.ly = lx, ly
 
     @property
     def real_edges(self) -> slice:
         """Edges of the real yarn (the first yarn: its edges come first)."""
-        s = self.state
-        return slice(0, int(np.count_nonzero(s.node_yarn[s.edge_a] == self.yarn)))
+        m = self.rods.model
+        return slice(0, int(np.count_nonzero(m.node_yarn[m.edge_a] == self.yarn)))
 
     @property
     def real_hinges(self) -> np.ndarray:
-        s = self.state
-        return np.flatnonzero(s.node_yarn[s.edge_a[s.hinge_e0]] == self.yarn)
+        m = self.rods.model
+        return np.flatnonzero(m.node_yarn[m.edge_a[m.hinge_e0]] == self.yarn)
 
 
 def build_periodic_stitch(geometry: Jersey) -> PeriodicStitch:
@@ -67,5 +66,5 @@ def build_periodic_stitch(geometry: Jersey) -> PeriodicStitch:
         for j in range(-IMAGES_Y, IMAGES_Y + 1):
             if i or j:
                 scene.add_image(y, (i * geometry.l_x, j * geometry.l_y, 0.0))
-    state = scene.build(twist=False)
-    return PeriodicStitch(geometry, state, y, geometry.l_x / units.LENGTH, geometry.l_y / units.LENGTH)
+    rods = scene.build(twist=False)
+    return PeriodicStitch(geometry, rods, y, geometry.l_x / units.LENGTH, geometry.l_y / units.LENGTH)

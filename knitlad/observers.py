@@ -1,0 +1,126 @@
+"""Observers and stop rules of the laddering run loop (:func:`knitlad.protocol.propagate`).
+
+An observer is any object with ``observe(t, run, undone)``: called after every
+observation interval with the time since the cut [s], the running
+:class:`knitlad.protocol.Laddering` and the map of cells undone since the cut
+(n_y, n_x). A stop rule has ``check(t, undone) -> str | None``: a reason to stop, or
+None. Write your own and pass them to ``propagate``; these are the standard ones.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+
+from knitlad.measure import ladder_front
+
+MAX_OVERLAP_OVER_D = 0.5  # deeper than this, a yarn may pass through another: the run stops with an error
+
+
+class Observer(Protocol):
+    def observe(self, t: float, run, undone: np.ndarray) -> None: ...
+
+
+class StopRule(Protocol):
+    def check(self, t: float, undone: np.ndarray) -> str | None: ...
+
+
+class Interpenetration(RuntimeError):
+    """Two yarns overlap by more than MAX_OVERLAP_OVER_D: the contact is too soft for the forces it carries."""
+
+
+class OverlapGuard:
+    """Stops a run with :class:`Interpenetration` when two yarns overlapped deeper than ``limit`` d
+    at any step since the last check (the contact kernel keeps the peak between checks)."""
+
+    def __init__(self, diameter_m: float, limit_over_d: float = MAX_OVERLAP_OVER_D) -> None:
+        self.d = diameter_m
+        self.limit = limit_over_d
+        self.peak_over_d = 0.0
+
+    def check(self, sim, when: str) -> None:
+        peak = sim.peak_overlap_m(reset=True) / self.d
+        self.peak_over_d = max(self.peak_over_d, peak)
+        if peak > self.limit:
+            raise Interpenetration(
+                f"yarns overlap by {peak:.2f} d {when} (limit {self.limit} d): the contact is too soft for this "
+                "tension; raise contact_force_f0"
+            )
+
+
+class FrontRecorder:
+    """The ladder's (upward, downward) extent from the cut row, and the column's cells, in each candidate column."""
+
+    def __init__(self, columns: tuple[int, ...], cut_row: int) -> None:
+        self.columns = columns
+        self.cut_row = cut_row
+        self._fronts: list[list[tuple[int, int]]] = [[] for _ in columns]
+        self._cells: list[list[np.ndarray]] = [[] for _ in columns]
+
+    def observe(self, t: float, run, undone: np.ndarray) -> None:
+        for c, col in enumerate(self.columns):
+            self._fronts[c].append(ladder_front(undone, col, self.cut_row))
+            self._cells[c].append(undone[:, col].copy())
+
+    def extents(self) -> tuple[np.ndarray, ...]:
+        return tuple(np.array(f, dtype=np.int64).reshape(-1, 2) for f in self._fronts)
+
+    def cells(self) -> tuple[np.ndarray, ...]:
+        return tuple(np.array(c) for c in self._cells)
+
+
+class TensionRecorder:
+    """f_x at every observation."""
+
+    def __init__(self) -> None:
+        self.fx: list[float] = []
+
+    def observe(self, t: float, run, undone: np.ndarray) -> None:
+        self.fx.append(run.tension())
+
+
+class FrameRecorder:
+    """Node positions [m] as float32 every ``every_s`` (the first observation included)."""
+
+    def __init__(self, every_s: float) -> None:
+        self.every_s = every_s
+        self.frames: list[np.ndarray] = []
+        self.times_s: list[float] = []
+        self._next = 0.0
+
+    def observe(self, t: float, run, undone: np.ndarray) -> None:
+        if t >= self._next:
+            self.frames.append(run.sim.positions_m().astype(np.float32))
+            self.times_s.append(t)
+            self._next += self.every_s
+
+
+class EdgeReached:
+    """The ladder has reached the bottom or the top course."""
+
+    def check(self, t: float, undone: np.ndarray) -> str | None:
+        return "ladder reached an edge course" if undone[-1].any() or undone[0].any() else None
+
+
+class Arrested:
+    """No cell has changed for ``arrest_s``."""
+
+    def __init__(self, arrest_s: float) -> None:
+        self.arrest_s = arrest_s
+        self._count = -1
+        self._since = 0.0
+
+    def check(self, t: float, undone: np.ndarray) -> str | None:
+        n = int(undone.sum())
+        if n != self._count:
+            self._count, self._since = n, t
+        return f"no cell changed for {self.arrest_s * 1e3:.1f} ms" if t - self._since >= self.arrest_s else None
+
+
+class TimeLimit:
+    def __init__(self, max_time_s: float) -> None:
+        self.max_time_s = max_time_s
+
+    def check(self, t: float, undone: np.ndarray) -> str | None:
+        return "max_time_s reached" if t >= self.max_time_s else None
