@@ -24,6 +24,7 @@ from knitlad.kernels.integrate import (
     half_kick,
     kinetic_energy,
     potential_energy,
+    rail_forces,
     verlet_steps,
 )
 from knitlad.state import Rods, Workspace
@@ -148,10 +149,14 @@ class Simulation:
         self.model = self.rods.model
 
     def set_external_forces(self, forces_N) -> None:
-        """Replace the constant external forces [N], (n, 3), from the next step on (a new model)."""
-        f = np.asarray(forces_N, dtype=float) / units.FORCE
-        self.replace_model(f_ext=np.broadcast_to(f, self.model.f_ext.shape))
-        self.compute_forces()
+        """Replace the constant external forces [N], (n, 3) or one 3-vector for all, from now on (a new model).
+
+        The forces of the current state change by the difference (not recomputed: a force
+        evaluation would also advance the friction history by a step)."""
+        f = np.broadcast_to(np.asarray(forces_N, dtype=float) / units.FORCE, self.model.f_ext.shape)
+        self.work.force[:] += f - self.model.f_ext
+        rail_forces(self.model.rail_node, self.model.rail_axis, self.work.force)
+        self.replace_model(f_ext=f)
 
     @property
     def friction(self) -> float:

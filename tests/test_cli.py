@@ -61,17 +61,18 @@ def test_cut_runs_a_ladder_end_to_end_on_a_small_knit(tmp_path):
 
 def test_a_run_that_fails_is_reported_in_one_line_with_exit_code_1(tmp_path, monkeypatch):
     """A run that stops on its own (force control out of reach, interpenetration, blow-up)
-    raises RuntimeError; the command prints one line and writes nothing. The failure is
-    injected: the force-control failure itself is tested in test_protocol."""
+    raises; the command prints one line and writes nothing. The failure is injected: the
+    force-control failure itself is tested in test_protocol."""
     from typer.testing import CliRunner
 
     from knitlad import protocol
     from knitlad.cli import app
+    from knitlad.stretching import OutOfReach
 
-    def fail(self):
-        raise RuntimeError("at l_x/l0 = 0.300 the relaxed knit already carries f_x = 0.40 > 0.05: use position control (--lx)")
+    def fail(settings, progress=None):
+        raise OutOfReach("at l_x/l0 = 0.300 the relaxed knit already carries f_x = 0.40 > 0.05: use position control (--lx)")
 
-    monkeypatch.setattr(protocol.LadderRun, "run", fail)
+    monkeypatch.setattr(protocol, "run_ladder", fail)
     p = CliRunner().invoke(app, ["cut", "--fx", "0.05", "--stitches", "8x10", "--out", str(tmp_path / "out")])
     assert p.exit_code == 1
     assert p.output.strip().splitlines()[-1].startswith("knitlad: run failed: at l_x/l0")
@@ -92,13 +93,13 @@ def test_presets_set_the_resolution_and_an_explicit_one_wins():
     assert [CutConfig(fx=4, preset=p).resolution for p in ("fast", "default", "accurate")] == [16, 24, 48]
     assert [LoopConfig(preset=p).resolution for p in ("fast", "default", "accurate")] == [24, 36, 48]
     assert CutConfig(fx=4, preset="fast", resolution=30).resolution == 30
-    assert CutConfig(fx=4, preset="accurate").settings().nodes_per_stitch == 48
+    assert CutConfig(fx=4, preset="accurate").stretch_settings().nodes_per_stitch == 48
 
 
 def test_the_drag_of_cut_reaches_the_laddering_settings_and_defaults_to_none():
     from knitlad.config import CutConfig
 
-    assert CutConfig(fx=4).settings().drag_per_s == 0.0
-    assert CutConfig(fx=4, drag_per_s=2e3).settings().drag_per_s == 2e3
-    assert CutConfig(fx=4).settings().twist is False
-    assert CutConfig(fx=4, twist=True).settings().twist is True
+    assert CutConfig(fx=4).dynamics_settings().drag_per_s == 0.0
+    assert CutConfig(fx=4, drag_per_s=2e3).dynamics_settings().drag_per_s == 2e3
+    assert CutConfig(fx=4).dynamics_settings().twist is False
+    assert CutConfig(fx=4, twist=True).dynamics_settings().twist is True

@@ -42,10 +42,10 @@ def dense_weave(n=4):
     return plain_weave(n, spacing=4 * D, nodes_per_spacing=6)
 
 
-def contact_forces_of(state, model):
+def contact_forces_of(rods, model):
     """Contact part of the nodal forces (Simulation grows the pair buffer as needed)."""
-    with_contact = kl.Simulation(state.copy(), contact=model)
-    without = kl.Simulation(state.copy())
+    with_contact = kl.Simulation(rods.copy(), contact=model)
+    without = kl.Simulation(rods.copy())
     return with_contact.work.force - without.work.force, with_contact.contacts
 
 
@@ -55,24 +55,24 @@ def pressed_weave():
 
 
 def test_contact_forces_obey_newtons_third_law_and_exert_no_torque():
-    state = pressed_weave()
-    f, c = contact_forces_of(state, ContactModel(stiffness=1e3))
+    rods = pressed_weave()
+    f, c = contact_forces_of(rods, ContactModel(stiffness=1e3))
     assert c.stats[TOUCHING] >= 16  # every one of the 16 crossings touches
     scale = np.abs(f).max()
     assert scale > 0
     np.testing.assert_allclose(f.sum(axis=0), 0.0, atol=1e-12 * scale * len(f))
-    torque = np.cross(state.x, f).sum(axis=0)
-    assert np.abs(torque).max() < 1e-10 * scale * np.abs(state.x).max() * len(f)
+    torque = np.cross(rods.state.x, f).sum(axis=0)
+    assert np.abs(torque).max() < 1e-10 * scale * np.abs(rods.state.x).max() * len(f)
 
 
-def brute_force_touching(state, exclusion):
+def brute_force_touching(rods, exclusion):
     """Touching edge pairs by an all-pairs search (the reference for the broad phase)."""
     from knitlad.contact import edge_topology
 
-    edge_yarn, edge_local, _, _ = edge_topology(state)
-    x = state.x
-    a, b = state.edge_a, state.edge_b
-    r = 0.5 * (state.radius[a] + state.radius[b])
+    edge_yarn, edge_local, _, _ = edge_topology(rods.model)
+    x = rods.state.x
+    a, b = rods.model.edge_a, rods.model.edge_b
+    r = 0.5 * (rods.model.radius[a] + rods.model.radius[b])
     found = set()
     for i in range(len(a)):
         for j in range(i + 1, len(a)):
@@ -85,24 +85,24 @@ def brute_force_touching(state, exclusion):
     return found
 
 
-def touching_in_broad_phase(state):
+def touching_in_broad_phase(rods):
     """The touching pairs among the broad phase's candidates, and the exclusion it used."""
     from knitlad.kernels.contact import refresh_contacts, segment_distance
 
-    c = make_contacts(state, ContactModel(stiffness=1e3))
-    assert refresh_contacts(state.x, state.edge_a, state.edge_b, state.edge_shift, c)
+    c = make_contacts(rods, ContactModel(stiffness=1e3))
+    assert refresh_contacts(rods.state.x, rods.model.edge_a, rods.model.edge_b, rods.model.edge_shift, c)
     touching = {
         (int(i), int(j))
         for i, j in c.pairs[: c.n_pairs[0]]
-        if segment_distance(state.x, state.edge_a, state.edge_b, state.edge_shift, i, j)[0] < c.edge_radius[i] + c.edge_radius[j]
+        if segment_distance(rods.state.x, rods.model.edge_a, rods.model.edge_b, rods.model.edge_shift, i, j)[0] < c.edge_radius[i] + c.edge_radius[j]
     }
     return touching, int(c.exclusion[0])
 
 
 def test_broad_phase_finds_exactly_the_pairs_of_an_all_pairs_search():
-    state = pressed_weave()
-    touching, exclusion = touching_in_broad_phase(state)
-    assert touching == brute_force_touching(state, exclusion)
+    rods = pressed_weave()
+    touching, exclusion = touching_in_broad_phase(rods)
+    assert touching == brute_force_touching(rods, exclusion)
     assert len(touching) > 0
 
 
@@ -110,25 +110,25 @@ def test_a_yarn_flung_far_away_coarsens_the_grid_and_no_touching_pair_is_missed(
     """The grid spans the bounding box: 10 m away, one yarn would make 1e10 cells of the reach."""
     from knitlad.kernels.contact import MAX_CELLS_PER_EDGE
 
-    state = pressed_weave()
-    first = slice(int(state.yarn_start[0]), int(state.yarn_start[1]))
-    state.x[first, 0] += 10.0 / kl.units.LENGTH
-    state.x[first, 2] += 10.0 / kl.units.LENGTH
-    box = (state.x.max(axis=0) - state.x.min(axis=0)) * kl.units.LENGTH
-    assert box.prod() / D**3 > MAX_CELLS_PER_EDGE * state.edge_a.shape[0] * 1e3  # cells of d: far too many
-    touching, exclusion = touching_in_broad_phase(state)
-    assert touching == brute_force_touching(state, exclusion)
+    rods = pressed_weave()
+    first = slice(int(rods.model.yarn_start[0]), int(rods.model.yarn_start[1]))
+    rods.state.x[first, 0] += 10.0 / kl.units.LENGTH
+    rods.state.x[first, 2] += 10.0 / kl.units.LENGTH
+    box = (rods.state.x.max(axis=0) - rods.state.x.min(axis=0)) * kl.units.LENGTH
+    assert box.prod() / D**3 > MAX_CELLS_PER_EDGE * rods.model.edge_a.shape[0] * 1e3  # cells of d: far too many
+    touching, exclusion = touching_in_broad_phase(rods)
+    assert touching == brute_force_touching(rods, exclusion)
     assert len(touching) >= 12  # the 12 crossings of the 3 warps left in place
 
 
 def test_a_non_finite_position_finds_no_pair_for_its_edges_and_crashes_nothing():
     from knitlad.kernels.contact import refresh_contacts
 
-    state = pressed_weave()
-    state.x[3] = np.nan
-    c = make_contacts(state, ContactModel(stiffness=1e3))
-    assert refresh_contacts(state.x, state.edge_a, state.edge_b, state.edge_shift, c)
-    bad = set(np.flatnonzero((state.edge_a == 3) | (state.edge_b == 3)).tolist())
+    rods = pressed_weave()
+    rods.state.x[3] = np.nan
+    c = make_contacts(rods, ContactModel(stiffness=1e3))
+    assert refresh_contacts(rods.state.x, rods.model.edge_a, rods.model.edge_b, rods.model.edge_shift, c)
+    bad = set(np.flatnonzero((rods.model.edge_a == 3) | (rods.model.edge_b == 3)).tolist())
     assert c.n_pairs[0] > 0
     assert not any(int(i) in bad or int(j) in bad for i, j in c.pairs[: c.n_pairs[0]])
 
@@ -136,16 +136,16 @@ def test_a_non_finite_position_finds_no_pair_for_its_edges_and_crashes_nothing()
 @pytest.mark.parametrize("skin_d", [0.05, 0.5, 3.0])
 def test_contact_count_and_forces_do_not_depend_on_the_cell_size(skin_d):
     """The cell size is longest edge + 2 r + skin: changing the skin changes the cells."""
-    state = pressed_weave()
-    reference, c_ref = contact_forces_of(state, ContactModel(stiffness=1e3, skin=1.0 * D))
-    f, c = contact_forces_of(state, ContactModel(stiffness=1e3, skin=skin_d * D))
+    rods = pressed_weave()
+    reference, c_ref = contact_forces_of(rods, ContactModel(stiffness=1e3, skin=1.0 * D))
+    f, c = contact_forces_of(rods, ContactModel(stiffness=1e3, skin=skin_d * D))
     assert c.stats[TOUCHING] == c_ref.stats[TOUCHING]
     np.testing.assert_allclose(f, reference, rtol=0, atol=1e-12 * np.abs(reference).max())
 
 
 def test_a_full_buffer_is_grown_and_the_run_goes_on():
-    state = pressed_weave()
-    sim = kl.Simulation(state, contact=ContactModel(stiffness=1e3, capacity_per_edge=0))
+    rods = pressed_weave()
+    sim = kl.Simulation(rods, contact=ContactModel(stiffness=1e3, capacity_per_edge=0))
     assert sim.contacts.pairs.shape[0] >= sim.contacts.n_pairs[0] > 0
     sim.step(10)
     assert np.isfinite(sim.state.x).all()
@@ -163,8 +163,8 @@ def test_same_yarn_neighbours_are_excluded_but_distant_loops_of_one_yarn_touch()
     pts[n:, 0] += 0.5 * arm / n  # no coincident points at the fold
     scene = kl.Scene()
     scene.add_yarn(pts)
-    state = scene.build()
-    f, c = contact_forces_of(state, ContactModel(stiffness=1e3))
+    rods = scene.build()
+    f, c = contact_forces_of(rods, ContactModel(stiffness=1e3))
     assert c.stats[TOUCHING] > 10  # the two arms touch along their length
     # straight neighbours never interact: no force on a lone straight yarn
     scene2 = kl.Scene()
@@ -215,9 +215,9 @@ def test_counting_every_pair_halves_the_stable_contact_step():
     yarns), so its contact time-step limit is half that of union counting."""
     from knitlad.contact import contact_time_step
 
-    state = pressed_weave()
-    union = contact_time_step(state, ContactModel(stiffness=1e3))
-    every = contact_time_step(state, ContactModel(stiffness=1e3, counting="all_pairs"))
+    rods = pressed_weave()
+    union = contact_time_step(rods.model, ContactModel(stiffness=1e3))
+    every = contact_time_step(rods.model, ContactModel(stiffness=1e3, counting="all_pairs"))
     assert every == pytest.approx(union / 2, rel=1e-12)
     with pytest.raises(ValueError, match="counting"):
         ContactModel(stiffness=1e3, counting="pairs")
@@ -234,13 +234,13 @@ def test_contact_forces_are_bit_for_bit_the_same_on_one_and_two_threads():
     if numba.config.NUMBA_NUM_THREADS < 2:
         pytest.skip("needs two Numba threads")
     rng = np.random.default_rng(7)
-    state = plain_weave(20, spacing=4 * D, nodes_per_spacing=6, amplitude=0.45 * D).build()
-    state.v[:] = rng.normal(scale=2.0, size=state.v.shape) / units.VELOCITY  # a few m/s: sliding contacts
-    state.v[state.held] = 0.0
+    rods = plain_weave(20, spacing=4 * D, nodes_per_spacing=6, amplitude=0.45 * D).build()
+    rods.state.v[:] = rng.normal(scale=2.0, size=rods.state.v.shape) / units.VELOCITY  # a few m/s: sliding contacts
+    rods.state.v[rods.model.held] = 0.0
     finals = []
     for threads in (1, 2):
         with numba_threads(threads):
-            sim = kl.Simulation(state.copy(), contact=ContactModel(stiffness=1e3, friction=0.02))
+            sim = kl.Simulation(rods.copy(), contact=ContactModel(stiffness=1e3, friction=0.02))
             assert sim.contacts.threads[0] == threads
             sliding = 0
             for _ in range(30):

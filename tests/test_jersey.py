@@ -26,21 +26,21 @@ def knit(request):
 def test_each_stitch_holds_l0_of_yarn(knit):
     g = knit.geometry
     # the resampled course (chords, as the rod sees it): n_x stitches between the end sinkers
-    s = knit.state
+    s = knit.rods
     nodes = knit.course_nodes(0)
     t = knit.node_t[nodes]
     inside = np.isfinite(t)
-    x = s.x[nodes][inside] * kl.units.LENGTH
+    x = s.state.x[nodes][inside] * kl.units.LENGTH
     length = np.linalg.norm(np.diff(x, axis=0), axis=1).sum()
     assert length == pytest.approx(g.n_x * L0, rel=1e-4)
 
 
 def test_no_two_non_neighbouring_segments_are_closer_than_d(knit):
     """No overlap: non-neighbouring yarn axes stay >= d apart (measured 2.83 d at 0.245 l0, 1.56 d at 0.30 l0)."""
-    s = knit.state
+    s = knit.rods
     c = make_contacts(s, ContactModel(stiffness=1.0, skin=3 * D))
-    assert refresh_contacts(s.x, s.edge_a, s.edge_b, s.edge_shift, c)
-    dists = [segment_distance(s.x, s.edge_a, s.edge_b, s.edge_shift, i, j)[0] for i, j in c.pairs[: c.n_pairs[0]]]
+    assert refresh_contacts(s.state.x, s.model.edge_a, s.model.edge_b, s.model.edge_shift, c)
+    dists = [segment_distance(s.state.x, s.model.edge_a, s.model.edge_b, s.model.edge_shift, i, j)[0] for i, j in c.pairs[: c.n_pairs[0]]]
     assert len(dists) > 0
     assert min(dists) * kl.units.LENGTH > D
 
@@ -50,7 +50,7 @@ def head_ring(knit, row, col):
     nodes = knit.course_nodes(row)
     t = knit.node_t[nodes]
     sel = (t >= 2 * math.pi * col - math.pi / 2) & (t <= 2 * math.pi * col + math.pi / 2)
-    return knit.state.x[nodes][sel]
+    return knit.rods.state.x[nodes][sel]
 
 
 def loop_arc(knit, row, col):
@@ -58,7 +58,7 @@ def loop_arc(knit, row, col):
     nodes = knit.course_nodes(row)
     t = knit.node_t[nodes]
     sel = (t >= 2 * math.pi * col - math.pi) & (t <= 2 * math.pi * col + math.pi)
-    return knit.state.x[nodes][sel]
+    return knit.rods.state.x[nodes][sel]
 
 
 def test_jersey_topology_each_loop_passes_through_the_loop_of_the_course_below(knit):
@@ -76,12 +76,12 @@ def test_jersey_topology_each_loop_passes_through_the_loop_of_the_course_below(k
 def test_edge_courses_are_held_and_courses_are_clamped_at_their_edge_sinkers(knit):
     """Two nodes held at each end (position and tangent), the end node on the box edge at the
     bottom of the sinker, the yarn leaving it along x: the periodic stitch's mirror symmetry there."""
-    s, g = knit.state, knit.geometry
+    s, g = knit.rods, knit.geometry
     for y in knit.bars:
-        assert s.held[s.yarn_start[y]: s.yarn_start[y + 1]].all()
+        assert s.model.held[s.model.yarn_start[y]: s.model.yarn_start[y + 1]].all()
     for k, y in enumerate(knit.courses):
-        nodes = s.x[s.yarn_start[y]: s.yarn_start[y + 1]] * kl.units.LENGTH
-        held = np.flatnonzero(s.held[s.yarn_start[y]: s.yarn_start[y + 1]])
+        nodes = s.state.x[s.model.yarn_start[y]: s.model.yarn_start[y + 1]] * kl.units.LENGTH
+        held = np.flatnonzero(s.model.held[s.model.yarn_start[y]: s.model.yarn_start[y + 1]])
         last = nodes.shape[0] - 1
         assert held.tolist() == [0, 1, last - 1, last]
         assert nodes[0, 0] == pytest.approx(g.column_x(0) - 0.5 * g.l_x, abs=1e-9 * L0)
@@ -94,10 +94,10 @@ def test_edge_courses_are_held_and_courses_are_clamped_at_their_edge_sinkers(kni
 
 def test_course_ends_with_tails_are_held_at_one_node():
     knit = build_jersey(Jersey(n_x=3, n_y=2, l_x=0.3 * L0, l_y=0.25 * L0, nodes_per_stitch=24, edge="tail"))
-    s = knit.state
+    s = knit.rods
     for y in knit.courses:
-        held = np.flatnonzero(s.held[s.yarn_start[y]: s.yarn_start[y + 1]])
-        assert held.tolist() == [0, s.yarn_start[y + 1] - s.yarn_start[y] - 1]
+        held = np.flatnonzero(s.model.held[s.model.yarn_start[y]: s.model.yarn_start[y + 1]])
+        assert held.tolist() == [0, s.model.yarn_start[y + 1] - s.model.yarn_start[y] - 1]
 
 
 @pytest.mark.parametrize("kwargs, match", [(dict(n_x=0), "1 x 1"), (dict(l_x=L0), "l0"), (dict(nodes_per_stitch=4), "nodes_per_stitch"),

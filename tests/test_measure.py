@@ -27,7 +27,7 @@ def knit():
 
 
 def rows_of(knit, x):
-    s = knit.state
+    s = knit.rods.model
     return [x[s.yarn_start[y]: s.yarn_start[y + 1]] for y in knit.courses + [knit.bars[1]]]
 
 
@@ -38,7 +38,7 @@ def unit(knit):
 
 def test_an_intact_knit_has_no_laddered_cell(knit):
     cols, lx, ly = unit(knit)
-    overlap = cell_overlap(rows_of(knit, knit.state.x), cols, lx)
+    overlap = cell_overlap(rows_of(knit, knit.rods.state.x), cols, lx)
     assert np.all(overlap > 0.1 * ly)
     assert not laddered_cells(overlap, ly).any()
 
@@ -46,7 +46,7 @@ def test_an_intact_knit_has_no_laddered_cell(knit):
 def test_a_flattened_head_is_detected_as_exactly_one_laddered_cell(knit):
     """Pull the head of course 2 at column 3 down onto the course line: that cell, and only it."""
     cols, lx, ly = unit(knit)
-    x = knit.state.x.copy()
+    x = knit.rods.state.x.copy()
     nodes = knit.course_nodes(2)
     course = x[nodes]
     head = np.abs(course[:, 0] - cols[3]) < 0.45 * lx
@@ -96,16 +96,16 @@ def test_tension_per_thread_averages_the_two_ends():
 
 def test_periodicities_of_the_built_knit(knit):
     cols, lx, ly = unit(knit)
-    mlx, mly = periodicities(rows_of(knit, knit.state.x)[:-1], cols, lx)
+    mlx, mly = periodicities(rows_of(knit, knit.rods.state.x)[:-1], cols, lx)
     assert mlx == pytest.approx(lx, rel=1e-3) and mly == pytest.approx(ly, rel=1e-3)
 
 
 def test_cut_edge_splits_a_yarn_and_frees_its_ends(knit):
-    s = knit.state
+    s = knit.rods.model
     y = knit.courses[2]
     start = int(s.yarn_start[y])
     edge = int(np.flatnonzero(s.edge_a == start + 30)[0])
-    cut = cut_edge(s, edge)
+    cut = cut_edge(knit.rods, edge).model
     assert cut.n_yarns == s.n_yarns + 1
     assert cut.edge_a.shape[0] == s.edge_a.shape[0] - 1
     assert cut.hinge_e0.shape[0] == s.hinge_e0.shape[0] - 2

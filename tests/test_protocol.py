@@ -1,15 +1,20 @@
-"""The laddering protocol's choices that measurements made: where the knit is built."""
+"""The laddering protocol: its stages, and the choices that measurements made (where the knit is built)."""
 
 from __future__ import annotations
-
-from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from knitlad import units
-from knitlad.protocol import BUILD_LX, LadderRun, LadderSettings, build_width
+from knitlad.config import CutConfig
+from knitlad.protocol import _KnitBox, analyse, build_width, cut, propagate, stretch
+from knitlad.scenes.jersey import BUILD_LX
+from knitlad.stretching import OutOfReach, stretch_to
 from knitlad.units import NYLON
+
+
+def config(**kw) -> CutConfig:
+    return CutConfig(**kw)
 
 
 def test_tall_cells_are_built_narrower_so_that_the_loops_interlock():
@@ -18,74 +23,69 @@ def test_tall_cells_are_built_narrower_so_that_the_loops_interlock():
     assert build_width(0.25, NYLON) == BUILD_LX
     lx = build_width(0.302, NYLON)
     assert 0.24 < lx < 0.29
-    run = LadderRun(LadderSettings(n_x=4, n_y=6, fx_target=None, lx_over_l0=0.35, ly_over_l0=0.302))
+    box = _KnitBox(config(n_x=4, n_y=6, lx=0.35, ly=0.302).stretch_settings())
     l0, d = NYLON.stitch_length, NYLON.diameter
-    overlap = 2 * run.knit.H - 0.302 * l0
+    overlap = 2 * box.knit.H - 0.302 * l0
     assert overlap > 2 * d
 
 
 @pytest.mark.parametrize("ly", [0.302])
 def test_force_control_reaches_its_target_in_a_tall_knit(ly):
-    run = LadderRun(LadderSettings(n_x=6, n_y=8, fx_target=4.0, ly_over_l0=ly, nodes_per_stitch=16))
-    run.stretch()
-    assert run.result.fx_within_tolerance
-    assert run.result.fx_ini == pytest.approx(4.0, rel=0.02)
+    knit = stretch(config(n_x=6, n_y=8, fx=4.0, ly=ly, resolution=16).stretch_settings())
+    assert knit.fx_within_tolerance
+    assert knit.fx_ini == pytest.approx(4.0, rel=0.02)
 
 
 def test_dashpot_and_drag_settings_reach_the_knit_and_the_laddering_dynamics():
-    """The dissipation of the dynamics after the cut is set from LadderSettings alone (the
+    """The dissipation of the dynamics after the cut is set from the dynamics' settings alone (the
     damping study and scripts/energy_drift.py switch it off this way)."""
-    from knitlad import units
-
-    run = LadderRun(LadderSettings(n_x=4, n_y=4, nodes_per_stitch=16, fx_target=None, lx_over_l0=0.30,
-                                   contact_damping_ratio=0.0, stretch_damping_ratio=0.0, drag_per_s=3e3))
+    cfg = config(n_x=4, n_y=4, resolution=16, lx=0.30, contact_damping_ratio=0.0, stretch_damping_ratio=0.0,
+                 drag_per_s=3e3)
+    box = _KnitBox(cfg.stretch_settings())
     # the mu = 0 stretch (FIRE) keeps its own dashpots and no drag: they only shape its path
-    assert run.knit.state.stretch_damping.min() > 0 and run.contact.damping_ratio == 0.3
-    assert run.sim.drag == 0.0
-    run.cut()
-    assert not run.sim.state.stretch_damping.any()
+    assert box.knit.rods.model.stretch_damping.min() > 0 and box.sim.contact_model.damping_ratio == 0.3
+    assert box.sim.drag == 0.0
+    knit = stretch(cfg.stretch_settings())
+    run = cut(knit, cfg.dynamics_settings())
+    assert not run.sim.model.stretch_damping.any()
     assert run.sim.contact_model.damping_ratio == 0.0 and run.sim.contact_model.tangential_damping_ratio == 0.0
     assert run.sim.drag == pytest.approx(3e3 * units.TIME)
+    assert knit.knit.rods.model.stretch_damping.min() > 0  # the stretched knit is untouched
 
 
 def test_the_stretched_knit_does_not_depend_on_the_laddering_time_step():
     """dt_safety sets the step of the dynamics after the cut only: a stretch at another step
     would end in another relaxed state, and the ladder from it differs by the knit's scatter
     (16 x 16 at f_x = 3.9: v_lad 0.27 against 0.49), which would pass for an effect of dt."""
-    import numpy as np
-
-    runs = []
+    knits, steps = [], []
     for dt in (0.35, 0.175):
-        run = LadderRun(LadderSettings(n_x=4, n_y=4, nodes_per_stitch=16, fx_target=None, lx_over_l0=0.34,
-                                       dt_safety=dt))
-        run.stretch()
-        runs.append(run)
-    assert np.array_equal(runs[0].sim.state.x, runs[1].sim.state.x)
-    assert runs[0].result.fx_ini == runs[1].result.fx_ini
-    steps = []
-    for run in runs:
-        run.cut()
+        cfg = config(n_x=4, n_y=4, resolution=16, lx=0.34, dt_safety=dt)
+        knit = stretch(cfg.stretch_settings())
+        run = cut(knit, cfg.dynamics_settings())
+        knits.append(knit)
         steps.append(run.sim.dt / run.sim.limits.combined)
+    assert np.array_equal(knits[0].knit.rods.state.x, knits[1].knit.rods.state.x)
+    assert knits[0].fx_ini == knits[1].fx_ini
     assert steps == pytest.approx([0.35, 0.175], rel=1e-9)
 
 
 @pytest.mark.parametrize("name", ["contact_damping_ratio", "stretch_damping_ratio", "drag_per_s"])
 def test_a_negative_dissipation_setting_is_refused_before_anything_runs(name):
     with pytest.raises(ValueError, match=name):
-        LadderSettings(fx_target=4.0, **{name: -0.1})
+        config(fx=4.0, **{name: -0.1})
 
 
 def test_an_unknown_contact_counting_is_refused_before_anything_runs():
     with pytest.raises(ValueError, match="contact_counting"):
-        LadderSettings(fx_target=4.0, contact_counting="every")
+        config(fx=4.0, contact_counting="every")
 
 
-def _relax_in_rounds(run: LadderRun, rounds: int) -> tuple[list[float], dict]:
+def _relax_in_rounds(box: _KnitBox, rounds: int) -> tuple[list[float], dict]:
     """The protocol's FIRE rounds at a fixed box; f_x after each, and the last round's report."""
     readings, info = [], {}
     for _ in range(rounds):
-        info = run._relax(run.s.steps_per_increment)
-        readings.append(run.tension())
+        info = box.relax()
+        readings.append(box.tension())
         if info["converged"]:
             break
     return readings, info
@@ -96,68 +96,106 @@ def test_at_mu_0_a_knit_with_clamped_course_ends_reaches_equilibrium_at_a_fixed_
     periodic stitch there): FIRE reaches its force tolerance (1e-3 f0), so f_x has settled. Ends held at the tip of
     straight tails instead leave the edge stitches free to trade yarn, and the knit creeps: 8 x 10
     at l_x/l0 = 0.355 wandered between f_x 1.21 and 1.46 over 30 rounds, residual ~0.4 f0."""
-    clamped = LadderRun(LadderSettings(n_x=8, n_y=10, lx_over_l0=0.355, fx_target=None, edge="clamped"))
-    clamped.stretch_to(0.355, 0.25)
+    clamped = _KnitBox(config(n_x=8, n_y=10, lx=0.355, edge="clamped").stretch_settings())
+    stretch_to(clamped, 0.355, 0.25, clamped.s.stretch_increment)
     readings, info = _relax_in_rounds(clamped, 40)
     assert info["converged"], f"residual {info['max_force_N'] / NYLON.f0:.3g} f0 after {len(readings)} rounds"
 
-    tail = LadderRun(LadderSettings(n_x=8, n_y=10, lx_over_l0=0.355, fx_target=None, edge="tail"))
-    tail.stretch_to(0.355, 0.25)
+    tail = _KnitBox(config(n_x=8, n_y=10, lx=0.355, edge="tail").stretch_settings())
+    stretch_to(tail, 0.355, 0.25, tail.s.stretch_increment)
     _, info = _relax_in_rounds(tail, len(readings) + 10)
     assert info["max_force_N"] > 10 * 1e-3 * NYLON.f0
 
 
 def test_an_unknown_edge_is_refused_before_anything_runs():
-    with pytest.raises(ValueError, match="edge must be one of"):
-        LadderRun(LadderSettings(n_x=4, n_y=4, lx_over_l0=0.35, fx_target=None, edge="loose"))
+    with pytest.raises(ValueError, match="edge"):
+        config(n_x=4, n_y=4, lx=0.35, edge="loose")
 
 
 def test_force_control_says_when_the_knit_as_built_is_already_past_the_target():
     """With tails, the 8 x 10 knit built at l_x/l0 = 0.30 carries f_x ~ 0.4: a target of 0.05
     cannot be reached by stretching, and force control says so (position control is advised)."""
-    run = LadderRun(LadderSettings(n_x=8, n_y=10, fx_target=0.05, edge="tail"))
-    with pytest.raises(RuntimeError, match="use position control"):
-        run.stretch()
+    with pytest.raises(OutOfReach, match="use position control"):
+        stretch(config(n_x=8, n_y=10, fx=0.05, edge="tail").stretch_settings())
 
 
-def test_a_branch_of_a_stretched_run_ladders_like_a_fresh_run_with_its_settings():
-    """LadderRun.branch: the laddering studies compare settings of the dynamics from one
-    stretched knit. A branch must be independent of its parent, carry its new settings into the
-    dynamics, and give the very ladder a fresh run with those settings gives (the stretch is
-    deterministic and does not read them)."""
-    base = LadderSettings(n_x=4, n_y=4, nodes_per_stitch=16, fx_target=None, lx_over_l0=0.34, max_time_s=0.2e-3)
-    parent = LadderRun(base)
-    parent.stretch()
-    x_before = parent.sim.state.x.copy()
-    child = parent.branch(mu=0.0, drag_per_s=1e3)
-    child.propagate()
-    assert np.array_equal(parent.sim.state.x, x_before)  # the parent is untouched
-    assert child.result.settings.mu == 0.0 and parent.s.mu == base.mu
-    fresh = LadderRun(replace(base, mu=0.0, drag_per_s=1e3))
-    fresh.stretch()
-    fresh.propagate()
-    assert np.array_equal(child.sim.state.x, fresh.sim.state.x)
-    assert child.result.fx_series == fresh.result.fx_series
-    with pytest.raises(ValueError, match="n_x: not a setting of the laddering dynamics"):
-        parent.branch(n_x=6)
-    with pytest.raises(ValueError, match="drag_per_s must be >= 0"):
-        parent.branch(drag_per_s=-1.0)
-    with pytest.raises(RuntimeError, match="already cut"):
-        child.branch(mu=0.4)
+def test_one_stretched_knit_cut_twice_ladders_like_two_fresh_runs():
+    """Studies of the laddering dynamics compare settings from one stretched knit: cutting it
+    leaves it untouched, and each cut gives the very ladder a fresh run with those settings gives
+    (the stretch is deterministic and does not read them)."""
+    base = dict(n_x=4, n_y=4, resolution=16, lx=0.34, max_time_ms=0.2)
+    knit = stretch(config(**base).stretch_settings())
+    x_before = knit.knit.rods.state.x.copy()
+    other = config(**base, mu=0.0, drag_per_s=1e3)
+    first = analyse(propagate(cut(knit, other.dynamics_settings())))
+    assert np.array_equal(knit.knit.rods.state.x, x_before)  # the knit is untouched
+    again = analyse(propagate(cut(knit, other.dynamics_settings())))
+    fresh = analyse(propagate(cut(stretch(other.stretch_settings()), other.dynamics_settings())))
+    assert first.settings.dynamics.mu == 0.0
+    assert first.fx_series == again.fx_series == fresh.fx_series
+    assert [np.array_equal(a, b) for a, b in zip(first.frames, fresh.frames)] == [True] * len(fresh.frames)
+
+
+def test_a_stretched_knit_written_and_read_back_ladders_the_same(tmp_path):
+    """A stretched knit is a value that can be stored: the one read back ladders bit for bit
+    as the one in memory."""
+    from knitlad.io.hdf5 import read_stretched_knit, write_stretched_knit
+
+    cfg = config(n_x=4, n_y=4, resolution=16, lx=0.34, max_time_ms=0.1)
+    knit = stretch(cfg.stretch_settings())
+    read = read_stretched_knit(write_stretched_knit(tmp_path / "stretched.h5", knit))
+    assert read.settings == knit.settings and read.fx_ini == knit.fx_ini and read.dt_s == knit.dt_s
+    a = analyse(propagate(cut(knit, cfg.dynamics_settings())))
+    b = analyse(propagate(cut(read, cfg.dynamics_settings())))
+    assert a.fx_series == b.fx_series and np.array_equal(a.frames[-1], b.frames[-1])
+
+
+def test_observers_and_stop_rules_are_handed_to_the_run_loop():
+    """propagate calls the observers it is given with (t, run, undone cells) and stops by the rules."""
+    from knitlad.observers import TimeLimit
+
+    cfg = config(n_x=4, n_y=4, resolution=16, lx=0.34)
+    seen = []
+
+    class Counter:
+        def observe(self, t, run, undone):
+            seen.append((t, undone.shape))
+
+    trace = propagate(cut(stretch(cfg.stretch_settings()), cfg.dynamics_settings()), observers=[Counter()],
+                      stop_rules=[TimeLimit(50e-6)])
+    assert trace.stop_reason == "max_time_s reached" and not trace.reached_edge
+    assert len(seen) == len(trace.times_s) == 3 and seen[0][1] == (4, 4)
 
 
 def test_with_twist_the_laddering_yarns_spin_and_the_time_step_allows_for_it():
-    """LadderSettings(twist=True): twist switched on at the cut (friction couple on)."""
-    base = LadderSettings(n_x=4, n_y=4, nodes_per_stitch=16, fx_target=None, lx_over_l0=0.34, max_time_s=0.1e-3)
-    parent = LadderRun(base)
-    parent.stretch()
-    plain = parent.branch()
-    plain.propagate()
-    twisted = parent.branch(twist=True)
-    twisted.propagate()
+    """twist=True: twist switched on at the cut (friction couple on)."""
+    base = dict(n_x=4, n_y=4, resolution=16, lx=0.34, max_time_ms=0.1)
+    knit = stretch(config(**base).stretch_settings())
+    plain = cut(knit, config(**base).dynamics_settings())
+    propagate(plain)
+    twisted = cut(knit, config(**base, twist=True).dynamics_settings())
+    propagate(twisted)
     assert twisted.sim.twist and not plain.sim.twist
     spin = np.abs(twisted.sim.state.omega).max() / units.TIME  # rad/s
     assert spin > 1e3  # friction has turned the yarns (surface speeds of 0.1 m/s and more)
     assert twisted.sim.limits.contact < plain.sim.limits.contact  # the turning adds to the contact stiffness
-    assert twisted.sim.dt <= base.dt_safety * twisted.sim.limits.combined * (1 + 1e-12)
+    assert twisted.sim.dt <= twisted.dynamics.dt_safety * twisted.sim.limits.combined * (1 + 1e-12)
     assert np.isfinite(twisted.sim.state.x).all()
+
+
+def test_cut_edge_cuts_every_array_along_its_axis():
+    """cut_edge removes one entry of every edge array and the hinges of that edge, whatever the
+    fields: each field of the model and the state declares its axis once (MODEL_AXES, STATE_AXES)."""
+    from knitlad.state import EDGE, HINGE, MODEL_AXES, STATE_AXES, RodModel, RodState, cut_edge
+
+    assert set(MODEL_AXES) == set(RodModel._fields) and set(STATE_AXES) == set(RodState._fields)
+    knit = stretch(config(n_x=4, n_y=4, resolution=16, lx=0.32).stretch_settings())
+    rods = knit.knit.rods
+    edge = int(rods.model.yarn_start[2]) + 5
+    after = cut_edge(rods, edge)
+    for part, axes in ((rods.model, MODEL_AXES), (rods.state, STATE_AXES)):
+        new = after.model if part is rods.model else after.state
+        for name, axis in axes.items():
+            drop = {EDGE: 1, HINGE: 2}.get(axis, 0)
+            assert getattr(new, name).shape[0] == getattr(part, name).shape[0] - drop + (name == "yarn_start"), name
+    assert after.model.n_yarns == rods.model.n_yarns + 1

@@ -14,7 +14,7 @@ def test_many_yarns_share_one_state_with_offsets():
     scene = kl.Scene()
     scene.add_yarn(line(5))
     scene.add_yarn(line(7) + [0, 1e-3, 0], closed=True)
-    s = scene.build()
+    s = scene.build().model
     assert s.yarn_start.tolist() == [0, 5, 12]
     assert s.edge_a.shape[0] == 4 + 7  # open: k-1 edges, closed: k
     assert s.hinge_e0.shape[0] == 3 + 7
@@ -28,7 +28,7 @@ def test_periodised_yarn_closes_with_its_shift():
     scene = kl.Scene()
     pts = line(4, length=0.003)
     scene.add_yarn(pts, closed=True, period=(0.004, 0, 0))
-    s = scene.build()
+    s = scene.build().model
     np.testing.assert_allclose(s.rest_length * kl.units.LENGTH, 1e-3)
 
 

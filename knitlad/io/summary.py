@@ -23,6 +23,7 @@ LOOP_SUMMARY_KEYS = ("tau_s", "tau_contact_s", "v_lad_over_cb", "released", "rel
                      "steps", "nodes", "wall_s", "job_wall_s")
 STITCH_SUMMARY_KEYS = ("fx", "fy", "converged", "max_overlap_over_d", "relax_steps", "wall_s", "job_wall_s")
 SCENE_SUMMARY_KEYS = {"ladder": SUMMARY_KEYS, "loop": LOOP_SUMMARY_KEYS, "stitch": STITCH_SUMMARY_KEYS}
+TIMING_COLUMNS = ("wall_s", "job_wall_s", "wall_stretch_s", "wall_propagate_s")  # differ from run to run
 
 
 def summary_frame(rows: list[dict]) -> pd.DataFrame:

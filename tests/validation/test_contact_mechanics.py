@@ -33,15 +33,15 @@ def slider(mu: float, pull: float, rail_edge_d: float = 0.5, counting: str = "un
     s = scene.add_yarn(sl)
     for i in range(n):
         scene.apply_force(s, i, (pull / n, 0.0, -PRESS / n))
-    state = scene.build()
+    rods = scene.build()
     model = ContactModel.for_force(PRESS, D, overlap_fraction=OVERLAP, friction=mu, damping_ratio=0.5,
                                    counting=counting)
-    sim = kl.Simulation(state, contact=model)
+    sim = kl.Simulation(rods, contact=model)
     return sim, slice(n_rail, n_rail + n)
 
 
 def com(sim, nodes):
-    m = sim.state.mass[nodes]
+    m = sim.model.mass[nodes]
     return (m[:, None] * sim.state.x[nodes]).sum(0) / m.sum() * kl.units.LENGTH, (
         m[:, None] * sim.state.v[nodes]
     ).sum(0) / m.sum() * kl.units.VELOCITY
@@ -50,7 +50,7 @@ def com(sim, nodes):
 def run_slider(mu, pull, duration=0.1e-3):
     """Sample (t, com x, com v, total energy); 0.1 ms slides ~1 d at (T - mu N) = 0.2 mN."""
     sim, nodes = slider(mu, pull)
-    M = sim.state.mass[nodes].sum() * kl.units.MASS
+    M = sim.model.mass[nodes].sum() * kl.units.MASS
     samples = []
     sim.run(duration, observe=lambda s: samples.append((s.time_s, *com(s, nodes)[0], *com(s, nodes)[1], s.energies_J()["total"])), observe_every_s=duration / 200)
     return np.array(samples), M, sim
@@ -74,11 +74,13 @@ def test_slider_pulled_slowly_to_just_below_mu_N_still_sticks():
     target = 0.95 * 0.4 * PRESS
     sim, nodes = slider(mu=0.4, pull=0.0)
     ramp = 0.4e-3
-    base = sim.state.f_ext[nodes].copy()
+    base = sim.model.f_ext.copy()
 
     def load(s):
         frac = min(1.0, s.time_s / ramp)
-        s.state.f_ext[nodes, 0] = base[:, 0] + frac * target / len(base) / kl.units.FORCE
+        f = base.copy()
+        f[nodes, 0] += frac * target / base[nodes].shape[0] / kl.units.FORCE
+        s.set_external_forces(f * kl.units.FORCE)
 
     sim.run(0.6e-3, observe=load, observe_every_s=1e-6)
     x_before = com(sim, nodes)[0][0]
@@ -134,10 +136,10 @@ def test_no_tunnelling_at_the_speed_of_a_fast_ladder(speed):
     ya = scene.add_yarn(a)
     scene.hold(ya, [0, n - 1])
     scene.add_yarn(b)
-    state = scene.build()
-    state.v[n:, 2] = -speed / kl.units.VELOCITY
+    rods = scene.build()
+    rods.state.v[n:, 2] = -speed / kl.units.VELOCITY
     model = ContactModel.for_force(20 * kl.NYLON.f0, D, overlap_fraction=0.05)
-    sim = kl.Simulation(state, contact=model)
+    sim = kl.Simulation(rods, contact=model)
     worst = np.inf
     for _ in range(100):
         sim.run(2e-6)
@@ -154,7 +156,7 @@ def test_a_frictionless_slider_crossing_rail_nodes_feels_no_drag_union_a_small_o
     dashpot takes energy: measured 1.4 % of PRESS (3.2 % with 0.5 d edges)."""
     pull = 0.2 * PRESS
     sim, nodes = slider(0.0, pull, rail_edge_d=2.9, counting=counting, rail_length_d=40)
-    M = sim.state.mass[nodes].sum() * kl.units.MASS
+    M = sim.model.mass[nodes].sum() * kl.units.MASS
     t, v = [], []
     sim.run(0.4e-3, observe=lambda s: (t.append(s.time_s), v.append(com(s, nodes)[1][0])), observe_every_s=2e-6)
     resistance = pull - M * np.polyfit(t, v, 1)[0]

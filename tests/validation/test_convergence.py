@@ -10,7 +10,8 @@ import math
 
 import pytest
 
-from knitlad.protocol import LadderSettings, run_ladder
+from knitlad.config import CutConfig
+from knitlad.protocol import run_ladder
 from knitlad.simulation import numba_threads
 from knitlad.stitch_model import stitch_tensions
 
@@ -55,6 +56,6 @@ def test_the_laddering_velocity_is_converged_in_the_time_step_below_035(fx):
     depends on the step: it was the front read in the column beside the upward ladder, fixed
     since (``measure.laddering_column``). The steps at 13.5 on 42 x 42: docs/accuracy.md."""
     with numba_threads(1):
-        v = [run_ladder(LadderSettings(n_x=16, n_y=16, fx_target=fx, dt_safety=dt)).v_lad_over_cb
+        v = [run_ladder(CutConfig(n_x=16, n_y=16, fx=fx, dt_safety=dt).settings()).v_lad_over_cb
              for dt in (0.35, 0.175)]
     assert v[1] == pytest.approx(v[0], rel=0.05)

@@ -20,31 +20,37 @@ def wiggly_rod(n: int = 9, seed: int = 0) -> np.ndarray:
     return pts
 
 
-def energy(state: kl.RodState, twist: bool) -> float:
-    s = state.copy()
-    return float(sum(potential_energy(s, Workspace.for_state(s), make_contacts(s, None), twist)))
+def energy(rods: kl.Rods, twist: bool) -> float:
+    r = rods.copy()
+    return float(sum(potential_energy(r.model, r.state, Workspace.for_model(r.model), make_contacts(r, None), twist,
+                                      False)))
 
 
-def check_gradient(state: kl.RodState, twist: bool, rel_tol: float) -> None:
-    s = state.copy()
-    w = Workspace.for_state(s)
-    compute_forces(s, w, make_contacts(s, None), twist, 0.0, 1.0)
+def forces(rods: kl.Rods, twist: bool) -> Workspace:
+    """Forces and torques of ``rods`` (no contact) into a new workspace."""
+    w = Workspace.for_model(rods.model)
+    compute_forces(rods.model, rods.state, w, make_contacts(rods, None), twist, False, 0.0, 1.0)
+    return w
+
+
+def check_gradient(rods: kl.Rods, twist: bool, rel_tol: float) -> None:
+    w = forces(rods.copy(), twist)
     eps = 1e-7  # mm
-    fd = np.zeros_like(state.x)
-    for i in range(state.x.shape[0]):
+    fd = np.zeros_like(rods.state.x)
+    for i in range(rods.state.x.shape[0]):
         for c in range(3):
-            plus, minus = state.copy(), state.copy()
-            plus.x[i, c] += eps
-            minus.x[i, c] -= eps
+            plus, minus = rods.copy(), rods.copy()
+            plus.state.x[i, c] += eps
+            minus.state.x[i, c] -= eps
             fd[i, c] = -(energy(plus, twist) - energy(minus, twist)) / (2 * eps)
     scale = np.max(np.abs(fd))
     assert np.max(np.abs(w.force - fd)) < rel_tol * scale, np.max(np.abs(w.force - fd)) / scale
     if twist:
-        fd_t = np.zeros_like(state.theta)
-        for k in range(state.theta.shape[0]):
-            plus, minus = state.copy(), state.copy()
-            plus.theta[k] += 1e-6
-            minus.theta[k] -= 1e-6
+        fd_t = np.zeros_like(rods.state.theta)
+        for k in range(rods.state.theta.shape[0]):
+            plus, minus = rods.copy(), rods.copy()
+            plus.state.theta[k] += 1e-6
+            minus.state.theta[k] -= 1e-6
             fd_t[k] = -(energy(plus, twist) - energy(minus, twist)) / 2e-6
         scale_t = np.max(np.abs(fd_t))
         assert np.max(np.abs(w.torque - fd_t)) < rel_tol * scale_t
@@ -54,9 +60,9 @@ def test_isotropic_bending_and_stretching_forces_are_minus_the_energy_gradient()
     pts = wiggly_rod()
     scene = kl.Scene()
     scene.add_yarn(pts)
-    state = scene.build(twist=False, stretch_damping_ratio=0.0)
-    state.x[:] *= 1.003  # some stretch too
-    check_gradient(state, twist=False, rel_tol=1e-5)
+    rods = scene.build(twist=False, stretch_damping_ratio=0.0)
+    rods.state.x[:] *= 1.003  # some stretch too
+    check_gradient(rods, twist=False, rel_tol=1e-5)
 
 
 @pytest.mark.parametrize("closed", [False, True])
@@ -64,10 +70,10 @@ def test_framed_bending_with_natural_curvature_and_twist_are_minus_the_energy_gr
     pts = wiggly_rod(seed=1)
     scene = kl.Scene()
     scene.add_yarn(pts, natural_curvature="rest", closed=closed)
-    state = scene.build(twist=True, stretch_damping_ratio=0.0)
+    rods = scene.build(twist=True, stretch_damping_ratio=0.0)
     rng = np.random.default_rng(2)
-    state.x[:] += rng.normal(scale=0.05e-3 / kl.units.LENGTH, size=state.x.shape)
-    state.theta[:] = rng.normal(scale=0.3, size=state.theta.shape)
+    rods.state.x[:] += rng.normal(scale=0.05e-3 / kl.units.LENGTH, size=rods.state.x.shape)
+    rods.state.theta[:] = rng.normal(scale=0.3, size=rods.state.theta.shape)
     # bring the frames to the perturbed shape first: the FD energies transport from here
-    compute_forces(state, Workspace.for_state(state), make_contacts(state, None), True, 0.0, 1.0)
-    check_gradient(state, twist=True, rel_tol=1e-5)
+    forces(rods, True)
+    check_gradient(rods, twist=True, rel_tol=1e-5)

@@ -32,11 +32,11 @@ def crossing(spin_rad_s: float, axis_velocity=(0.0, 0.0, 0.0)):
     b = scene.add_yarn(np.column_stack([0 * s, s, 0 * s - 0.49 * D]))
     scene.hold(a, range(n), velocity=axis_velocity)
     scene.hold(b, range(n))
-    state = scene.build(twist=True)
-    state.v[:] = state.v_prescribed  # moving from the first force evaluation on
-    edges_a = np.flatnonzero(state.node_yarn[state.edge_a] == a)
-    state.omega[edges_a] = spin_rad_s * units.TIME
-    sim = kl.Simulation(state, contact=ContactModel(stiffness=1e3, friction=MU))
+    rods = scene.build(twist=True)
+    rods.state.v[:] = rods.model.v_prescribed  # moving from the first force evaluation on
+    edges_a = np.flatnonzero(rods.model.node_yarn[rods.model.edge_a] == a)
+    rods.state.omega[edges_a] = spin_rad_s * units.TIME
+    sim = kl.Simulation(rods, contact=ContactModel(stiffness=1e3, friction=MU))
     return sim, edges_a
 
 
@@ -47,7 +47,7 @@ def test_a_spinning_yarn_is_spun_down_by_the_friction_torque_r_mu_fn():
     for _ in range(40):
         sim.step(20)
         times.append(sim.time_s)
-        spins.append(float((s.twist_inertia[ea] * s.omega[ea]).sum()) * units.MASS * units.LENGTH**2 / units.TIME)
+        spins.append(float((sim.model.twist_inertia[ea] * s.omega[ea]).sum()) * units.MASS * units.LENGTH**2 / units.TIME)
         normal.append(sim.contact_stats().normal_force_sum_N)
     assert sim.contact_stats().sliding >= 1
     rate = np.polyfit(times[10:], spins[10:], 1)[0]  # after the tangential spring has loaded
@@ -80,19 +80,19 @@ def test_switching_twist_on_leaves_every_force_unchanged():
 
     l0 = kl.NYLON.stitch_length
     knit = build_jersey(Jersey(n_x=3, n_y=4, l_x=0.33 * l0, l_y=0.25 * l0, nodes_per_stitch=24))
-    plain = knit.state
-    plain.x[:] += np.random.default_rng(3).normal(scale=0.02 * D / units.LENGTH, size=plain.x.shape)  # any shape
+    plain = knit.rods
+    plain.state.x[:] += np.random.default_rng(3).normal(scale=0.02 * D / units.LENGTH, size=plain.state.x.shape)  # any shape
     twisted = with_twist(plain, kl.NYLON.twisting_stiffness / kl.NYLON.bending_stiffness)
     contact = ContactModel(stiffness=1e3)
     forces = []
-    for state, twist in ((plain, False), (twisted, True)):
-        w = Workspace.for_state(state)
-        c = make_contacts(state, contact)
-        assert compute_forces(state, w, c, twist, 0.0, 1e-3)
+    for rods, twist in ((plain, False), (twisted, True)):
+        w = Workspace.for_model(rods.model)
+        c = make_contacts(rods, contact)
+        assert compute_forces(rods.model, rods.state, w, c, twist, True, 0.0, 1e-3)
         forces.append(w.force.copy())
         if twist:
             assert np.abs(w.torque).max() < 1e-9 * np.abs(w.force).max()
-            stretching, bending, twisting = potential_energy(state, w, c, True)[:3]
+            stretching, bending, twisting = potential_energy(rods.model, rods.state, w, c, True, True)[:3]
             assert abs(twisting) < 1e-12 * (stretching + bending)
     np.testing.assert_allclose(forces[1], forces[0], rtol=0, atol=1e-9 * np.abs(forces[0]).max())
     with pytest.raises(ValueError, match="already carries twist"):

@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 
 import knitlad as kl
-from knitlad.config import material_for
+from knitlad.config import CutConfig
 from knitlad.contact import ContactModel
-from knitlad.protocol import Interpenetration, LadderRun, LadderSettings
+from knitlad.observers import Interpenetration
+from knitlad.protocol import analyse, cut, propagate, stretch, stretch_contact
 from knitlad.scenes.weave import plain_weave
 from knitlad.simulation import numba_threads
 
@@ -22,32 +23,29 @@ from knitlad.simulation import numba_threads
 OVERLAP_BOUND = 0.25
 
 
-def small(**kw) -> LadderSettings:
-    base = dict(n_x=6, n_y=8, nodes_per_stitch=16, max_time_s=5e-3)
-    base.update(kw)
-    if "fx_target" not in kw:
-        base["fx_target"] = None
-    return LadderSettings(**base)
+def small(**kw) -> CutConfig:
+    return CutConfig(**{**dict(n_x=6, n_y=8, resolution=16, max_time_ms=5.0), **kw})
 
 
-def run(settings: LadderSettings):
+def run(cfg: CutConfig):
     with numba_threads(1):
-        r = LadderRun(settings)
-        res = r.run()
-    assert np.isfinite(r.sim.state.x).all() and np.isfinite(r.sim.state.v).all()
-    return r, res
+        knit = stretch(cfg.stretch_settings())
+        laddering = cut(knit, cfg.dynamics_settings())
+        res = analyse(propagate(laddering))
+    assert np.isfinite(laddering.sim.state.x).all() and np.isfinite(laddering.sim.state.v).all()
+    return knit, res
 
 
 def test_tension_25_is_reached_and_ladders_without_deep_overlap():
     """f_x^ini = 25 (above the paper's highest point, 15.67), force control within 2 %."""
-    r, res = run(small(fx_target=25.0))
+    _, res = run(small(fx=25.0))
     assert res.fx_within_tolerance and res.fx_ini == pytest.approx(25.0, rel=0.02)
     assert 0.0 < res.peak_overlap_over_d < OVERLAP_BOUND
     assert res.n_lad_over_ny >= 0.25 and res.fx_fin < res.fx_ini
 
 
 def test_friction_08_runs_without_deep_overlap():
-    r, res = run(small(lx_over_l0=0.42, mu=0.8))
+    _, res = run(small(lx=0.42, mu=0.8))
     assert res.fx_ini > 2.0
     assert 0.0 < res.peak_overlap_over_d < OVERLAP_BOUND
 
@@ -55,24 +53,24 @@ def test_friction_08_runs_without_deep_overlap():
 def test_a_jammed_thick_yarn_knit_is_built_narrower_and_runs():
     """d/l0 = 1/20: no jersey centreline holds l0 per stitch at l_x = 0.30 l0, so the knit
     is built at the widest l_x (0.01 l0 steps) where it does, then run as any other."""
-    r, res = run(small(lx_over_l0=0.24, material=material_for(1 / 20)))
-    assert r.build_lx <= 0.23 and res.box_lx_over_l0 == pytest.approx(0.24)
+    knit, res = run(small(lx=0.24, d_over_l0=1 / 20))
+    assert knit.knit.geometry.l_x / knit.settings.material.stitch_length <= 0.23 + 1e-9
+    assert res.box_lx_over_l0 == pytest.approx(0.24)
     assert res.peak_overlap_over_d < OVERLAP_BOUND
 
 
 def test_a_contact_too_soft_for_the_tension_stops_with_an_interpenetration_error():
     """k_n 400 times below the default (20 f0 -> 0.05 f0 at 5 % of d): the loops sink into each other."""
-    with numba_threads(1), pytest.raises(Interpenetration, match=r"yarns overlap by .* d .*raise contact_force_f0"):
-        LadderRun(small(lx_over_l0=0.42, contact_force_f0=0.05)).run()
+    with pytest.raises(Interpenetration, match=r"yarns overlap by .* d .*raise contact_force_f0"):
+        run(small(lx=0.42, contact_force_f0=0.05))
 
 
 def test_a_knit_stepped_at_the_stability_limit_stays_finite():
     """safety = 1: the largest step knitlad accepts (Gershgorin bound over stretching,
     bending and contact springs); 3000 steps of a relaxed 4 x 4 knit with friction."""
     with numba_threads(1):
-        r = LadderRun(small(n_x=4, n_y=4, lx_over_l0=0.36))
-        r.stretch()
-        sim = kl.Simulation(r.sim.state, contact=r.contact, safety=1.0)
+        knit = stretch(small(n_x=4, n_y=4, lx=0.36).stretch_settings())
+        sim = kl.Simulation(knit.knit.rods.copy(), contact=stretch_contact(knit.settings), safety=1.0)
         sim.set_friction(0.4)
         sim.step(3000)  # raises SimulationBlowUp on a non-finite value or a supersonic node
         assert np.isfinite(sim.state.x).all()
@@ -122,12 +120,11 @@ def undamped_ladder_energy(safety: float, counting: str) -> float:
     mu = 0 and no dashpot anywhere (from rest at the cut; the held ends do no work): the
     largest change of the total energy, over the peak kinetic energy."""
     with numba_threads(1):
-        run = LadderRun(small(fx_target=13.6, mu=0.0, dt_safety=safety, contact_damping_ratio=0.0,
-                              stretch_damping_ratio=0.0, contact_counting=counting))
-        run.stretch()
-        run.cut()
-        run.sim.state.v[:] = 0.0
-        total, kinetic = run.sim.energy_history(20, 0.1e-3)
+        cfg = small(fx=13.6, mu=0.0, dt_safety=safety, contact_damping_ratio=0.0, stretch_damping_ratio=0.0,
+                    contact_counting=counting)
+        sim = cut(stretch(cfg.stretch_settings()), cfg.dynamics_settings()).sim
+        sim.state.v[:] = 0.0
+        total, kinetic = sim.energy_history(20, 0.1e-3)
     assert kinetic.max() > 1e-3 * total[0]  # the ladder ran: the check below is not vacuous
     return float(np.max(np.abs(total[1:] - total[0])) / kinetic.max())
 
@@ -148,10 +145,9 @@ def test_a_ladder_freed_slowly_is_held_by_friction():
     mu = 0.4 the ladder stops before any edge course, at mu = 0 it still runs to one (measured,
     clamped course ends: 0.44 c_b). Undamped, at mu = 0.4, it reaches an edge too (n_lad/n_y
     1.56). So the model's ladders run on the momentum of the freed loops, and friction holds
-    loops freed slowly (README, issue 4). With tail ends (session 5) the same held: 1.0 damped
-    against 1.5 undamped."""
+    loops freed slowly (README). With tail ends the same held: 1.0 damped against 1.5 undamped."""
     with numba_threads(1):
-        held = LadderRun(LadderSettings(n_x=16, n_y=16, fx_target=13.6, drag_per_s=3e4)).run()
-        free = LadderRun(LadderSettings(n_x=16, n_y=16, fx_target=13.6, drag_per_s=3e4, mu=0.0)).run()
+        held = run(CutConfig(n_x=16, n_y=16, fx=13.6, drag_per_s=3e4))[1]
+        free = run(CutConfig(n_x=16, n_y=16, fx=13.6, drag_per_s=3e4, mu=0.0))[1]
     assert not held.reached_edge
     assert free.reached_edge

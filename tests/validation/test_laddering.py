@@ -1,4 +1,4 @@
-"""The laddering experiment against the paper's DER runs (issue 4; slow).
+"""The laddering experiment against the paper's DER runs (slow).
 
 Paper (Fig. 5a and appendix "Simulations"; 42 x 42, mu = 0.4, l_y/l0 = 0.25, no natural
 curvature): v_lad/c_b = 0.176 at f_x^ini = 1.58 and 1.05 at 15.67, linear in the tension, so
@@ -13,7 +13,8 @@ import math
 
 import pytest
 
-from knitlad.protocol import LadderRun, LadderSettings, run_ladder
+from knitlad.config import CutConfig
+from knitlad.protocol import analyse, cut, propagate, run_ladder, stretch
 from tests.validation.references import paper_der_line
 
 PAPER_SLOPE = paper_der_line(1.0) - paper_der_line(0.0)
@@ -26,7 +27,7 @@ def test_the_laddering_velocity_grows_with_tension_at_the_papers_rate():
     0.062. The 25 %: one run's v_lad scatters by up to +-13 % at f_x 4 and +-2 % at 13.6
     (docs/accuracy.md), which moves the slope by up to ~13 %, and a knit of 24 rows ladders
     slower at low tension than one of 42."""
-    runs = [run_ladder(LadderSettings(n_x=24, n_y=24, fx_target=fx)) for fx in (4.0, 13.6)]
+    runs = [run_ladder(CutConfig(n_x=24, n_y=24, fx=fx).settings()) for fx in (4.0, 13.6)]
     for r in runs:
         assert math.isfinite(r.v_lad_over_cb), r.stop_reason
         assert r.fx_fin < r.fx_ini
@@ -38,7 +39,7 @@ def test_the_laddering_velocity_grows_with_tension_at_the_papers_rate():
 @pytest.mark.slow
 def test_a_weak_global_drag_slows_the_ladder_at_low_tension_only():
     """docs/accuracy.md, "A weak global drag": from one stretched 24 x 24 knit per tension
-    (LadderRun.branch), a drag of 3e3 /s on every node (momentum decays in 0.33 ms) slows the
+    (each stretched knit cut twice), a drag of 3e3 /s on every node (momentum decays in 0.33 ms) slows the
     ladder by more than 40 % at f_x^ini 1.58, where a stitch takes ~0.3 ms to let go, and by
     less than 5 % at 13.6 (~0.09 ms per stitch). Measured: 0.277 -> 0.128 (-54 %) and
     0.916 -> 0.918. The 40 %: undamped at 1.58, v_lad scatters from 0.26 to 0.39 under drags
@@ -60,14 +61,12 @@ def test_the_friction_couple_slows_the_ladder_at_low_tension():
     assert twisted < 0.75 * free
 
 
-def laddering_velocity_by_default_and_with(fx: float, size: int = 24, **after_cut) -> tuple[float, float]:
-    """v_lad/c_b from one stretched knit, laddered with the default settings and with ``after_cut``."""
-    stretched = LadderRun(LadderSettings(n_x=size, n_y=size, fx_target=fx))
-    stretched.stretch()
+def laddering_velocity_by_default_and_with(fx: float, size: int = 24, **dynamics) -> tuple[float, float]:
+    """v_lad/c_b from one stretched knit, laddered with the default settings and with ``dynamics`` changed."""
+    knit = stretch(CutConfig(n_x=size, n_y=size, fx=fx).stretch_settings())
     v = []
-    for settings in ({}, after_cut):
-        run = stretched.branch(**settings)
-        run.propagate()
-        assert math.isfinite(run.result.v_lad_over_cb), run.result.stop_reason
-        v.append(run.result.v_lad_over_cb)
+    for settings in ({}, dynamics):
+        result = analyse(propagate(cut(knit, CutConfig(n_x=size, n_y=size, fx=fx, **settings).dynamics_settings())))
+        assert math.isfinite(result.v_lad_over_cb), result.stop_reason
+        v.append(result.v_lad_over_cb)
     return v[0], v[1]

@@ -31,9 +31,9 @@ def test_pre_curved_ring_is_force_free_in_its_rest_shape():
     R = 2e-3
     scene = kl.Scene()
     scene.add_yarn(circle(R, 40), closed=True, natural_curvature="rest")
-    state = scene.build()
-    w = Workspace.for_state(state)
-    compute_forces(state, w, make_contacts(state, None), True, 0.0, 1.0)
+    rods = scene.build()
+    w = Workspace.for_model(rods.model)
+    compute_forces(rods.model, rods.state, w, make_contacts(rods, None), True, False, 0.0, 1.0)
     scale = B / R**2 / kl.units.FORCE
     assert np.max(np.abs(w.force)) < 1e-9 * scale
     assert np.max(np.abs(w.torque)) < 1e-9 * scale * R / kl.units.LENGTH
@@ -46,12 +46,12 @@ def test_straightened_rod_with_natural_curvature_curls_back_to_its_arc():
     scene = kl.Scene()
     arc = circle(R, n, arc=1.5 * math.pi, closed=False)
     scene.add_yarn(arc, natural_curvature="rest")
-    state = scene.build()
-    length = state.rest_length.sum()
-    state.x[:] = 0.0
-    state.x[:, 0] = np.linspace(0.0, length, n)
-    state.x[:, 1] = 1e-3 * np.sin(np.linspace(0, math.pi, n)) * length  # break the symmetry
-    sim = kl.Simulation(state)
+    rods = scene.build()
+    length = rods.model.rest_length.sum()
+    rods.state.x[:] = 0.0
+    rods.state.x[:, 0] = np.linspace(0.0, length, n)
+    rods.state.x[:, 1] = 1e-3 * np.sin(np.linspace(0, math.pi, n)) * length  # break the symmetry
+    sim = kl.Simulation(rods)
     result = sim.relax(force_tol_N=1e-9, max_steps=2_000_000)
     assert result["converged"], result
     radii = circumradii(sim.positions_m())
@@ -69,15 +69,15 @@ def test_twisted_rod_carries_torque_GJ_phi_over_L():
     y = scene.add_yarn(pts)
     scene.hold(y, [0, 1, n - 2, n - 1])
     scene.hold_twist(y, [0, n - 2])
-    state = scene.build(twist=True)
+    rods = scene.build(twist=True)
     phi = 0.3
-    state.theta[-1] = phi
-    sim = kl.Simulation(state)
+    rods.state.theta[-1] = phi
+    sim = kl.Simulation(rods)
     sim.relax(force_tol_N=1e-12, torque_tol_Nm=1e-14)
     L = (n - 2) * h  # between the midpoints of the two clamped edges
     expected = kl.NYLON.twisting_stiffness * phi / L
     torque_end = -sim.work.torque[-1] * kl.units.FORCE * kl.units.LENGTH
     assert abs(torque_end / expected - 1.0) < 1e-6
     # the twist relaxed to a uniform rate
-    rate = np.diff(state.theta)
+    rate = np.diff(rods.state.theta)
     np.testing.assert_allclose(rate, phi / (n - 2), rtol=1e-6)

@@ -27,18 +27,19 @@ def straight_cell(n: int, length: float, rest_length: float, ly: float, images_y
         for j in range(-images_y, images_y + 1):
             if i or j:
                 scene.add_image(y, (i * rest_length, j * ly, 0.0))
-    state = scene.build()
-    cell = PeriodicStitch(None, state, y, rest_length / units.LENGTH, ly / units.LENGTH)
-    cell.set_cell(length / units.LENGTH, ly / units.LENGTH)
-    return cell, kl.Simulation(state, contact=contact)
+    rods = scene.build()
+    cell = PeriodicStitch(None, rods, y, rest_length / units.LENGTH, ly / units.LENGTH)
+    sim = kl.Simulation(rods, contact=contact)
+    cell.set_cell(sim, length / units.LENGTH, ly / units.LENGTH)
+    return cell, sim
 
 
 def test_images_follow_their_master():
     cell, sim = straight_cell(20, 5e-3, 5e-3, 1e-3, contact=None)
     sim.state.v[:20, 1] = 1e-3  # the real yarn drifts along y
     sim.run(1e-4)
-    s = sim.state
-    np.testing.assert_allclose(s.x[s.image_node], s.x[s.image_master] + s.image_shift, atol=1e-12)
+    m, x = sim.model, sim.state.x
+    np.testing.assert_allclose(x[m.image_node], x[m.image_master] + m.image_shift, atol=1e-12)
 
 
 def test_a_yarn_does_not_touch_its_own_continuation_across_the_seam():
@@ -81,15 +82,14 @@ def test_the_zero_tension_point_is_converged_in_the_resolution():
 
 @pytest.mark.slow
 def test_the_fabric_away_from_its_edges_carries_the_tension_of_the_periodic_stitch():
-    """Issue 6: the 42 x 42 knit (course ends clamped at the edge sinkers), stretched at mu = 0 to
+    """The 42 x 42 knit (course ends clamped at the edge sinkers), stretched at mu = 0 to
     f_x^ini = 4 by force control, against the periodised stitch at the fabric's own measured
     central periodicities (same resolution, 24 nodes/stitch). Measured: 3.97 against 4.01
     (-0.9 %); at 1.59, -2.6 %; at 15.6, where f_x rises by ~300 per unit of l_x/l0, -5.3 %.
     Bound 5 %; with the ends held at the tip of tails the fabric read +11 % at 15.6."""
-    from knitlad.protocol import LadderRun, LadderSettings
+    from knitlad.config import CutConfig
+    from knitlad.protocol import stretch
 
-    run = LadderRun(LadderSettings(fx_target=4.0, nodes_per_stitch=24))
-    run.stretch()
-    r = run.result
+    r = stretch(CutConfig(fx=4.0, resolution=24).stretch_settings())
     stitch = stitch_tensions(r.lx_over_l0, r.ly_over_l0, nodes_per_stitch=24)
     assert r.fx_ini == pytest.approx(stitch.fx, rel=0.05)

@@ -64,10 +64,10 @@ def test_reaction_forces_balance_the_load():
 def oscillate(c: Cantilever, dt_s: float | None, periods: float, damping: float = 0.0):
     """Release the cantilever from its statically loaded shape; tip y(t) and energies."""
     force = 1e-3 * B / c.length**2
-    state = c.build(tip_force=(0.0, -force, 0.0), stretch_damping_ratio=damping)
-    kl.Simulation(state).relax(force_tol_N=force * 1e-7, max_steps=3_000_000)
-    state.f_ext[:] = 0.0
-    sim = kl.Simulation(state, dt_s=dt_s)
+    rods = c.build(tip_force=(0.0, -force, 0.0), stretch_damping_ratio=damping)
+    kl.Simulation(rods).relax(force_tol_N=force * 1e-7, max_steps=3_000_000)
+    rods = rods.replace_model(f_ext=0.0 * rods.model.f_ext)
+    sim = kl.Simulation(rods, dt_s=dt_s)
     period = 2 * math.pi / c.first_frequency()
     times, tips, totals = [], [], []
 
@@ -116,9 +116,9 @@ def axial_energy_history(damping: float, periods: float = 5.0) -> np.ndarray:
     pts[:, 0] = np.linspace(0.0, 0.01, n)
     scene = kl.Scene()
     scene.add_yarn(pts)
-    state = scene.build(stretch_damping_ratio=damping)
-    state.x[:, 0] *= 1.0 + 1e-4
-    sim = kl.Simulation(state)
+    rods = scene.build(stretch_damping_ratio=damping)
+    rods.state.x[:, 0] *= 1.0 + 1e-4
+    sim = kl.Simulation(rods)
     period = 2 * 0.01 / kl.NYLON.axial_wave_speed  # fundamental free-free axial mode
     totals = [sim.energies_J()["total"]]
     sim.run(periods * period, observe=lambda s: totals.append(s.energies_J()["total"]), observe_every_s=period / 50)

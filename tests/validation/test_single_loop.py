@@ -25,10 +25,10 @@ def release(fx: float, mu: float, resolution: int = 36):
 def test_the_loop_stays_hooked_while_the_lower_row_is_there():
     run = LoopRun(LoopSettings(fx=4.0, mu=0.0))
     run.relax()
-    s, sc = run.sim.state, run.scene
-    loop = slice(int(s.yarn_start[sc.loop]), int(s.yarn_start[sc.loop + 1]))
-    upper = slice(int(s.yarn_start[sc.upper]), int(s.yarn_start[sc.upper + 1]))
-    lower = slice(int(s.yarn_start[sc.lower]), int(s.yarn_start[sc.lower + 1]))
+    s, sc, start = run.sim.state, run.scene, run.sim.model.yarn_start
+    loop = slice(int(start[sc.loop]), int(start[sc.loop + 1]))
+    upper = slice(int(start[sc.upper]), int(start[sc.upper + 1]))
+    lower = slice(int(start[sc.lower]), int(start[sc.lower + 1]))
     assert run.result.relax_converged
     assert piercings(s.x[loop], s.x[upper]) == (2, 0)  # the upper row threads the loop
     assert piercings(s.x[lower], s.x[loop]) == (2, 0)  # the loop threads the lower row
