@@ -28,10 +28,6 @@ def tension_per_thread(reactions_N: np.ndarray, left_end: np.ndarray, right_end:
     return float(F_x / (len(right_end) * f0))
 
 
-def course_rows(x: np.ndarray, yarn_start: np.ndarray, rows: list[int]) -> list[np.ndarray]:
-    return [x[yarn_start[y]: yarn_start[y + 1]] for y in rows]
-
-
 def periodicities(course_positions: list[np.ndarray], column_x: np.ndarray, l_x_guess: float,
                   margin: float = 0.25) -> tuple[float, float]:
     """(l_x, l_y) [same unit as the positions] measured on the central courses and columns.

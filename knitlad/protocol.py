@@ -36,7 +36,7 @@ import numpy as np
 
 from knitlad import units
 from knitlad.contact import ContactModel, Counting, contact_time_step
-from knitlad.measure import cell_overlap, course_rows, laddered_cells, periodicities, tension_per_thread
+from knitlad.measure import cell_overlap, laddered_cells, periodicities, tension_per_thread
 from knitlad.observers import (
     Arrested,
     EdgeReached,
@@ -153,10 +153,10 @@ class KnitGauge:
         k = self.knit
         return tension_per_thread(sim.reaction_forces_N(), k.left_end, k.right_end, self.material.f0)
 
-    def rows(self, x: np.ndarray, yarn_start: np.ndarray) -> list[np.ndarray]:
-        """Positions of the free courses, bottom to top, then of the held top course."""
-        k = self.knit
-        return course_rows(x, yarn_start, k.courses + [k.bars[1]])
+    def rows(self, x: np.ndarray) -> list[np.ndarray]:
+        """Positions of the free courses, bottom to top, then of the held top course, by their
+        nodes as built (a cut course is still one row)."""
+        return [x[nodes] for nodes in self.knit.row_nodes()]
 
     def column_centres(self, box_lx: float) -> np.ndarray:
         """Head x of each column [internal]: the built columns, carried by the affine stretch."""
@@ -164,9 +164,9 @@ class KnitGauge:
         scale = box_lx * self.material.stitch_length / g.l_x
         return g.column_x(np.arange(g.n_x)) * scale / units.LENGTH
 
-    def laddered(self, x: np.ndarray, yarn_start: np.ndarray, box_lx: float, box_ly: float) -> np.ndarray:
+    def laddered(self, x: np.ndarray, box_lx: float, box_ly: float) -> np.ndarray:
         l0 = self.material.stitch_length / units.LENGTH
-        overlap = cell_overlap(self.rows(x, yarn_start), self.column_centres(box_lx), box_lx * l0)
+        overlap = cell_overlap(self.rows(x), self.column_centres(box_lx), box_lx * l0)
         return laddered_cells(overlap, box_ly * l0)
 
 
@@ -204,7 +204,7 @@ def stretch_contact(s: StretchSettings, **changes) -> ContactModel:
     return ContactModel.for_knit(s.material, s.contact_force_f0, s.overlap_fraction, **{**kw, **changes})
 
 
-class _KnitBox:
+class KnitBox:
     """The knit in its box while it is stretched (:class:`knitlad.stretching.Box`)."""
 
     def __init__(self, s: StretchSettings) -> None:
@@ -244,7 +244,7 @@ def stretch(s: StretchSettings, progress: Callable[[str, float], None] | None = 
     """Stage 1: build the knit, stretch it at mu = 0 to the target and relax it (module docstring)."""
     t0 = time.perf_counter()
     report = (lambda frac: progress("stretch", frac)) if progress else None
-    box = _KnitBox(s)
+    box = KnitBox(s)
     within = True
     if s.lx_over_l0 is not None:
         stretch_to(box, s.lx_over_l0, s.ly_over_l0, s.stretch_increment, progress=report)
@@ -254,8 +254,7 @@ def stretch(s: StretchSettings, progress: Callable[[str, float], None] | None = 
                                    progress=report)
     box.guard.check(box.sim, "while stretching")
     l0 = s.material.stitch_length / units.LENGTH
-    x, yarn_start = box.sim.state.x, box.sim.model.yarn_start
-    lx_m, ly_m = periodicities(box.gauge.rows(x, yarn_start)[:-1], box.gauge.column_centres(box.lx), box.lx * l0)
+    lx_m, ly_m = periodicities(box.gauge.rows(box.sim.state.x)[:-1], box.gauge.column_centres(box.lx), box.lx * l0)
     return StretchedKnit(
         settings=s, knit=box.knit, box_lx=box.lx, box_ly=box.ly, fx_ini=fx, lx_over_l0=lx_m / l0,
         ly_over_l0=ly_m / l0, fx_within_tolerance=within, relax_steps=box.relax_steps,
@@ -280,7 +279,7 @@ class Laddering:
     def laddered(self) -> np.ndarray:
         """Cells laddered at the current positions (including the baseline)."""
         k = self.knit
-        return k.gauge.laddered(self.sim.state.x, self.sim.model.yarn_start, k.box_lx, k.box_ly)
+        return k.gauge.laddered(self.sim.state.x, k.box_lx, k.box_ly)
 
     def tension(self) -> float:
         return self.knit.gauge.tension(self.sim)
@@ -305,7 +304,7 @@ def cut(knit: StretchedKnit, dynamics: DynamicsSettings) -> Laddering:
     t0 = time.perf_counter()
     row, column = s.n_y // 2, s.n_x // 2
     rods = knit.knit.rods
-    baseline = knit.gauge.laddered(rods.state.x, rods.model.yarn_start, knit.box_lx, knit.box_ly)
+    baseline = knit.gauge.laddered(rods.state.x, knit.box_lx, knit.box_ly)
     edge = sinker_edge(knit, row, column)
     rods = cut_edge(rods, edge)
     rods = rods.replace_model(

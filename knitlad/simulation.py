@@ -28,7 +28,7 @@ from knitlad.kernels.integrate import (
     verlet_steps,
 )
 from knitlad.state import Rods, Workspace
-from knitlad.timestep import DEFAULT_SAFETY, TimeStepLimits, critical_time_steps
+from knitlad.timestep import DEFAULT_SAFETY, TimeStepLimits, UnstableTimeStep, critical_time_steps
 
 
 class SimulationBlowUp(RuntimeError):
@@ -49,10 +49,6 @@ def numba_threads(n: int):
         yield
     finally:
         numba.set_num_threads(before)
-
-
-class UnstableTimeStep(ValueError):
-    """A requested time step exceeds the explicit stability limit."""
 
 
 class Simulation:
@@ -90,21 +86,7 @@ class Simulation:
         self.contacts: Contacts = make_contacts(rods, contact)
         contact_limit = contact_time_step(self.model, contact, spin=self.twist)
         self.limits: TimeStepLimits = critical_time_steps(self.model, self.twist, contact_limit)
-        if dt_s is None:
-            self.dt = safety * self.limits.combined
-        else:
-            dt = dt_s / units.TIME
-            if not (dt > 0 and math.isfinite(dt)):
-                raise ValueError(f"dt must be a positive number of seconds, got {dt_s!r}")
-            if dt > self.limits.combined:
-                raise UnstableTimeStep(
-                    f"dt = {dt_s:.3e} s exceeds the stability limit {self.limits.combined * units.TIME:.3e} s "
-                    f"(set by {self.limits.limiting()}); use dt <= {self.limits.combined * units.TIME:.3e} s "
-                    "or leave dt unset"
-                )
-            self.dt = dt
-        if not math.isfinite(self.dt):
-            self.dt = 1.0  # nothing moves; any step is stable
+        self.dt = self.limits.time_step(dt_s, safety)
         self.set_drag(drag_per_s)
         self.guard_every = int(guard_every)
         self.steps = 0

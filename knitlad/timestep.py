@@ -15,9 +15,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from knitlad import units
 from knitlad.state import RodModel
 
 DEFAULT_SAFETY = 0.7
+
+
+class UnstableTimeStep(ValueError):
+    """A requested time step exceeds the explicit stability limit."""
 
 
 @dataclass(frozen=True)
@@ -33,6 +38,20 @@ class TimeStepLimits:
     def limiting(self) -> str:
         parts = {"stretching": self.stretching, "bending": self.bending, "twisting": self.twisting, "contact": self.contact}
         return min(parts, key=parts.get)
+
+    def time_step(self, dt_s: float | None, safety: float) -> float:
+        """The step [internal ms]: ``dt_s`` [s] if given (refused above the limit), else ``safety`` x the limit."""
+        if dt_s is None:
+            dt = safety * self.combined
+        else:
+            dt = dt_s / units.TIME
+            if not (dt > 0 and math.isfinite(dt)):
+                raise ValueError(f"dt must be a positive number of seconds, got {dt_s!r}")
+            if dt > self.combined:
+                limit = self.combined * units.TIME
+                raise UnstableTimeStep(f"dt = {dt_s:.3e} s exceeds the stability limit {limit:.3e} s (set by "
+                                       f"{self.limiting()}); use dt <= {limit:.3e} s or leave dt unset")
+        return dt if math.isfinite(dt) else 1.0  # infinite limit: nothing moves, any step is stable
 
 
 def stiffness_row_sums(model: RodModel, twist: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -7,7 +7,7 @@ import pytest
 
 from knitlad import units
 from knitlad.config import CutConfig
-from knitlad.protocol import _KnitBox, analyse, build_width, cut, propagate, stretch
+from knitlad.protocol import KnitBox, analyse, build_width, cut, propagate, stretch
 from knitlad.scenes.jersey import BUILD_LX
 from knitlad.stretching import OutOfReach, stretch_to
 from knitlad.units import NYLON
@@ -23,7 +23,7 @@ def test_tall_cells_are_built_narrower_so_that_the_loops_interlock():
     assert build_width(0.25, NYLON) == BUILD_LX
     lx = build_width(0.302, NYLON)
     assert 0.24 < lx < 0.29
-    box = _KnitBox(config(n_x=4, n_y=6, lx=0.35, ly=0.302).stretch_settings())
+    box = KnitBox(config(n_x=4, n_y=6, lx=0.35, ly=0.302).stretch_settings())
     l0, d = NYLON.stitch_length, NYLON.diameter
     overlap = 2 * box.knit.H - 0.302 * l0
     assert overlap > 2 * d
@@ -41,7 +41,7 @@ def test_dashpot_and_drag_settings_reach_the_knit_and_the_laddering_dynamics():
     damping study and scripts/energy_drift.py switch it off this way)."""
     cfg = config(n_x=4, n_y=4, resolution=16, lx=0.30, contact_damping_ratio=0.0, stretch_damping_ratio=0.0,
                  drag_per_s=3e3)
-    box = _KnitBox(cfg.stretch_settings())
+    box = KnitBox(cfg.stretch_settings())
     # the mu = 0 stretch (FIRE) keeps its own dashpots and no drag: they only shape its path
     assert box.knit.rods.model.stretch_damping.min() > 0 and box.sim.contact_model.damping_ratio == 0.3
     assert box.sim.drag == 0.0
@@ -80,7 +80,7 @@ def test_an_unknown_contact_counting_is_refused_before_anything_runs():
         config(fx=4.0, contact_counting="every")
 
 
-def _relax_in_rounds(box: _KnitBox, rounds: int) -> tuple[list[float], dict]:
+def _relax_in_rounds(box: KnitBox, rounds: int) -> tuple[list[float], dict]:
     """The protocol's FIRE rounds at a fixed box; f_x after each, and the last round's report."""
     readings, info = [], {}
     for _ in range(rounds):
@@ -96,12 +96,12 @@ def test_at_mu_0_a_knit_with_clamped_course_ends_reaches_equilibrium_at_a_fixed_
     periodic stitch there): FIRE reaches its force tolerance (1e-3 f0), so f_x has settled. Ends held at the tip of
     straight tails instead leave the edge stitches free to trade yarn, and the knit creeps: 8 x 10
     at l_x/l0 = 0.355 wandered between f_x 1.21 and 1.46 over 30 rounds, residual ~0.4 f0."""
-    clamped = _KnitBox(config(n_x=8, n_y=10, lx=0.355, edge="clamped").stretch_settings())
+    clamped = KnitBox(config(n_x=8, n_y=10, lx=0.355, edge="clamped").stretch_settings())
     stretch_to(clamped, 0.355, 0.25, clamped.s.stretch_increment)
     readings, info = _relax_in_rounds(clamped, 40)
     assert info["converged"], f"residual {info['max_force_N'] / NYLON.f0:.3g} f0 after {len(readings)} rounds"
 
-    tail = _KnitBox(config(n_x=8, n_y=10, lx=0.355, edge="tail").stretch_settings())
+    tail = KnitBox(config(n_x=8, n_y=10, lx=0.355, edge="tail").stretch_settings())
     stretch_to(tail, 0.355, 0.25, tail.s.stretch_increment)
     _, info = _relax_in_rounds(tail, len(readings) + 10)
     assert info["max_force_N"] > 10 * 1e-3 * NYLON.f0
@@ -199,3 +199,20 @@ def test_cut_edge_cuts_every_array_along_its_axis():
             drop = {EDGE: 1, HINGE: 2}.get(axis, 0)
             assert getattr(new, name).shape[0] == getattr(part, name).shape[0] - drop + (name == "yarn_start"), name
     assert after.model.n_yarns == rods.model.n_yarns + 1
+
+
+def test_the_cut_leaves_every_course_and_cell_where_it_was():
+    """Cutting a course makes two yarns of it, so the yarn indices of the courses above shift by
+    one; the laddered cells are read by the nodes of each course, which do not move: right after
+    the cut, before any step, the map is the one of the uncut knit and the courses are whole."""
+    cfg = config(n_x=6, n_y=8, resolution=16, lx=0.36, steps_per_increment=200)
+    knit = stretch(cfg.stretch_settings())
+    run = cut(knit, cfg.dynamics_settings())
+    x = run.sim.state.x
+    assert np.array_equal(x, knit.knit.rods.state.x)
+    rows = knit.gauge.rows(x)
+    assert [len(r) for r in rows] == [len(knit.knit.rods.state.x[s]) for s in knit.knit.row_nodes()]
+    assert run.sim.model.n_yarns == knit.knit.rods.model.n_yarns + 1
+    heights = [r[:, 1].mean() for r in rows]
+    assert np.all(np.diff(heights) > 0.5 * knit.box_ly * NYLON.stitch_length / units.LENGTH)
+    assert np.array_equal(run.laddered(), run.baseline)

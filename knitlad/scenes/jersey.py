@@ -170,9 +170,17 @@ class KnitScene:
     right_end: np.ndarray
 
     def course_nodes(self, k: int) -> slice:
-        """Node slice of free course k (0 = bottom)."""
-        y = self.courses[k]
-        return slice(int(self.rods.model.yarn_start[y]), int(self.rods.model.yarn_start[y + 1]))
+        """Node slice of free course k (0 = bottom). Node indices never change (a cut makes two
+        yarns of a course and shifts the yarn indices above it, not the nodes)."""
+        return self._yarn_nodes(self.courses[k])
+
+    def row_nodes(self) -> list[slice]:
+        """Node slices of the free courses, bottom to top, then of the held top course."""
+        return [self._yarn_nodes(y) for y in self.courses + [self.bars[1]]]
+
+    def _yarn_nodes(self, y: int) -> slice:
+        start = self.rods.model.yarn_start  # as built: this scene is never cut
+        return slice(int(start[y]), int(start[y + 1]))
 
 
 def discrete_loop_half_height(geometry: Jersey) -> float:
