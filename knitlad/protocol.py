@@ -239,6 +239,18 @@ class KnitBox:
     def tension(self) -> float:
         return self.gauge.tension(self.sim)
 
+    def stretched(self, fx: float, within_tolerance: bool, wall_s: float) -> StretchedKnit:
+        """The knit as it is now, as a :class:`StretchedKnit` (its f_x measured: ``fx``); stops on a deep overlap."""
+        self.guard.check(self.sim, "while stretching")
+        l0 = self.s.material.stitch_length / units.LENGTH
+        rows = self.gauge.rows(self.sim.state.x)[:-1]
+        lx_m, ly_m = periodicities(rows, self.gauge.column_centres(self.lx), self.lx * l0)
+        return StretchedKnit(
+            settings=self.s, knit=self.knit, box_lx=self.lx, box_ly=self.ly, fx_ini=fx, lx_over_l0=lx_m / l0,
+            ly_over_l0=ly_m / l0, fx_within_tolerance=within_tolerance, relax_steps=self.relax_steps,
+            peak_overlap_over_d=self.guard.peak_over_d, dt_s=self.sim.dt_s, wall_s=wall_s,
+        )
+
 
 def stretch(s: StretchSettings, progress: Callable[[str, float], None] | None = None) -> StretchedKnit:
     """Stage 1: build the knit, stretch it at mu = 0 to the target and relax it (module docstring)."""
@@ -252,14 +264,7 @@ def stretch(s: StretchSettings, progress: Callable[[str, float], None] | None = 
     else:
         fx, within = force_control(box, s.fx_target, s.fx_tolerance, s.stretch_increment, box.build_lx,
                                    progress=report)
-    box.guard.check(box.sim, "while stretching")
-    l0 = s.material.stitch_length / units.LENGTH
-    lx_m, ly_m = periodicities(box.gauge.rows(box.sim.state.x)[:-1], box.gauge.column_centres(box.lx), box.lx * l0)
-    return StretchedKnit(
-        settings=s, knit=box.knit, box_lx=box.lx, box_ly=box.ly, fx_ini=fx, lx_over_l0=lx_m / l0,
-        ly_over_l0=ly_m / l0, fx_within_tolerance=within, relax_steps=box.relax_steps,
-        peak_overlap_over_d=box.guard.peak_over_d, dt_s=box.sim.dt_s, wall_s=time.perf_counter() - t0,
-    )
+    return box.stretched(fx, within, time.perf_counter() - t0)
 
 
 # ------------------------------------------------------------------ stage 2: cut

@@ -31,8 +31,9 @@ from typing import Callable
 
 from knitlad import __version__
 from knitlad.io.atomic import atomic_path
-from knitlad.io.hdf5 import read_attrs, write_ladder_result, write_record
-from knitlad.io.summary import SCENE_SUMMARY_KEYS, write_summary
+from knitlad.io.hdf5 import read_attrs, write_record
+from knitlad.io.summary import write_summary
+from knitlad.registry import SCENES
 from knitlad.sweep import Job
 
 
@@ -63,7 +64,7 @@ def run_job(job: Job, jobs_dir: str, threads: int | None = 1) -> dict:
     path = job_path(jobs_dir, job)
     t0 = time.perf_counter()
     try:
-        summary, write = SCENE_RUNNERS[job.scene](job)
+        summary, write = SCENES[job.scene].run(job.scene_config(), job.output)
     except KeyboardInterrupt:
         raise
     except Exception as e:  # noqa: BLE001 - any failure of one job is recorded and the sweep goes on
@@ -77,52 +78,6 @@ def run_job(job: Job, jobs_dir: str, threads: int | None = 1) -> dict:
     return summary_row(job, {**summary, **record})
 
 
-def _run_ladder(job: Job):
-    """The laddering experiment; returns its summary and a writer of its HDF5 file."""
-    from knitlad.protocol import run_ladder
-
-    result = run_ladder(job.scene_config().settings())
-    if not job.output.frames:
-        result.frames, result.frame_times_s = [], []
-    compression = None if job.output.compression == "none" else job.output.compression
-
-    def write(path: Path, record: dict) -> None:
-        write_ladder_result(path, result, compression=compression, attrs=record)
-
-    return result.summary(), write
-
-
-def _attributes_only(result, job: Job):
-    """A reduced model's summary, and a writer of a file of attributes (summary, settings, scales)."""
-    import dataclasses
-
-    from knitlad.units import Scales
-
-    summary = result.summary()
-    settings = {k: v for k, v in dataclasses.asdict(result.settings).items() if k != "material"}
-    scales = {f"scale_{k}": v for k, v in Scales(result.settings.material).as_attributes().items()}
-
-    def write(path: Path, record: dict) -> None:
-        write_record(path, {**summary, **record, "settings_json": json.dumps(settings), **scales})
-
-    return summary, write
-
-
-def _run_loop(job: Job):
-    from knitlad.loop_model import LoopRun
-
-    return _attributes_only(LoopRun(job.scene_config().settings()).run(), job)
-
-
-def _run_stitch(job: Job):
-    from knitlad.stitch_model import StitchRun
-
-    return _attributes_only(StitchRun(job.scene_config().settings()).run(), job)
-
-
-SCENE_RUNNERS = {"ladder": _run_ladder, "loop": _run_loop, "stitch": _run_stitch}
-
-
 def summary_row(job: Job, attrs: dict | None) -> dict:
     """One table row: the job's inputs, then its status and results."""
     row = {"job_id": job.id, "scene": job.scene, **job.params}
@@ -130,7 +85,7 @@ def summary_row(job: Job, attrs: dict | None) -> dict:
         return {**row, "status": "pending", "error": ""}
     row["status"] = attrs.get("status", "ok")
     row["error"] = attrs.get("error", "")
-    for key in SCENE_SUMMARY_KEYS[job.scene]:
+    for key in SCENES[job.scene].summary_keys:
         value = attrs.get(key, float("nan"))
         row[key] = json.dumps(value) if isinstance(value, (list, dict)) else value
     return row

@@ -41,9 +41,9 @@ from pydantic import (
     model_validator,
 )
 
-from knitlad.config import CutConfig, LoopConfig, StitchConfig, one_line
+from knitlad.config import one_line
+from knitlad.registry import SCENES
 
-SCENES: dict[str, type[BaseModel]] = {"ladder": CutConfig, "loop": LoopConfig, "stitch": StitchConfig}
 COMPRESSIONS = ("gzip", "lzf", "none")
 
 
@@ -127,9 +127,8 @@ class SweepConfig(BaseModel):
     """A whole sweep file (see the module docstring)."""
 
     model_config = ConfigDict(extra="forbid")
-    scene: Literal["ladder", "loop", "stitch"] = Field(
-        "ladder", description="what each job runs: ladder = `knitlad cut`, loop = `knitlad loop`, "
-        "stitch = `knitlad stitch`")
+    scene: Literal[tuple(SCENES)] = Field(
+        "ladder", description="what each job runs: " + "; ".join(f"{k} = {s.description}" for k, s in SCENES.items()))
     fixed: dict[str, Any] = Field(default_factory=dict, description="scene fields common to all jobs (scene units)")
     sweep: Sweep = Field(description="the swept axes and how they combine")
     output: Output = Field(default_factory=Output, description="what each job writes")
@@ -148,12 +147,12 @@ class Job(BaseModel):
         return job_id(self.scene, self.params, self.output)
 
     def scene_config(self) -> BaseModel:
-        return SCENES[self.scene].model_validate(self.params)
+        return SCENES[self.scene].config.model_validate(self.params)
 
 
 def job_id(scene: str, params: dict, output: Output) -> str:
     """Hash of the resolved parameters, less those a scene added later left at their neutral value."""
-    model = SCENES[scene]
+    model = SCENES[scene].config
     neutral = {name: model.model_fields[name].default for name in getattr(model, "ADDED_LATER", ())}
     params = {k: v for k, v in params.items() if not (k in neutral and v == neutral[k])}
     blob = json.dumps({"scene": scene, "params": params, "output": output.model_dump()}, sort_keys=True)
@@ -185,7 +184,7 @@ def load_sweep(path: str | Path) -> tuple[SweepConfig, list[Job]]:
 
 def expand(cfg: SweepConfig) -> list[Job]:
     """All jobs of a sweep, each validated by its scene's config (errors name the YAML key)."""
-    model = SCENES[cfg.scene]
+    model = SCENES[cfg.scene].config
     fields = set(model.model_fields)
     for key in cfg.fixed:
         if key not in fields:

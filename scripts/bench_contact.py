@@ -24,22 +24,22 @@ from knitlad.scenes.weave import plain_weave
 
 
 def timed_steps(sim: kl.Simulation, steps: int) -> float:
-    verlet_steps(sim.state, sim.work, sim.contacts, sim.dt, 5, sim.twist, 0.0)  # warm
+    verlet_steps(sim.model, sim.state, sim.work, sim.contacts, sim.dt, 5, sim.twist, sim.has_contact, 0.0)  # warm
     best = float("inf")
     for _ in range(3):
         t = time.perf_counter()
-        verlet_steps(sim.state, sim.work, sim.contacts, sim.dt, steps, sim.twist, 0.0)
+        verlet_steps(sim.model, sim.state, sim.work, sim.contacts, sim.dt, steps, sim.twist, sim.has_contact, 0.0)
         best = min(best, time.perf_counter() - t)
     return best / steps
 
 
 def timed_rebuild(sim: kl.Simulation, repeats: int = 5) -> float:
-    s, c = sim.state, sim.contacts
+    m, c = sim.model, sim.contacts
     best = float("inf")
     for _ in range(repeats):
         c.status[STALE] = 1
         t = time.perf_counter()
-        refresh_contacts(s.x, s.edge_a, s.edge_b, s.edge_shift, c)
+        refresh_contacts(sim.state.x, m.edge_a, m.edge_b, m.edge_shift, c)
         best = min(best, time.perf_counter() - t)
     return best
 
@@ -62,17 +62,17 @@ def main() -> None:
     rows = []
     for n in args.sizes:
         scene = plain_weave(n, spacing=4 * d, nodes_per_spacing=8, amplitude=0.4 * d)
-        state = scene.build()
-        sim = kl.Simulation(state.copy(), contact=model)
-        bare = kl.Simulation(state.copy(), dt_s=sim.dt_s)
-        nseg = state.edge_a.shape[0]
+        rods = scene.build()
+        sim = kl.Simulation(rods.copy(), contact=model)
+        bare = kl.Simulation(rods.copy(), dt_s=sim.dt_s)
+        nseg = rods.model.edge_a.shape[0]
         t_step = timed_steps(sim, args.steps)
         t_bare = timed_steps(bare, args.steps)
         t_rebuild = timed_rebuild(sim)
-        rate = state.x.shape[0] / t_step
+        rate = rods.model.n_nodes / t_step
         rows.append((nseg, t_step))
         print(f"{2 * n:6d} {nseg:9d} {sim.contact_stats().touching:9d} {t_step * 1e6:10.1f} "
-              f"{t_step / nseg * 1e6:8.4f} {t_rebuild * 1e6:12.1f} {rate:21.3e} {state.x.shape[0] / t_bare:11.3e}")
+              f"{t_step / nseg * 1e6:8.4f} {t_rebuild * 1e6:12.1f} {rate:21.3e} {rods.model.n_nodes / t_bare:11.3e}")
     segs, times = np.array(rows).T
     slope = np.polyfit(np.log(segs), np.log(times), 1)[0]
     print(f"cost per step ~ segments^{slope:.2f} (1 = linear)")

@@ -3,8 +3,7 @@
     python scripts/bench_cut.py [--fx 13.6] [--stitches 42] [--resolution 24]
 
 Runs the CLI in a subprocess (as a user would, compile time included on a cold
-cache) and prints the summary's timing fields. Goal (issue): 42 x 42 at
-f_x = 13.6 under 10 minutes on a 2-core machine.
+cache) and prints the summary's timing fields.
 """
 
 from __future__ import annotations

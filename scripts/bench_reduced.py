@@ -1,4 +1,4 @@
-"""Speed of the reduced models (issue goals: one single-loop run < 10 s, one stitch relaxation < 5 s).
+"""Speed of the reduced models (goals: one single-loop run < 10 s, one stitch relaxation < 5 s).
 
     python scripts/bench_reduced.py [--repeat 3]
 

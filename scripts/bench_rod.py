@@ -30,13 +30,13 @@ def build(n_nodes: int, twist: bool = False) -> kl.Simulation:
 
 
 def measure(sim: kl.Simulation, steps: int, repeats: int = 3) -> float:
-    verlet_steps(sim.state, sim.work, sim.contacts, sim.dt, 10, sim.twist, 0.0)  # compile / warm
+    verlet_steps(sim.model, sim.state, sim.work, sim.contacts, sim.dt, 10, sim.twist, sim.has_contact, 0.0)  # compile / warm
     best = float("inf")
     for _ in range(repeats):
         t = time.perf_counter()
-        verlet_steps(sim.state, sim.work, sim.contacts, sim.dt, steps, sim.twist, 0.0)
+        verlet_steps(sim.model, sim.state, sim.work, sim.contacts, sim.dt, steps, sim.twist, sim.has_contact, 0.0)
         best = min(best, time.perf_counter() - t)
-    return sim.state.x.shape[0] * steps / best
+    return sim.model.n_nodes * steps / best
 
 
 def main() -> None:

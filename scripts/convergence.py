@@ -35,7 +35,6 @@ Writes ``<out>/convergence.csv`` and prints tables (markdown).
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 import os
 import time
@@ -45,6 +44,8 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
+
+from knitlad.io.atomic import atomic_path  # noqa: E402
 
 DEFAULT = {"nodes_per_stitch": 24, "overlap_fraction": 0.05, "dt_safety": 0.7}
 STUDY = {
@@ -89,15 +90,16 @@ def loop_run(cfg: dict) -> dict:
 
 def knit_runs(cfg: dict, size: int, tensions: list[float], nominal: float | None = None) -> list[dict]:
     """v_lad and n_lad at each target; ``nominal``: the tension named in the labels (default: the target)."""
-    from knitlad.protocol import LadderSettings, run_ladder
+    from knitlad.config import CutConfig
+    from knitlad.protocol import run_ladder
 
     rows = []
     for fx in tensions:
         label = fx if nominal is None else nominal
         t = time.perf_counter()
-        res = run_ladder(LadderSettings(n_x=size, n_y=size, fx_target=fx, mu=0.4, max_time_s=30e-3,
-                                        nodes_per_stitch=cfg["nodes_per_stitch"],
-                                        overlap_fraction=cfg["overlap_fraction"], dt_safety=cfg["dt_safety"]))
+        res = run_ladder(CutConfig(n_x=size, n_y=size, fx=fx, mu=0.4, max_time_ms=30.0,
+                                   resolution=cfg["nodes_per_stitch"], overlap_fraction=cfg["overlap_fraction"],
+                                   dt_safety=cfg["dt_safety"]).settings())
         wall = time.perf_counter() - t
         rows.append({"observable": f"knit {size}x{size} v_lad/c_b (f_x {label:g})", "value": res.v_lad_over_cb,
                      "wall_s": wall, "fx_ini": res.fx_ini})
@@ -132,14 +134,15 @@ COUNTING = {"contact_counting": ["union", "all_pairs"]}
 
 def model_runs(size: int, tensions: list[float], csv: Path, study: dict[str, list]) -> pd.DataFrame:
     """Model parameters rather than discretisation (the dashpots, the contact counting),
-    each varied alone about knitlad's current defaults (LadderSettings: 24 nodes/stitch,
-    dynamics at 0.35 x the limit). Every one of them applies after the cut, so all runs at
-    one tension ladder from one stretched knit (LadderRun.branch). There is no finest value to converge
+    each varied alone about knitlad's current defaults (CutConfig: 24 nodes/stitch,
+    dynamics at 0.35 x the limit). Every one of them is a setting of the dynamics, so all runs at
+    one tension ladder from one stretched knit (cut once per setting). There is no finest value to converge
     to: the change against the default run is what is reported, to be read against the
     run-to-run scatter. Resumable."""
-    from knitlad.protocol import LadderRun, LadderSettings
+    from knitlad.config import CutConfig
+    from knitlad.protocol import analyse, cut, propagate, stretch
 
-    defaults = {f.name: f.default for f in dataclasses.fields(LadderSettings)}
+    defaults = {name: f.default for name, f in CutConfig.model_fields.items()}
     rows = pd.read_csv(csv, dtype={"setting_value": str}).to_dict("records") if csv.exists() else []
     done = {(r["varied"], r["setting_value"], r["fx_target"]) for r in rows}
     # (varied, its value): the default run is labelled "default" (it varies nothing)
@@ -148,21 +151,19 @@ def model_runs(size: int, tensions: list[float], csv: Path, study: dict[str, lis
         todo = [(key, value) for key, value in cases if (key, str(value), fx) not in done]
         if not todo:
             continue
-        stretched = LadderRun(LadderSettings(n_x=size, n_y=size, fx_target=fx, mu=0.4))
-        stretched.stretch()
+        base = CutConfig(n_x=size, n_y=size, fx=fx, mu=0.4)
+        knit = stretch(base.stretch_settings())
         for key, value in todo:
             t = time.perf_counter()
-            run = stretched.branch(**({} if key == "default" else {key: value}))
-            run.propagate()
-            res = run.result
-            wall = time.perf_counter() - t + res.wall_s["stretch"]  # what a fresh run would cost
+            dynamics = base.model_copy(update={} if key == "default" else {key: value}).dynamics_settings()
+            res = analyse(propagate(cut(knit, dynamics)))
+            wall = time.perf_counter() - t + knit.wall_s  # what a fresh run would cost
             rows.append({"varied": key, "setting_value": str(value), "fx_target": fx, "fx_ini": res.fx_ini,
                          "v_lad_over_cb": res.v_lad_over_cb, "n_lad_over_ny": res.n_lad_over_ny, "wall_s": wall})
             print(f"model  {key:22s} {value!s:9s}  f_x {fx:5.2f}  v {res.v_lad_over_cb:.4f}  "
                   f"n_lad/n_y {res.n_lad_over_ny:.3f}  {wall:.1f} s", flush=True)
-            tmp = csv.with_suffix(".tmp")
-            pd.DataFrame(rows).to_csv(tmp, index=False)
-            tmp.replace(csv)
+            with atomic_path(csv) as tmp:
+                pd.DataFrame(rows).to_csv(tmp, index=False)
     df = pd.DataFrame(rows)
     ref = df[df.varied == "default"].set_index("fx_target")
     for col in ("v_lad_over_cb", "n_lad_over_ny"):
@@ -284,9 +285,8 @@ def main() -> None:
                 rows.append(r)
                 print(f"{key[0]:8s} {cfg['varied']:17s} n={cfg['nodes_per_stitch']:2d} ov={cfg['overlap_fraction']:.3f} "
                       f"dt={cfg['dt_safety']:.2f}  {r['observable']:34s} {r['value']:.4f}  {r['wall_s']:.1f} s", flush=True)
-            tmp = csv.with_suffix(".tmp")
-            pd.DataFrame(rows).to_csv(tmp, index=False)
-            tmp.replace(csv)
+            with atomic_path(csv) as tmp:
+                pd.DataFrame(rows).to_csv(tmp, index=False)
     df = with_errors(pd.DataFrame(rows))
     df.to_csv(out / "errors.csv", index=False)
     pareto_plot(df, out / "pareto.png")

@@ -1,7 +1,7 @@
 """The mu = 0 tension of a knit held at fixed boxes, and a ladder from the first box at a target.
 
 At mu = 0 nothing holds the loops but their shape. With the course ends held at the tip
-of straight tails (``--edge tail``, the default until session 6) the knit creeps: at a
+of straight tails (``--edge tail``) the knit creeps: at a
 fixed box its tension keeps changing over thousands of FIRE steps (42 x 42 at box
 l_x/l0 = 0.355: 0.33 to 0.94 f0 per thread over 20 rounds of 750 steps, to 2.04 over 57,
 then a drop to 0.77), with residual forces of about f0 on some node; with the ends
@@ -27,18 +27,20 @@ import time
 
 import numpy as np
 
-from knitlad.protocol import LadderRun, LadderSettings
+from knitlad.config import CutConfig
+from knitlad.protocol import KnitBox, analyse, cut, propagate
 from knitlad.scenes.jersey import EDGES
+from knitlad.stretching import stretch_to
 
 
-def loop_heads(run: LadderRun) -> np.ndarray:
+def loop_heads(box: KnitBox) -> np.ndarray:
     """(courses, columns) index along its course of the highest node of each loop."""
-    x = run.sim.state.x
-    centres = run.column_centres()
+    x = box.sim.state.x
+    centres = box.gauge.column_centres(box.lx)
     half = 0.5 * (centres[1] - centres[0])
-    heads = np.full((len(run.knit.courses), centres.size), -1)
-    for r in range(len(run.knit.courses)):
-        xr = x[run.knit.course_nodes(r)]
+    heads = np.full((len(box.knit.courses), centres.size), -1)
+    for r in range(len(box.knit.courses)):
+        xr = x[box.knit.course_nodes(r)]
         for c, centre in enumerate(centres):
             inside = np.flatnonzero(np.abs(xr[:, 0] - centre) < half)
             if inside.size:
@@ -56,30 +58,29 @@ def main() -> None:
     args = p.parse_args()
     if args.rounds < 1:
         p.error("--rounds must be >= 1")
-    run = LadderRun(LadderSettings(n_x=args.stitches, n_y=args.stitches, lx_over_l0=args.boxes[-1], fx_target=None,
-                                       edge=args.edge))
-    f0 = run.s.material.f0
+    cfg = CutConfig(n_x=args.stitches, n_y=args.stitches, lx=args.boxes[-1], edge=args.edge)
+    box = KnitBox(cfg.stretch_settings())
+    f0 = box.s.material.f0
     t0 = time.perf_counter()
     first_heads = None
-    for box in args.boxes:
-        run.stretch_to(box, run.s.ly_over_l0)
-        first_heads = loop_heads(run) if first_heads is None else first_heads
-        series = [run.tension()]
+    for lx in args.boxes:
+        stretch_to(box, lx, box.ly, box.s.stretch_increment)
+        first_heads = loop_heads(box) if first_heads is None else first_heads
+        series = [box.tension()]
         for _ in range(args.rounds):
-            info = run._relax(run.s.steps_per_increment)
-            series.append(run.tension())
-        heads = loop_heads(run)
+            info = box.relax()
+            series.append(box.tension())
+        heads = loop_heads(box)
         yarn_per_stitch = np.diff(heads, axis=1)
-        print(json.dumps({"box_lx_over_l0": box, "fx_after_each_round": [round(f, 3) for f in series],
+        print(json.dumps({"box_lx_over_l0": lx, "fx_after_each_round": [round(f, 3) for f in series],
                           "max_residual_force_over_f0": round(info["max_force_N"] / f0, 3),
                           "largest_head_shift_nodes": int(np.abs(heads - first_heads).max()),
                           "mean_head_shift_by_column": np.abs(heads - first_heads).mean(axis=0).round(1).tolist(),
                           "nodes_per_stitch_min_max": [int(yarn_per_stitch.min()), int(yarn_per_stitch.max())],
                           "wall_s": round(time.perf_counter() - t0)}), flush=True)
         if args.target is not None and abs(series[-1] - args.target) <= 0.02 * args.target:
-            run.record_stretched(series[-1])
-            run.propagate()
-            print(json.dumps(run.result.summary()), flush=True)
+            knit = box.stretched(series[-1], True, time.perf_counter() - t0)
+            print(json.dumps(analyse(propagate(cut(knit, cfg.dynamics_settings()))).summary(), default=float), flush=True)
             return
     if args.target is not None:
         print(f"no box reached f_x = {args.target} within 2 %")

@@ -1,4 +1,4 @@
-"""Energy bookkeeping of the contact without any damping (issue 7, hard cases).
+"""Energy bookkeeping of the contact without any damping (the hard cases).
 
 Two undamped, frictionless scenes, each at three time steps and with each contact
 counting ("union", the default, and "all_pairs", conservative):
@@ -29,7 +29,8 @@ import numpy as np  # noqa: E402
 
 import knitlad as kl  # noqa: E402
 from knitlad.contact import COUNTING, ContactModel  # noqa: E402
-from knitlad.protocol import LadderRun, LadderSettings  # noqa: E402
+from knitlad.config import CutConfig  # noqa: E402
+from knitlad.protocol import cut, stretch  # noqa: E402
 from knitlad.scenes.weave import plain_weave  # noqa: E402
 
 
@@ -39,19 +40,18 @@ def undamped_contact(counting: str, material=kl.NYLON) -> ContactModel:
 
 
 def ladder_energy(safety: float, counting: str, samples: int = 20, every_s: float = 0.1e-3) -> dict:
-    run = LadderRun(LadderSettings(n_x=6, n_y=8, nodes_per_stitch=16, fx_target=13.6, mu=0.0, dt_safety=safety,
-                                   contact_damping_ratio=0.0, stretch_damping_ratio=0.0, contact_counting=counting))
-    run.stretch()  # FIRE with its own dashpots; the settings above take effect at the cut
-    run.cut()
-    sim = run.sim
+    cfg = CutConfig(n_x=6, n_y=8, resolution=16, fx=13.6, mu=0.0, dt_safety=safety, contact_damping_ratio=0.0,
+                    stretch_damping_ratio=0.0, contact_counting=counting)
+    knit = stretch(cfg.stretch_settings())  # FIRE with its own dashpots; the settings above take effect at the cut
+    sim = cut(knit, cfg.dynamics_settings()).sim
     sim.state.v[:] = 0.0
-    return sample(sim, samples, every_s) | {"fx_ini": run.result.fx_ini}
+    return sample(sim, samples, every_s) | {"fx_ini": knit.fx_ini}
 
 
 def weave_energy(safety: float, counting: str, samples: int = 8, every_s: float = 0.05e-3) -> dict:
     d = kl.NYLON.diameter
-    state = plain_weave(4, 1.0e-3, nodes_per_spacing=8, amplitude=0.47 * d).build(stretch_damping_ratio=0.0)
-    return sample(kl.Simulation(state, contact=undamped_contact(counting), safety=safety), samples, every_s)
+    rods = plain_weave(4, 1.0e-3, nodes_per_spacing=8, amplitude=0.47 * d).build(stretch_damping_ratio=0.0)
+    return sample(kl.Simulation(rods, contact=undamped_contact(counting), safety=safety), samples, every_s)
 
 
 def sample(sim: kl.Simulation, samples: int, every_s: float) -> dict:

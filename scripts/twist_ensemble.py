@@ -4,9 +4,8 @@ One ladder's v_lad scatters from knit to knit (about +-20 % at low tension: a
 perturbation far below any setting's effect sends the stick-slip releases down
 another path), so one pair of runs cannot tell an effect from the scatter. Here
 each knit of an ensemble (force-control targets a fraction of a percent apart)
-is stretched once and laddered twice from the same state (LadderRun.branch):
-twist-free (the default) and with twist (LadderSettings.twist: friction also turns
-the yarns). The paired change is averaged over the ensemble, with its standard error.
+is stretched once and cut twice (one StretchedKnit, two runs): twist-free (the
+default) and with twist (CutConfig.twist: friction also turns the yarns). The paired change is averaged over the ensemble, with its standard error.
 
     python scripts/twist_ensemble.py [--size 16] [--tensions 1.6 4 13.6] [--members 5] [--out runs/twist]
 
@@ -22,7 +21,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from knitlad.protocol import LadderRun, LadderSettings
+from knitlad.config import CutConfig
+from knitlad.io.atomic import atomic_path
+from knitlad.protocol import analyse, cut, propagate, stretch
 
 
 def main() -> None:
@@ -42,23 +43,21 @@ def main() -> None:
         for k, offset in enumerate(offsets):
             if (fx, k) in done:
                 continue
-            stretched = LadderRun(LadderSettings(n_x=args.size, n_y=args.size, fx_target=fx * (1 + offset)))
-            stretched.stretch()
-            row = {"fx_nominal": fx, "member": k, "fx_ini": stretched.result.fx_ini}
+            cfg = CutConfig(n_x=args.size, n_y=args.size, fx=fx * (1 + offset))
+            knit = stretch(cfg.stretch_settings())
+            row = {"fx_nominal": fx, "member": k, "fx_ini": knit.fx_ini}
             for label, twist in (("free", False), ("twist", True)):
                 t = time.perf_counter()
-                run = stretched.branch(twist=twist)
-                run.propagate()
-                row[f"v_{label}"] = run.result.v_lad_over_cb
-                row[f"n_{label}"] = run.result.n_lad_over_ny
+                result = analyse(propagate(cut(knit, cfg.model_copy(update={"twist": twist}).dynamics_settings())))
+                row[f"v_{label}"] = result.v_lad_over_cb
+                row[f"n_{label}"] = result.n_lad_over_ny
                 row[f"wall_{label}_s"] = time.perf_counter() - t
             rows.append(row)
             print(f"f_x {row['fx_ini']:6.3f}  v {row['v_free']:.4f} -> {row['v_twist']:.4f}   "
                   f"n_lad/n_y {row['n_free']:.3f} -> {row['n_twist']:.3f}   "
                   f"{row['wall_free_s']:.0f} s / {row['wall_twist_s']:.0f} s", flush=True)
-            tmp = csv.with_suffix(".tmp")
-            pd.DataFrame(rows).to_csv(tmp, index=False)
-            tmp.replace(csv)
+            with atomic_path(csv) as tmp:
+                pd.DataFrame(rows).to_csv(tmp, index=False)
     df = pd.DataFrame(rows)
     print("\n| f_x^ini | knits | v_lad/c_b twist-free | with twist | paired change (mean +- s.e.) "
           "| n_lad/n_y twist-free | with twist | wall with / without twist |")

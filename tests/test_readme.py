@@ -12,3 +12,4 @@ def test_readme_python_example_runs(capsys):
         exec(compile(block, "README.md", "exec"), {})
     out = capsys.readouterr().out
     assert "tip [m]" in out and "energies [J]" in out
+    assert len(blocks) == 2 and len([line for line in out.splitlines() if line.startswith(("0.0 ", "0.4 ", "0.8 "))]) == 3

@@ -14,15 +14,6 @@ import pandas as pd
 
 from knitlad.io.atomic import atomic_path
 
-SUMMARY_KEYS = (
-    "fx_ini", "fx_fin", "n_lad", "n_lad_over_ny", "v_lad_over_cb", "lx_over_l0", "ly_over_l0",
-    "box_lx_over_l0", "fx_within_tolerance", "peak_overlap_over_d", "reached_edge", "stop_reason", "laddering_column",
-    "v_fit_stitches", "nodes", "steps", "relax_steps", "wall_s", "wall_stretch_s", "wall_propagate_s", "job_wall_s",
-)
-LOOP_SUMMARY_KEYS = ("tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before",
-                     "steps", "nodes", "wall_s", "job_wall_s")
-STITCH_SUMMARY_KEYS = ("fx", "fy", "converged", "max_overlap_over_d", "relax_steps", "wall_s", "job_wall_s")
-SCENE_SUMMARY_KEYS = {"ladder": SUMMARY_KEYS, "loop": LOOP_SUMMARY_KEYS, "stitch": STITCH_SUMMARY_KEYS}
 TIMING_COLUMNS = ("wall_s", "job_wall_s", "wall_stretch_s", "wall_propagate_s")  # differ from run to run
 
 

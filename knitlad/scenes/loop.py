@@ -17,7 +17,7 @@ pinned ends) and a row held above it (the loops ring against each other and
 part only at f_x <= 2), the column stretched from 0.30 to 0.39 l0 before
 the release (the upper row's legs then trap the head at every tension), and the
 loop row without tails, clamped at its sinkers and sliding along x as the
-fabric's courses are held (session 6: never released, f_x = 1 to 20, mu = 0), and
+fabric's courses are held (never released, f_x = 1 to 20, mu = 0), and
 rows three stitches wide with only the middle stitch of the lower row removed, so
 that the loop's neighbours stay hooked to held rows (never released in 2 ms,
 f_x = 0.05 to 20, mu = 0: the tails are drawn out by 0.1 l0 and spring back, the

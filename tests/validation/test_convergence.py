@@ -1,4 +1,4 @@
-"""Convergence of the observables in the solver settings (issue 7; docs/accuracy.md).
+"""Convergence of the observables in the solver settings (docs/accuracy.md).
 
 The periodised stitch's tension converges in the resolution at order 3 to 4 (default suite);
 the laddering velocity converges in the time step below 0.35 x the stability limit (slow).
@@ -52,7 +52,7 @@ def test_the_laddering_velocity_is_converged_in_the_time_step_below_035(fx):
     """16 x 16, mu = 0.4, from one stretched knit (the FIRE stretch does not depend on dt_safety):
     v_lad at 0.35 and 0.175 x the stability limit agree within 5 % (measured with tail ends at
     f_x^ini = 3.92: 0.270 and 0.266, where 0.7 gives 0.312; with clamped ends at 13.59: 0.738
-    at both). Session 6 dropped 13.6 here, reading a NaN at 0.35 as a ladder whose direction
+    at both). An earlier version dropped 13.6 here, reading a NaN at 0.35 as a ladder whose direction
     depends on the step: it was the front read in the column beside the upward ladder, fixed
     since (``measure.laddering_column``). The steps at 13.5 on 42 x 42: docs/accuracy.md."""
     with numba_threads(1):

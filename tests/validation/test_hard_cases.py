@@ -1,4 +1,4 @@
-"""Numerical stability on hard cases (issue 7): high tension, strong friction, a jammed
+"""Numerical stability on hard cases: high tension, strong friction, a jammed
 knit, the time step at its limit, a long undamped run, interpenetration.
 
 Each case either runs with every position finite and no two yarns overlapping by more
@@ -90,7 +90,7 @@ def undamped_weave_energy(safety: float, counting: str = "union") -> np.ndarray:
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "known defect of the default counting (issue 7): the contact is counted once per local minimum of the "
+    "known defect of the default counting: the contact is counted once per local minimum of the "
     "distance between two chains of capsules (owns_contact). Where a crossing sits at a kink node of both "
     "yarns, each of the four chord pairs around it has its own minimum (here 64 counted pairs for 16 crossings "
     "at t = 0); they merge into one pair and split again as the crossing moves, and a split at finite overlap "

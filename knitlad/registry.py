@@ -1,0 +1,85 @@
+"""The scenes a sweep can run: each names its config, its runner and its summary columns once.
+
+A runner takes the validated config of one job and the job's output options, runs
+it, and returns its summary (a dict of scalars) and a writer ``write(path, record)``
+of its file (``record``: the sweep's job attributes: id, status, config).
+To add a scene: a pydantic config in :mod:`knitlad.config`, a runner here, one entry.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from pydantic import BaseModel
+
+from knitlad.config import CutConfig, LoopConfig, StitchConfig
+
+
+@dataclass(frozen=True)
+class Scene:
+    config: type[BaseModel]
+    run: Callable  # (config, output options) -> (summary, write)
+    summary_keys: tuple[str, ...]  # the results a sweep's summary table shows, in order
+    description: str
+
+
+def run_ladder_job(cfg: CutConfig, output):
+    """The laddering experiment (`knitlad cut`); its file holds the frames and series (:mod:`knitlad.io.hdf5`)."""
+    from knitlad.io.hdf5 import write_ladder_result
+    from knitlad.protocol import run_ladder
+
+    result = run_ladder(cfg.settings())
+    if not output.frames:
+        result.frames, result.frame_times_s = [], []
+    compression = None if output.compression == "none" else output.compression
+
+    def write(path: Path, record: dict) -> None:
+        write_ladder_result(path, result, compression=compression, attrs=record)
+
+    return result.summary(), write
+
+
+def _attributes_only(result):
+    """A reduced model's summary, and a writer of a file of attributes (summary, settings, scales)."""
+    from knitlad.io.hdf5 import write_record
+    from knitlad.units import Scales
+
+    summary = result.summary()
+    settings = {k: v for k, v in dataclasses.asdict(result.settings).items() if k != "material"}
+    scales = {f"scale_{k}": v for k, v in Scales(result.settings.material).as_attributes().items()}
+
+    def write(path: Path, record: dict) -> None:
+        write_record(path, {**summary, **record, "settings_json": json.dumps(settings), **scales})
+
+    return summary, write
+
+
+def run_loop_job(cfg: LoopConfig, output):
+    from knitlad.loop_model import LoopRun
+
+    return _attributes_only(LoopRun(cfg.settings()).run())
+
+
+def run_stitch_job(cfg: StitchConfig, output):
+    from knitlad.stitch_model import StitchRun
+
+    return _attributes_only(StitchRun(cfg.settings()).run())
+
+
+SCENES: dict[str, Scene] = {
+    "ladder": Scene(CutConfig, run_ladder_job, (
+        "fx_ini", "fx_fin", "n_lad", "n_lad_over_ny", "v_lad_over_cb", "lx_over_l0", "ly_over_l0",
+        "box_lx_over_l0", "fx_within_tolerance", "peak_overlap_over_d", "reached_edge", "stop_reason",
+        "laddering_column", "v_fit_stitches", "nodes", "steps", "relax_steps", "wall_s", "wall_stretch_s",
+        "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment"),
+    "loop": Scene(LoopConfig, run_loop_job, (
+        "tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before", "steps",
+        "nodes", "wall_s", "job_wall_s"), "`knitlad loop`: the single-loop model"),
+    "stitch": Scene(StitchConfig, run_stitch_job, (
+        "fx", "fy", "converged", "max_overlap_over_d", "relax_steps", "wall_s", "job_wall_s"),
+        "`knitlad stitch`: the periodised stitch"),
+}
