@@ -141,11 +141,12 @@ class LoopConfig(_WithPreset):
     resolution: int = Field(36, ge=12, le=280, description="nodes per stitch [-]; default: the preset's")
     max_time_ms: float = Field(1.0, gt=0, le=100, description="longest time simulated after the release [ms]")
 
-    def settings(self):
+    def settings(self, **model_choices):
+        """The run's settings; ``model_choices``: other fields of :class:`knitlad.loop_model.LoopSettings`."""
         from knitlad.loop_model import LoopSettings
 
         return LoopSettings(fx=self.fx, mu=self.mu, lx_over_l0=self.lx, ly_over_l0=self.ly,
-                            nodes_per_stitch=self.resolution, max_time_s=self.max_time_ms * 1e-3)
+                            nodes_per_stitch=self.resolution, max_time_s=self.max_time_ms * 1e-3, **model_choices)
 
 
 class StitchConfig(_WithPreset):
@@ -158,11 +159,12 @@ class StitchConfig(_WithPreset):
     resolution: int = Field(36, ge=12, le=280, description="nodes per stitch [-]; default: the preset's")
     d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description="yarn diameter over stitch length d/l0 [-]")
 
-    def settings(self):
+    def settings(self, **model_choices):
+        """The run's settings; ``model_choices``: other fields of :class:`knitlad.stitch_model.StitchSettings`."""
         from knitlad.stitch_model import StitchSettings
 
         return StitchSettings(lx_over_l0=self.lx, ly_over_l0=self.ly, nodes_per_stitch=self.resolution,
-                              material=material_for(self.d_over_l0))
+                              material=material_for(self.d_over_l0), **model_choices)
 
 
 def material_for(d_over_l0: float):

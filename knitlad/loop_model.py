@@ -41,19 +41,23 @@ from knitlad.units import NYLON, Material
 
 @dataclass
 class LoopSettings:
-    """Inputs of one single-loop run. Lengths as l/l0, tension as f_x, SI otherwise."""
+    """Inputs of one single-loop run. Lengths as l/l0, tension as f_x, SI otherwise.
 
-    fx: float = 8.0
-    mu: float = 0.4
-    lx_over_l0: float = 0.30  # wider, the loops of one column no longer overlap (0.39: none)
-    ly_over_l0: float = 0.25
-    nodes_per_stitch: int = 36  # release time within 3 % of 48 nodes/stitch (24: up to 8 %, and f_x = 2 stays hooked)
-    contact_force_f0: float = 20.0
+    Built by :meth:`knitlad.config.LoopConfig.settings`, where the first six have their
+    defaults and units; the rest are the model's own choices.
+    """
+
+    fx: float
+    mu: float
+    lx_over_l0: float  # wider, the loops of one column no longer overlap (0.39: none)
+    ly_over_l0: float
+    nodes_per_stitch: int  # release time within 3 % of 48 nodes/stitch (24: up to 8 %, and f_x = 2 stays hooked)
+    max_time_s: float  # releases take 50 to 150 us
+    contact_force_f0: float = 20.0  # as the knit's (CutConfig)
     overlap_fraction: float = 0.05
     observe_every_s: float = 0.5e-6  # contact checks
     topology_every_s: float = 1e-6  # threading checks (tau is resolved to this)
     confirm_s: float = 20e-6  # unthreaded this long: released
-    max_time_s: float = 1e-3  # releases take 50 to 150 us
     dt_safety: float = DEFAULT_SAFETY  # time step as a fraction of the stability limit
     # global viscous drag on every node after the lower row is removed [1/s]; 0 is the physics.
     # With 2e4 /s the loop stays hooked (f_x = 8, mu = 0, 36 to 96 nodes per stitch): it gets

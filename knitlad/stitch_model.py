@@ -41,15 +41,18 @@ BUILD_LY = 0.25  # tallest l_y/l0 the stitch is built at
 
 @dataclass
 class StitchSettings:
-    lx_over_l0: float = 0.35
-    ly_over_l0: float = 0.25
-    nodes_per_stitch: int = 36
+    """Inputs of one periodised stitch, built by :meth:`knitlad.config.StitchConfig.settings` (which has
+    the defaults and units of the first three and the material); the rest are the model's own choices."""
+
+    lx_over_l0: float
+    ly_over_l0: float
+    nodes_per_stitch: int
+    material: Material
     contact_force_f0: float = 20.0
     overlap_fraction: float = 0.05
     stretch_increment: float = 0.005
     relax_steps: int = 20_000  # per increment
     force_tol_f0: float = 1e-4  # final relaxation: max |F| on a node, in f0
-    material: Material = NYLON
 
 
 @dataclass
@@ -129,8 +132,14 @@ class StitchRun:
         return self.result
 
 
-def stitch_tensions(lx_over_l0: float, ly_over_l0: float, **kwargs) -> StitchResult:
-    return StitchRun(StitchSettings(lx_over_l0=lx_over_l0, ly_over_l0=ly_over_l0, **kwargs)).run()
+def stitch_tensions(lx_over_l0: float, ly_over_l0: float, nodes_per_stitch: int | None = None,
+                    material: Material = NYLON) -> StitchResult:
+    """The stitch at (l_x, l_y) [l/l0]; default resolution: :class:`knitlad.config.StitchConfig`'s."""
+    from knitlad.config import StitchConfig
+
+    if nodes_per_stitch is None:
+        nodes_per_stitch = StitchConfig.model_fields["resolution"].default
+    return StitchRun(StitchSettings(lx_over_l0, ly_over_l0, nodes_per_stitch, material)).run()
 
 
 def zero_tension_lx(ly_over_l0: float, lo: float = 0.22, hi: float = 0.40, tol: float = 1e-3, **kwargs) -> float:

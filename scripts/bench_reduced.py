@@ -11,8 +11,10 @@ from __future__ import annotations
 import argparse
 import time
 
-from knitlad.loop_model import LoopRun, LoopSettings
-from knitlad.stitch_model import StitchRun, StitchSettings
+from knitlad.config import LoopConfig
+from knitlad.loop_model import LoopRun
+from knitlad.config import StitchConfig
+from knitlad.stitch_model import StitchRun
 
 
 def timed(make, repeat: int) -> tuple[float, object]:
@@ -29,16 +31,16 @@ def main() -> None:
     p.add_argument("--repeat", type=int, default=3)
     args = p.parse_args()
     t = time.perf_counter()
-    LoopRun(LoopSettings(fx=4.0, mu=0.4, max_time_s=2e-5)).run()
-    StitchRun(StitchSettings(lx_over_l0=0.30)).run()
+    LoopRun(LoopConfig(fx=4.0, mu=0.4, max_time_ms=2e-2).settings()).run()
+    StitchRun(StitchConfig(lx=0.30).settings()).run()
     print(f"compile / cache load: {time.perf_counter() - t:.1f} s")
     for fx in (4.0, 16.0):
-        wall, r = timed(lambda: LoopRun(LoopSettings(fx=fx, mu=0.4)).run(), args.repeat)
+        wall, r = timed(lambda: LoopRun(LoopConfig(fx=fx, mu=0.4).settings()).run(), args.repeat)
         steps = r.steps
         print(f"single loop f_x = {fx:4.1f}, mu = 0.4: {wall:6.3f} s (goal < 10 s), {steps} steps, "
               f"{r.nodes} nodes, {r.nodes * steps / wall:.3g} node-steps/s, released = {r.released}")
     for lx in (0.30, 0.35, 0.40):
-        wall, r = timed(lambda: StitchRun(StitchSettings(lx_over_l0=lx, ly_over_l0=0.25)).run(), args.repeat)
+        wall, r = timed(lambda: StitchRun(StitchConfig(lx=lx, ly=0.25).settings()).run(), args.repeat)
         print(f"stitch l_x/l0 = {lx:.2f}: {wall:6.3f} s (goal < 5 s), {r.relax_steps} FIRE steps, f_x = {r.fx:.3f}")
 
 

@@ -71,20 +71,22 @@ def variations(static: bool = False, only: list[str] | None = None) -> list[dict
 
 
 def stitch_run(cfg: dict) -> dict:
-    from knitlad.stitch_model import StitchRun, StitchSettings
+    from knitlad.config import StitchConfig
+    from knitlad.stitch_model import StitchRun
 
     t = time.perf_counter()
-    res = StitchRun(StitchSettings(lx_over_l0=0.35, ly_over_l0=0.25, nodes_per_stitch=cfg["nodes_per_stitch"],
-                                   overlap_fraction=cfg["overlap_fraction"])).run()
+    res = StitchRun(StitchConfig(lx=0.35, ly=0.25, resolution=cfg["nodes_per_stitch"]).settings(
+        overlap_fraction=cfg["overlap_fraction"])).run()
     return {"observable": "stitch f_x (0.35, 0.25)", "value": res.fx, "wall_s": time.perf_counter() - t}
 
 
 def loop_run(cfg: dict) -> dict:
-    from knitlad.loop_model import LoopRun, LoopSettings
+    from knitlad.config import LoopConfig
+    from knitlad.loop_model import LoopRun
 
     t = time.perf_counter()
-    res = LoopRun(LoopSettings(fx=4.0, mu=0.4, nodes_per_stitch=cfg["nodes_per_stitch"],
-                                overlap_fraction=cfg["overlap_fraction"], dt_safety=cfg["dt_safety"])).run()
+    res = LoopRun(LoopConfig(fx=4.0, mu=0.4, resolution=cfg["nodes_per_stitch"]).settings(
+        overlap_fraction=cfg["overlap_fraction"], dt_safety=cfg["dt_safety"])).run()
     return {"observable": "loop v_lad/c_b (f_x 4)", "value": res.v_lad_over_cb, "wall_s": time.perf_counter() - t}
 
 

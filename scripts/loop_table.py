@@ -17,7 +17,8 @@ import time
 
 import numpy as np
 
-from knitlad.loop_model import LoopRun, LoopSettings
+from knitlad.config import LoopConfig
+from knitlad.loop_model import LoopRun
 
 
 def main() -> None:
@@ -27,15 +28,14 @@ def main() -> None:
     p.add_argument("--max-time-ms", type=float, default=1.0)
     p.add_argument("--resolution", type=int, default=36)
     args = p.parse_args()
-    LoopRun(LoopSettings(fx=4.0, mu=0.0, max_time_s=1e-5)).run()  # compile outside the timings
+    LoopRun(LoopConfig(fx=4.0, mu=0.0, max_time_ms=1e-2).settings()).run()  # compile outside the timings
     print(f"{'mu':>4s} {'f_x':>5s} {'v_lad/c_b':>9s} {'0.34 sqrt f':>11s} {'tau [us]':>9s} {'released':>8s} {'wall s':>7s}")
     fits = []
     for mu in args.mu:
         released = []
         for fx in args.fx:
             t = time.perf_counter()
-            r = LoopRun(LoopSettings(fx=fx, mu=mu, max_time_s=args.max_time_ms * 1e-3,
-                                     nodes_per_stitch=args.resolution)).run()
+            r = LoopRun(LoopConfig(fx=fx, mu=mu, max_time_ms=args.max_time_ms, resolution=args.resolution).settings()).run()
             wall = time.perf_counter() - t
             print(f"{mu:4.1f} {fx:5.1f} {r.v_lad_over_cb:9.3f} {0.34 * math.sqrt(fx):11.3f} {r.tau_s * 1e6:9.1f} "
                   f"{str(r.released):>8s} {wall:7.2f}", flush=True)

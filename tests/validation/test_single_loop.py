@@ -11,19 +11,20 @@ import math
 import numpy as np
 import pytest
 
-from knitlad.loop_model import LoopRun, LoopSettings
+from knitlad.config import LoopConfig
+from knitlad.loop_model import LoopRun
 from knitlad.topology import piercings
 from tests.validation.references import paper_der_line
 
 
 def release(fx: float, mu: float, resolution: int = 36):
-    r = LoopRun(LoopSettings(fx=fx, mu=mu, nodes_per_stitch=resolution)).run()
+    r = LoopRun(LoopConfig(fx=fx, mu=mu, resolution=resolution).settings()).run()
     assert r.released, f"f_x = {fx}, mu = {mu}: the loop did not let go"
     return r
 
 
 def test_the_loop_stays_hooked_while_the_lower_row_is_there():
-    run = LoopRun(LoopSettings(fx=4.0, mu=0.0))
+    run = LoopRun(LoopConfig(fx=4.0, mu=0.0).settings())
     run.relax()
     s, sc, start = run.sim.state, run.scene, run.sim.model.yarn_start
     loop = slice(int(start[sc.loop]), int(start[sc.loop + 1]))
@@ -62,9 +63,9 @@ def test_the_freed_loop_leaves_on_its_momentum_not_quasi_statically():
     per cent (measured -1.4 %, f_x = 8, mu = 0), but a drag that takes the loop's momentum within
     50 us (2e4 /s) leaves it hooked to the upper row: freed slowly, the loop finds an equilibrium."""
     free = release(8.0, 0.0).v_lad_over_cb
-    weak = LoopRun(LoopSettings(fx=8.0, mu=0.0, drag_per_s=2e3)).run()
+    weak = LoopRun(LoopConfig(fx=8.0, mu=0.0).settings(drag_per_s=2e3)).run()
     assert weak.released and weak.v_lad_over_cb == pytest.approx(free, rel=0.05)
-    strong = LoopRun(LoopSettings(fx=8.0, mu=0.0, drag_per_s=2e4, max_time_s=3e-3)).run()
+    strong = LoopRun(LoopConfig(fx=8.0, mu=0.0, max_time_ms=3.0).settings(drag_per_s=2e4)).run()
     assert not strong.released
 
 
