@@ -174,13 +174,19 @@ def cut(
     if options.get("fx") is None and options.get("lx") is None:
         options["fx"] = 13.6
     cfg = validated(_config.CutConfig, {**options, "n_x": n_x, "n_y": n_y}, {"n_x": "--stitches", "n_y": "--stitches"})
-    out_dir = Path(out) if out else Path("runs") / time.strftime("cut-%Y%m%d-%H%M%S")
+    from knitlad.io.folders import FolderError, writable_folder
     from knitlad.io.hdf5 import write_ladder_result
     from knitlad.observers import Interpenetration
     from knitlad.plots import spatio_temporal_diagram
-    from knitlad.protocol import run_ladder
+    from knitlad.protocol import KnitTooLarge, require_memory, run_ladder
     from knitlad.simulation import SimulationBlowUp
     from knitlad.stretching import OutOfReach
+
+    try:  # before any compute: a run of hours must not end in an unwritable folder
+        require_memory(cfg.memory_estimate_bytes(), f"--stitches {n_x}x{n_y} at --resolution {cfg.resolution}")
+        out_dir = writable_folder(Path(out) if out else Path("runs") / time.strftime("cut-%Y%m%d-%H%M%S"))
+    except (KnitTooLarge, FolderError) as e:
+        fail(str(e) if isinstance(e, KnitTooLarge) else f"--out {e}")
 
     progress = _StageProgress()
     try:
@@ -283,8 +289,6 @@ def diagram(
     out: str = typer.Option("runs/diagram", "--out", help="Folder for fx0_curve.csv and fx0_curve.png."),
 ) -> None:
     """The f_x = 0 curve of the periodised stitch in the (l_x/l0, l_y/l0) plane (paper, configuration diagram)."""
-    from pathlib import Path
-
     import pandas as pd
 
     from knitlad.config import StitchConfig
@@ -296,6 +300,12 @@ def diagram(
     for v in values:
         validated(StitchConfig, dict(ly=v, resolution=resolution, d_over_l0=d_over_l0))
     material = StitchConfig(d_over_l0=d_over_l0).settings().material
+    from knitlad.io.folders import FolderError, writable_folder
+
+    try:  # before any compute
+        out_dir = writable_folder(out)
+    except FolderError as e:
+        fail(f"--out {e}")
     rows = []
     for v in values:
         try:
@@ -305,8 +315,6 @@ def diagram(
             lx0 = float("nan")
         rows.append({"ly_over_l0": v, "lx_over_l0_at_fx0": lx0})
         typer.echo(f"l_y/l0 = {v:.3f}: f_x = 0 at l_x/l0 = {lx0:.4f}")
-    out_dir = Path(out)
-    out_dir.mkdir(parents=True, exist_ok=True)
     df = pd.DataFrame(rows)
     with atomic_path(out_dir / "fx0_curve.csv") as tmp:
         df.to_csv(tmp, index=False)
@@ -324,11 +332,14 @@ def sweep(
     force: bool = typer.Option(False, "--force", help="Rerun jobs that already have a result."),
     retry_failed: bool = typer.Option(False, "--retry-failed", help="Rerun jobs recorded as failed."),
     dry_run: bool = typer.Option(False, "--dry-run", help="Validate and list the jobs, run nothing."),
+    max_jobs: int = typer.Option(10_000, "--max-jobs", help="Refuse a sweep of more jobs than this."),
 ) -> None:
     """Run a sweep: one job per point of the config, in a process pool or on a Dask cluster.
 
     Finished jobs are skipped when the command is run again; the summary table
     (summary.csv) always matches the job files, also after a crash or Ctrl-C.
+    Exit code 0: every job done; 1: some job failed (this time or before); 2: bad
+    input; 130: interrupted (Ctrl-C); 143: terminated (SIGTERM).
     """
     from pathlib import Path
 
@@ -345,8 +356,10 @@ def sweep(
             import distributed  # noqa: F401
         except ImportError:
             fail("--executor dask: needs the optional extra (pip install 'knitlad[dask]')")
+    if max_jobs < 1:
+        fail(f"--max-jobs: must be >= 1, got {max_jobs}")
     try:
-        cfg, jobs = load_sweep(config)
+        cfg, jobs = load_sweep(config, max_jobs=max_jobs)
     except SweepError as e:
         fail(str(e))
     out_dir = Path(out) if out else Path("runs") / Path(config).stem
@@ -355,22 +368,82 @@ def sweep(
             typer.echo(f"{job.id}  " + " ".join(f"{k}={job.params[k]}" for k in cfg.sweep.axes))
         typer.echo(f"{len(jobs)} jobs")
         return
-    from knitlad.runner import run_sweep
+    from knitlad.io.folders import FolderError, FolderLock, writable_folder
+    from knitlad.runner import SchedulerError, connect, run_sweep
 
+    if scheduler:
+        try:
+            connect(scheduler).close()  # before anything starts: an unreachable scheduler is one line
+        except SchedulerError as e:
+            fail(str(e))
+    try:  # and so is a folder that cannot be used, or is in use
+        FolderLock(writable_folder(out_dir)).check_free()
+    except FolderError as e:
+        fail(f"--out {e}")
     typer.echo(f"{len(jobs)} jobs -> {out_dir} ({executor})", err=True)
-    outcome = run_sweep(jobs, out_dir, executor=executor, workers=workers, scheduler=scheduler, force=force,
-                        retry_failed=retry_failed, config_text=Path(config).read_text())
+    try:
+        outcome = run_sweep(jobs, out_dir, executor=executor, workers=workers, scheduler=scheduler, force=force,
+                            retry_failed=retry_failed, config_text=Path(config).read_text())
+    except (FolderError, SchedulerError) as e:
+        fail(str(e))
     summary = out_dir / "summary.csv"
     if outcome.interrupted:
-        typer.echo(f"knitlad: interrupted; {outcome.ran} jobs finished this time, summary in {summary}; "
+        how = "terminated" if outcome.terminated else "interrupted"
+        typer.echo(f"knitlad: {how}; {outcome.ran} jobs finished this time, summary in {summary}; "
                    "run the same command again to go on", err=True)
-        raise typer.Exit(130)
+        raise typer.Exit(143 if outcome.terminated else 130)
     typer.echo(f"{outcome.ran} jobs run ({outcome.failed} failed), {outcome.skipped} already done; summary: {summary}")
-    if outcome.failed:
-        for row in outcome.rows.values():
-            if row["status"] == "failed":
-                typer.echo(f"  failed {row['job_id']}: {row['error']}", err=True)
+    failed = outcome.failed_rows
+    if failed:
+        for row in failed:
+            typer.echo(f"  failed {row['job_id']}: {row['error']}", err=True)
+        typer.echo(f"knitlad: {len(failed)} of {len(outcome.rows)} jobs failed; rerun with --retry-failed to run "
+                   "them again", err=True)
         raise typer.Exit(1)
+
+
+def _sweep_table(folder):
+    """The sweep's table, checked against its job files: (rows to plot, problems found).
+
+    With the sweep's config (``sweep.yaml``, written by the sweep) the rows are rebuilt from
+    the job files, the truth; a summary that lacks rows, or lists as done a job whose file is
+    missing or not its own, is a problem said in one line each."""
+    from pathlib import Path
+
+    import pandas as pd
+
+    from knitlad.io.summary import read_summary
+    from knitlad.runner import job_path, summary_row, trusted_attrs
+    from knitlad.sweep import SweepError, load_sweep
+
+    folder = Path(folder)
+    problems = []
+    try:
+        summary = read_summary(folder)
+    except FileNotFoundError as e:
+        if not (folder / "sweep.yaml").exists():
+            fail(str(e))
+        summary, problems = None, [f"{folder / 'summary.csv'}: missing"]
+    except (ValueError, UnicodeDecodeError, pd.errors.ParserError) as e:
+        if not (folder / "sweep.yaml").exists():
+            fail(f"{folder / 'summary.csv'}: unreadable ({str(e).splitlines()[0]})")
+        summary, problems = None, [f"{folder / 'summary.csv'}: unreadable"]
+    if not (folder / "sweep.yaml").exists():
+        return summary, problems
+    try:
+        _, jobs = load_sweep(folder / "sweep.yaml")
+    except SweepError as e:
+        fail(f"{folder / 'sweep.yaml'}: {e}")
+    listed = {} if summary is None else {row["job_id"]: row for row in summary.to_dict("records")}
+    rows = []
+    for job in jobs:
+        attrs, why = trusted_attrs(job_path(folder / "jobs", job), job)
+        rows.append(summary_row(job, attrs))
+        if summary is not None and job.id not in listed:
+            problems.append(f"job {job.id}: missing from summary.csv (read from its file)")
+        elif summary is not None and listed[job.id]["status"] == "ok" and attrs is None:
+            problems.append(f"job {job.id}: summary.csv says done, but {why or 'it has no file'}")
+    return pd.DataFrame(rows), problems
 
 
 @app.command()
@@ -378,16 +451,16 @@ def plot(
     folder: str = typer.Argument(..., help="A sweep folder (with summary.csv) written by knitlad sweep."),
     diagrams: bool = typer.Option(True, "--diagrams/--no-diagrams", help="Also draw each job's spatio-temporal diagram."),
 ) -> None:
-    """PNG figures of a sweep: n_lad/n_y, f_x^fin and v_lad/c_b against f_x^ini, and the spatio-temporal diagrams."""
+    """PNG figures of a sweep: n_lad/n_y, f_x^fin and v_lad/c_b against f_x^ini, and the spatio-temporal diagrams.
+
+    The summary is checked against the job files first; what is missing or wrong is said on
+    stderr, the figures are drawn from what the files hold, and the exit code is 1.
+    """
     from pathlib import Path
 
-    from knitlad.io.summary import read_summary
     from knitlad.plots import spatio_temporal_from_file, summary_plots
 
-    try:
-        df = read_summary(folder)
-    except FileNotFoundError as e:
-        fail(str(e))
+    df, problems = _sweep_table(folder)
     if not (df["status"] == "ok").any():
         fail(f"{folder}: no finished job to plot yet")
     fig_dir = Path(folder) / "plots"
@@ -395,8 +468,15 @@ def plot(
     if diagrams:
         ladders = (df["status"] == "ok") & (df["scene"] == "ladder")
         for job in df.loc[ladders, "job_id"]:
-            paths.append(spatio_temporal_from_file(Path(folder) / "jobs" / f"{job}.h5", fig_dir / f"{job}.png"))
+            try:
+                paths.append(spatio_temporal_from_file(Path(folder) / "jobs" / f"{job}.h5", fig_dir / f"{job}.png"))
+            except (OSError, KeyError, ValueError) as e:
+                problems.append(f"job {job}: no diagram ({type(e).__name__}: {str(e).splitlines()[0]})")
     typer.echo(f"wrote {len(paths)} figures in {fig_dir}")
+    for line in problems:
+        typer.echo(f"knitlad: {line}", err=True)
+    if problems:
+        raise typer.Exit(1)
 
 
 def main() -> None:  # pragma: no cover - console entry point

@@ -27,7 +27,8 @@ STITCH_RESOLUTION = {"fast": 24, "default": 36, "accurate": 64}
 class _WithPreset(BaseModel):
     """A run whose resolution defaults to its accuracy preset's (``RESOLUTIONS``)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # no NaN or infinity in any number: a bad value is named as such, not as out of range
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
     RESOLUTIONS: ClassVar[dict[str, int]] = LADDER_RESOLUTION
 
     preset: Preset = Field("default", description="accuracy preset (fast, default, accurate): sets the resolution [-]")
@@ -38,6 +39,17 @@ class _WithPreset(BaseModel):
         """Fill a missing resolution from the preset, so a resolved config names the number it ran with."""
         if isinstance(data, dict) and data.get("resolution") is None and data.get("preset", "default") in cls.RESOLUTIONS:
             data = {**data, "resolution": cls.RESOLUTIONS[data.get("preset", "default")]}
+        return data
+
+    @model_validator(mode="before")
+    @classmethod
+    def no_bool_for_numbers(cls, data):
+        """``n_x: true`` is a mistake, not 1: a yes/no is taken only where the field is one."""
+        if isinstance(data, dict):
+            for name, value in data.items():
+                field = cls.model_fields.get(name)
+                if isinstance(value, bool) and field is not None and field.annotation is not bool:
+                    raise ValueError(f"{name}: a number is needed, got {value!r}")
         return data
 
 
@@ -98,7 +110,21 @@ class CutConfig(_WithPreset):
             raise ValueError("give either fx (force control) or lx (position control), not both")
         if self.fx is None and self.lx is None:
             raise ValueError("give fx (force control) or lx (position control)")
+        if self.frame_every_us < self.observe_every_us:
+            raise ValueError(f"frame_every_us: {self.frame_every_us:g} is shorter than observe_every_us "
+                             f"({self.observe_every_us:g}): frames are taken at observations")
         return self
+
+    @property
+    def nodes(self) -> int:
+        """Nodes of the knit: n_y free courses and two held edge courses of n_x stitches each."""
+        return (self.n_y + 2) * (self.n_x * self.resolution + 1)
+
+    def memory_estimate_bytes(self) -> int:
+        """What a run holds in memory, about: ~2 kB per node (model, state, work arrays and contact
+        buffers of 4 pairs per edge) and the position frames (float32) kept until written."""
+        frames = int(self.max_time_ms * 1e3 / self.frame_every_us) + 2
+        return self.nodes * (2048 + 12 * frames)
 
     def stretch_settings(self):
         from knitlad.protocol import StretchSettings

@@ -473,6 +473,29 @@ def analyse(trace: LadderTrace) -> LadderResult:
     )
 
 
+class KnitTooLarge(MemoryError):
+    """The run would need more memory than the machine has available."""
+
+
+def available_memory_bytes() -> int | None:
+    """MemAvailable of /proc/meminfo (Linux), else None."""
+    try:
+        for line in open("/proc/meminfo"):
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024
+    except OSError:
+        return None
+    return None
+
+
+def require_memory(needed: int, what: str) -> None:
+    """Refuse, before allocating anything, a run that needs more than the available memory."""
+    available = available_memory_bytes()
+    if available is not None and needed > available:
+        raise KnitTooLarge(f"{what} needs about {needed / 2**30:.1f} GiB, more than the {available / 2**30:.1f} GiB "
+                           "available: fewer stitches, a coarser resolution, or fewer frames (frame_every_us)")
+
+
 def run_ladder(settings: LadderSettings, progress: Callable[[str, float], None] | None = None) -> LadderResult:
     """The four stages in a row."""
     knit = stretch(settings.stretch, progress)

@@ -30,8 +30,9 @@ class Scene:
 def run_ladder_job(cfg: CutConfig, output):
     """The laddering experiment (`knitlad cut`); its file holds the frames and series (:mod:`knitlad.io.hdf5`)."""
     from knitlad.io.hdf5 import write_ladder_result
-    from knitlad.protocol import run_ladder
+    from knitlad.protocol import require_memory, run_ladder
 
+    require_memory(cfg.memory_estimate_bytes(), f"a {cfg.n_x} x {cfg.n_y} knit at {cfg.resolution} nodes per stitch")
     result = run_ladder(cfg.settings())
     if not output.frames:
         result.frames, result.frame_times_s = [], []

@@ -31,7 +31,8 @@ from typing import Callable
 
 from knitlad import __version__
 from knitlad.io.atomic import atomic_path
-from knitlad.io.hdf5 import read_attrs, write_record
+from knitlad.io.folders import FolderLock, lock_holds, writable_folder
+from knitlad.io.hdf5 import read_attrs, verify_datasets, write_record
 from knitlad.io.summary import write_summary
 from knitlad.registry import SCENES
 from knitlad.sweep import Job
@@ -52,10 +53,19 @@ def _record(job: Job, status: str, error: str = "", wall_s: float = float("nan")
     }
 
 
-def run_job(job: Job, jobs_dir: str, threads: int | None = 1) -> dict:
+ABANDONED = "abandoned: the sweep that started this job has stopped; its result was not written"
+
+
+def _one_line(e: BaseException) -> str:
+    return f"{type(e).__name__}: {e}".splitlines()[0]
+
+
+def run_job(job: Job, jobs_dir: str, threads: int | None = 1, token: str | None = None) -> dict:
     """Run one job and write its file; returns its summary row. Never raises for a failed run.
 
     ``threads``: Numba threads for this job (1 in a pool: the pool is the parallelism).
+    ``token``: the sweep's folder lock; the file is written only while the lock holds it
+    (a job that outlives its sweep writes nothing). A failed write fails this job alone.
     """
     import numba
 
@@ -65,16 +75,24 @@ def run_job(job: Job, jobs_dir: str, threads: int | None = 1) -> dict:
     t0 = time.perf_counter()
     try:
         summary, write = SCENES[job.scene].run(job.scene_config(), job.output)
+        record = _record(job, "ok", "", time.perf_counter() - t0)
     except KeyboardInterrupt:
         raise
     except Exception as e:  # noqa: BLE001 - any failure of one job is recorded and the sweep goes on
-        message = f"{type(e).__name__}: {e}".splitlines()[0]
-        record = _record(job, "failed", message, time.perf_counter() - t0)
+        record = _record(job, "failed", _one_line(e), time.perf_counter() - t0)
         record["traceback"] = traceback.format_exc()
-        write_record(path, record)
+        summary, write = {}, lambda p, r: write_record(p, r)
+    if token is not None and not lock_holds(Path(jobs_dir).parent, token):
+        return summary_row(job, None) | {"error": ABANDONED}
+    try:
+        write(path, record)
+    except Exception as e:  # noqa: BLE001 - a full disk or an I/O error: this job fails, the sweep goes on
+        record = _record(job, "failed", f"cannot write the job's file: {_one_line(e)}", time.perf_counter() - t0)
+        try:
+            write_record(path, record)
+        except Exception:  # noqa: BLE001 - not even the failure could be recorded: the row says it
+            pass
         return summary_row(job, record)
-    record = _record(job, "ok", "", time.perf_counter() - t0)
-    write(path, record)
     return summary_row(job, {**summary, **record})
 
 
@@ -92,14 +110,33 @@ def summary_row(job: Job, attrs: dict | None) -> dict:
 
 
 def finished_row(jobs_dir: str | Path, job: Job) -> dict | None:
-    """The row of a job that has a file, else None (an unreadable file counts as not run)."""
-    path = job_path(jobs_dir, job)
+    """The row of a job whose file is its own and intact, else None (see :func:`trusted_attrs`)."""
+    attrs, _ = trusted_attrs(job_path(jobs_dir, job), job)
+    return None if attrs is None else summary_row(job, attrs)
+
+
+def trusted_attrs(path: Path, job: Job) -> tuple[dict | None, str]:
+    """(the file's attributes, "") if ``path`` is ``job``'s file and intact, else (None, why not).
+
+    Its file: the recorded id and resolved config are the job's (a copied or left-over file
+    is not). Intact: every dataset reads back with its checksum (fletcher32)."""
     if not path.exists():
-        return None
+        return None, ""
     try:
-        return summary_row(job, read_attrs(path))
-    except OSError:
-        return None
+        attrs = read_attrs(path)
+        verify_datasets(path)
+    except Exception as e:  # noqa: BLE001 - any unreadable file is not trusted
+        return None, f"its file was unreadable or damaged ({_one_line(e)})"
+    if attrs.get("job_id") != job.id:
+        return None, f"its file belongs to job {attrs.get('job_id')!r}"
+    raw = attrs.get("job_json")
+    try:
+        same = (Job.model_validate(raw) if isinstance(raw, dict) else Job.model_validate_json(raw or "")) == job
+    except ValueError:
+        same = False
+    if not same:
+        return None, "its file records another configuration"
+    return attrs, ""
 
 
 # ---------------------------------------------------------------------- driver
@@ -110,6 +147,12 @@ class SweepOutcome:
     failed: int = 0
     skipped: int = 0
     interrupted: bool = False
+    terminated: bool = False  # by SIGTERM (exit 143), else Ctrl-C (exit 130)
+
+    @property
+    def failed_rows(self) -> list[dict]:
+        """Every failed job of the sweep, run this time or before."""
+        return [row for row in self.rows.values() if row["status"] == "failed"]
 
 
 class SweepProgress:
@@ -183,7 +226,23 @@ def compile_kernels() -> None:
                          observe_every_us=5.0, arrest_ms=5e-3).settings())
 
 
-Runner = Callable[[Job, str, int], dict]
+Runner = Callable[[Job, str, int, str], dict]  # (job, jobs folder, threads, lock token) -> summary row
+WORKER_DIED = "worker process died (killed, out of memory or crashed)"
+
+
+def _plan(jobs: list[Job], jobs_dir: Path, force: bool, retry_failed: bool, outcome: SweepOutcome) -> list[Job]:
+    """The jobs to run; the rows of the others. A job file that is not the job's own or is
+    damaged is not trusted: the job runs again and its row says why until then."""
+    todo = []
+    for job in jobs:
+        attrs, why = (None, "") if force else trusted_attrs(job_path(jobs_dir, job), job)
+        if attrs is not None and (attrs.get("status") == "ok" or not retry_failed):
+            outcome.rows[job.id] = summary_row(job, attrs)
+            outcome.skipped += 1
+        else:
+            outcome.rows[job.id] = summary_row(job, None) | ({"error": f"to rerun: {why}"} if why else {})
+            todo.append(job)
+    return todo
 
 
 def run_sweep(
@@ -198,61 +257,54 @@ def run_sweep(
     runner: Runner = run_job,
     config_text: str | None = None,
 ) -> SweepOutcome:
-    """Run the jobs that have no file yet (all with ``force``; failed ones too with ``retry_failed``).
+    """Run the jobs that have no trusted file yet (all with ``force``; failed ones too with ``retry_failed``).
 
-    The summary is rewritten after every finished job and once more at the end,
-    also after Ctrl-C or SIGTERM (then ``interrupted`` is set, the workers are
-    stopped and the unfinished jobs stay pending).
+    The folder is checked and locked first (:mod:`knitlad.io.folders`: one sweep at a time;
+    :class:`~knitlad.io.folders.FolderError` before anything runs). The summary is rewritten
+    after every finished job and once more at the end, also after Ctrl-C or SIGTERM (then
+    ``interrupted`` is set, the workers are stopped and the unfinished jobs stay pending).
     """
-    out = Path(out_dir)
-    jobs_dir = out / "jobs"
-    jobs_dir.mkdir(parents=True, exist_ok=True)
-    for stale in jobs_dir.glob("*.tmp"):  # left by a job killed while writing
-        stale.unlink()
-    if config_text is not None:
-        with atomic_path(out / "sweep.yaml") as tmp:
-            tmp.write_text(config_text)
-    outcome = SweepOutcome()
-    todo = []
-    for job in jobs:
-        row = None if force else finished_row(jobs_dir, job)
-        if row is not None and (row["status"] == "ok" or not retry_failed):
-            outcome.rows[job.id] = row
-            outcome.skipped += 1
-        else:
-            outcome.rows[job.id] = summary_row(job, None)
-            todo.append(job)
-    write_summary(out, list(outcome.rows.values()))
-    bar = SweepProgress(len(jobs), outcome.skipped) if progress else None
-
-    def finish(job: Job, row: dict) -> None:
-        outcome.rows[job.id] = row
-        outcome.ran += 1
-        outcome.failed += row["status"] != "ok"
-        write_summary(out, list(outcome.rows.values()))
-        if bar:
-            bar.update(row["status"])
-
-    previous = signal.getsignal(signal.SIGTERM)
-    main_thread = threading.current_thread() is threading.main_thread()
-    if main_thread:
-        signal.signal(signal.SIGTERM, _on_sigterm)
-    try:
-        if todo:
-            if executor == "dask":
-                _run_dask(todo, jobs_dir, workers, scheduler, runner, finish)
-            else:
-                _run_pool(todo, jobs_dir, workers, runner, finish)
-    except KeyboardInterrupt:
-        outcome.interrupted = True
-    finally:
-        for stale in jobs_dir.glob("*.tmp"):
+    out = writable_folder(out_dir)
+    jobs_dir = writable_folder(out / "jobs")
+    with FolderLock(out) as lock:
+        for stale in jobs_dir.glob("*.tmp"):  # left by a job killed while writing (the lock says none runs)
             stale.unlink(missing_ok=True)
+        if config_text is not None:
+            with atomic_path(out / "sweep.yaml") as tmp:
+                tmp.write_text(config_text)
+        outcome = SweepOutcome()
+        todo = _plan(jobs, jobs_dir, force, retry_failed, outcome)
         write_summary(out, list(outcome.rows.values()))
-        if bar:
-            bar.close()
+        bar = SweepProgress(len(jobs), outcome.skipped) if progress else None
+
+        def finish(job: Job, row: dict) -> None:
+            outcome.rows[job.id] = row
+            outcome.ran += 1
+            outcome.failed += row["status"] != "ok"
+            write_summary(out, list(outcome.rows.values()))
+            if bar:
+                bar.update(row["status"])
+
+        previous = signal.getsignal(signal.SIGTERM)
+        main_thread = threading.current_thread() is threading.main_thread()
         if main_thread:
-            signal.signal(signal.SIGTERM, previous)
+            signal.signal(signal.SIGTERM, _on_sigterm)
+        try:
+            if todo:
+                run = _run_dask if executor == "dask" else _run_pool
+                run(todo, jobs_dir, workers, scheduler, runner, finish, lock.token)
+        except KeyboardInterrupt as e:
+            outcome.interrupted = True
+            outcome.terminated = isinstance(e, _Terminated)
+        finally:
+            lock.release()  # from here on, a job still running elsewhere writes nothing
+            for stale in jobs_dir.glob("*.tmp"):
+                stale.unlink(missing_ok=True)
+            write_summary(out, list(outcome.rows.values()))
+            if bar:
+                bar.close()
+            if main_thread:
+                signal.signal(signal.SIGTERM, previous)
     return outcome
 
 
@@ -263,35 +315,48 @@ def _failed_row(jobs_dir: Path, job: Job, message: str) -> dict:
     return summary_row(job, record)
 
 
-def _run_pool(todo: list[Job], jobs_dir: Path, workers: int | None, runner: Runner, finish) -> None:
-    """At most ``workers`` jobs in flight, so that when a worker dies the jobs it may have
-    been running are known: they are recorded as failed and a new pool takes the rest."""
+def _run_pool(todo: list[Job], jobs_dir: Path, workers: int | None, scheduler, runner: Runner, finish,
+              token: str) -> None:
+    """At most ``workers`` jobs in flight. When a worker dies the pool breaks and every job
+    in flight is lost with it: a lone one is the job that killed it and fails; several
+    are run again one at a time, so that only the job that kills its worker fails."""
     workers = max(1, min(workers or os.cpu_count() or 1, len(todo)))
     if workers > 1 and runner is run_job:
         compile_kernels()
     queue = list(reversed(todo))
+    suspects: list[Job] = []  # in flight when a pool broke: each runs alone
     ctx = get_context("spawn")  # a fresh interpreter per worker: no forked Numba thread pools
-    while queue:
-        pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker)
-        running = {}
+    while queue or suspects:
+        alone = bool(suspects)
+        pool = ProcessPoolExecutor(max_workers=1 if alone else workers, mp_context=ctx, initializer=_init_worker)
+        running: dict = {}
         try:
-            while queue or running:
-                while queue and len(running) < workers:
-                    job = queue.pop()
-                    running[pool.submit(runner, job, str(jobs_dir), 1)] = job
-                done, _ = wait(running, return_when=FIRST_COMPLETED)
-                broken = False
+            while (suspects if alone else queue) or running:
+                source = suspects if alone else queue
+                lost = []
+                while source and len(running) < (1 if alone else workers):
+                    job = source.pop()
+                    try:
+                        running[pool.submit(runner, job, str(jobs_dir), 1, token)] = job
+                    except BrokenProcessPool:  # a worker died since the last wait: this job never started
+                        source.append(job)
+                        break
+                done, _ = wait(running, return_when=FIRST_COMPLETED) if running else (set(), None)
                 for fut in done:
                     job = running.pop(fut)
                     try:
                         finish(job, fut.result())
                     except BrokenProcessPool:
-                        broken = True
-                        finish(job, _failed_row(jobs_dir, job, "worker process died (killed, out of memory or crashed)"))
-                if broken:
-                    for fut, job in running.items():
-                        finish(job, _failed_row(jobs_dir, job, "worker process died (killed, out of memory or crashed)"))
+                        lost.append(job)
+                    except Exception as e:  # noqa: BLE001 - this job's task failed outside run_job
+                        finish(job, _failed_row(jobs_dir, job, _one_line(e)))
+                if lost or not done:
+                    lost += list(running.values())
                     running.clear()
+                    if len(lost) == 1:
+                        finish(lost[0], _failed_row(jobs_dir, lost[0], WORKER_DIED))
+                    elif lost:
+                        suspects.extend(reversed(lost))
                     break
         except BaseException:
             _stop_pool(pool)
@@ -309,32 +374,51 @@ def _stop_pool(pool: ProcessPoolExecutor) -> None:
     pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _run_dask(todo: list[Job], jobs_dir: Path, workers: int | None, scheduler: str | None, runner: Runner, finish) -> None:
-    """The same jobs on a Dask cluster at ``scheduler`` (or a local one). ``DIR`` must be on a
-    file system the workers share (as on a Slurm cluster with dask-jobqueue)."""
+class SchedulerError(RuntimeError):
+    """The Dask scheduler cannot be reached or its address is malformed (one line)."""
+
+
+SCHEDULER_TIMEOUT_S = 5
+
+
+def connect(scheduler: str):
+    """A Dask client of ``scheduler``, or :class:`SchedulerError` within SCHEDULER_TIMEOUT_S seconds."""
     try:
-        from distributed import Client, LocalCluster, as_completed
+        from distributed import Client
     except ImportError:
-        raise RuntimeError("--executor dask needs the optional extra: pip install 'knitlad[dask]'") from None
+        raise SchedulerError("--executor dask needs the optional extra: pip install 'knitlad[dask]'") from None
+    try:
+        return Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S}s")
+    except (OSError, TimeoutError, ValueError, TypeError) as e:
+        raise SchedulerError(f"--scheduler {scheduler}: cannot connect ({_one_line(e)})") from None
+
+
+def _run_dask(todo: list[Job], jobs_dir: Path, workers: int | None, scheduler: str | None, runner: Runner, finish,
+              token: str) -> None:
+    """The same jobs on a Dask cluster at ``scheduler`` (or a local one). ``DIR`` must be on a
+    file system the workers share (as on a Slurm cluster with dask-jobqueue). On Ctrl-C the
+    tasks are cancelled and the folder's lock released: a task still running writes nothing."""
+    from distributed import Client, LocalCluster, as_completed
+
     if len(todo) > 1 and runner is run_job:
         compile_kernels()  # the workers then load Numba's on-disk cache
     cluster = None
     if scheduler:
-        client = Client(scheduler)
+        client = connect(scheduler)
     else:
         n = max(1, min(workers or os.cpu_count() or 1, len(todo)))
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
         client = Client(cluster)
     futures = {}
     try:
-        futures = {client.submit(runner, job, str(jobs_dir.resolve()), 1, key=f"knitlad-{job.id}", pure=False): job
-                   for job in todo}
+        futures = {client.submit(runner, job, str(jobs_dir.resolve()), 1, token, key=f"knitlad-{job.id}", pure=False):
+                   job for job in todo}
         for fut in as_completed(futures):
             job = futures[fut]
             try:
                 row = fut.result()
             except Exception as e:  # noqa: BLE001 - a worker died (KilledWorker) or the task failed outside run_job
-                row = _failed_row(jobs_dir, job, f"{type(e).__name__}: {e}".splitlines()[0])
+                row = _failed_row(jobs_dir, job, _one_line(e))
             finish(job, row)
     except BaseException:
         client.cancel(list(futures))

@@ -44,6 +44,7 @@ from pydantic import (
 from knitlad.config import one_line
 from knitlad.registry import SCENES
 
+MAX_JOBS = 10_000  # a sweep of more jobs is refused unless asked for (--max-jobs)
 COMPRESSIONS = ("gzip", "lzf", "none")
 
 
@@ -55,10 +56,10 @@ class Range(BaseModel):
     """Evenly spaced values from start to stop (both included): num of them, or every step."""
 
     model_config = ConfigDict(extra="forbid")
-    start: float = Field(description="first value, in the axis' unit")
-    stop: float = Field(description="last value, in the axis' unit (included)")
-    num: int | None = Field(None, ge=1, le=10_000, description="number of values [-]")
-    step: float | None = Field(None, gt=0, description="spacing, in the axis' unit")
+    start: float = Field(allow_inf_nan=False, description="first value, in the axis' unit")
+    stop: float = Field(allow_inf_nan=False, description="last value, in the axis' unit (included)")
+    num: int | None = Field(None, ge=1, le=MAX_JOBS, strict=True, description="number of values [-]")
+    step: float | None = Field(None, gt=0, allow_inf_nan=False, description="spacing, in the axis' unit")
 
     @model_validator(mode="after")
     def one_spacing(self) -> "Range":
@@ -68,11 +69,13 @@ class Range(BaseModel):
             raise ValueError("stop must be >= start")
         return self
 
-    def values(self) -> list[float]:
+    def count(self) -> int:
         if self.num is not None:
-            n = self.num
-        else:
-            n = int(math.floor((self.stop - self.start) / self.step + 1e-9)) + 1
+            return self.num
+        return int(math.floor((self.stop - self.start) / self.step + 1e-9)) + 1
+
+    def values(self) -> list[float]:
+        n = self.count()
         if n == 1:
             return [self.start]
         h = (self.stop - self.start) / (n - 1) if self.num is not None else self.step
@@ -114,6 +117,10 @@ class Sweep(BaseModel):
 
     def values(self) -> dict[str, list]:
         return {k: v.values() if isinstance(v, Range) else list(v) for k, v in self.axes.items()}
+
+    def counts(self) -> dict[str, int]:
+        """How many values each axis has (without building them)."""
+        return {k: v.count() if isinstance(v, Range) else len(v) for k, v in self.axes.items()}
 
 
 class Output(BaseModel):
@@ -160,15 +167,35 @@ def job_id(scene: str, params: dict, output: Output) -> str:
 
 
 # --------------------------------------------------------------------- loading
-def load_sweep(path: str | Path) -> tuple[SweepConfig, list[Job]]:
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """YAML with each key of a mapping given once: a repeated key is an error, not 'the last wins'."""
+
+
+def _mapping_with_unique_keys(loader: _UniqueKeyLoader, node: yaml.MappingNode, deep: bool = False) -> dict:
+    seen = set()
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=deep)
+        if key in seen:
+            raise yaml.constructor.ConstructorError(None, None, f"key {key!r} is given twice", key_node.start_mark)
+        seen.add(key)
+    return loader.construct_mapping(node, deep)
+
+
+_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _mapping_with_unique_keys)
+
+
+
+def load_sweep(path: str | Path, max_jobs: int = MAX_JOBS) -> tuple[SweepConfig, list[Job]]:
     """Read, validate and expand a sweep file; every problem raises SweepError('key: reason')."""
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise SweepError(f"{path}: not a text file (a YAML sweep config is text)") from None
     except OSError as e:
         raise SweepError(f"{path}: cannot read ({e.strerror or e})") from None
     try:
-        raw = yaml.safe_load(text)
+        raw = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader
     except yaml.YAMLError as e:
         mark = getattr(e, "problem_mark", None)
         where = f"line {mark.line + 1}" if mark is not None else "YAML"
@@ -179,13 +206,22 @@ def load_sweep(path: str | Path) -> tuple[SweepConfig, list[Job]]:
         cfg = SweepConfig.model_validate(raw)
     except ValidationError as e:
         raise SweepError(one_line(e)) from None
-    return cfg, expand(cfg)
+    return cfg, expand(cfg, max_jobs)
 
 
-def expand(cfg: SweepConfig) -> list[Job]:
-    """All jobs of a sweep, each validated by its scene's config (errors name the YAML key)."""
+def expand(cfg: SweepConfig, max_jobs: int = MAX_JOBS) -> list[Job]:
+    """All jobs of a sweep, each validated by its scene's config (errors name the YAML key).
+
+    The number of jobs is counted before any is built: more than ``max_jobs`` is refused."""
     model = SCENES[cfg.scene].config
     fields = set(model.model_fields)
+    counts = cfg.sweep.counts()
+    n_jobs = math.prod(counts.values()) if cfg.sweep.expand == "grid" else max(counts.values())
+    if n_jobs > max_jobs:
+        raise SweepError(f"sweep.axes: {n_jobs:.3g} jobs ({' x '.join(map(str, counts.values()))}), more than "
+                         f"{max_jobs}; use fewer values or --max-jobs")
+    if "preset" in cfg.sweep.axes and ("resolution" in cfg.fixed or "resolution" in cfg.sweep.axes):
+        raise SweepError("sweep.axes.preset: has no effect where resolution is given (the preset only sets it)")
     for key in cfg.fixed:
         if key not in fields:
             raise SweepError(f"fixed.{key}: not a field of scene {cfg.scene!r} (fields: {', '.join(sorted(fields))})")

@@ -2,17 +2,38 @@
 
 from __future__ import annotations
 
+import contextlib
+import dataclasses
 import os
 
 from knitlad.io.hdf5 import write_record
 from knitlad.runner import _record, job_path, summary_row
 
 
-def fake_runner(job, jobs_dir: str, threads: int = 1) -> dict:
-    """Instant job: records ok; the job with mu == 0 kills its worker process instead."""
+def fake_runner(job, jobs_dir: str, threads: int = 1, token=None) -> dict:
+    """Instant job: records ok; the job with mu == 0 kills its worker process instead, the one
+    with mu == 0.2 fails to write its file (a full disk)."""
     if job.params["mu"] == 0.0:
         os._exit(3)  # a segfault or the OOM killer, as the pool sees it
+    if job.params["mu"] == 0.2:
+        raise OSError(28, "No space left on device")
     record = _record(job, "ok", "", 0.0)
     record["fx_ini"] = 10 * job.params["mu"]
     write_record(job_path(jobs_dir, job), record)
     return summary_row(job, record)
+
+
+@contextlib.contextmanager
+def fast_ladder_scene():
+    """In this process, the ladder scene's runner returns at once (a summary and a writer of a record)."""
+    from knitlad import registry
+
+    def instant(cfg, output):
+        return {"fx_ini": 1.0}, lambda path, record: write_record(path, record)
+
+    saved = registry.SCENES["ladder"]
+    registry.SCENES["ladder"] = dataclasses.replace(saved, run=instant)
+    try:
+        yield
+    finally:
+        registry.SCENES["ladder"] = saved

@@ -167,7 +167,7 @@ def test_a_failing_job_is_recorded_and_the_others_go_on(tmp_path):
 
 
 def test_a_dead_worker_fails_only_its_job_and_the_pool_is_restarted(tmp_path):
-    cfg = {"fixed": {**TINY, "lx": 0.4}, "sweep": {"axes": {"mu": [0.1, 0.0, 0.2, 0.3]}}}
+    cfg = {"fixed": {**TINY, "lx": 0.4}, "sweep": {"axes": {"mu": [0.1, 0.0, 0.3, 0.4]}}}
     _, jobs = load_sweep(write_config(tmp_path / "c.yaml", cfg))
     from tests.sweep_helpers import fake_runner
 
@@ -202,8 +202,8 @@ def test_ctrl_c_keeps_finished_jobs_and_a_consistent_summary_and_the_rerun_goes_
     else:
         os.kill(proc.pid, signal.SIGTERM)  # as kill or a batch system: the parent only
     _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130, err
-    assert "interrupted" in err and "Traceback" not in err
+    assert proc.returncode == (130 if sig == signal.SIGINT else 143), err
+    assert ("interrupted" if sig == signal.SIGINT else "terminated") in err and "Traceback" not in err
     df = read_summary(out)
     done = set(df.loc[df["status"] == "ok", "job_id"])
     assert 1 <= len(done) < 3 and set(df["status"]) <= {"ok", "pending"}

@@ -49,6 +49,24 @@ def _set_attrs(f: h5py.File, attrs: dict) -> None:
         f.attrs[key] = json.dumps(value) if isinstance(value, (list, dict)) else ("" if value is None else value)
 
 
+def _dataset(group, name: str, data, compression: str | None = None) -> None:
+    """A dataset with a checksum (fletcher32; read back by :func:`verify_datasets`); empty ones cannot carry one."""
+    data = np.asarray(data)
+    if data.size:
+        group.create_dataset(name, data=data, compression=compression, fletcher32=True)
+    else:
+        group.create_dataset(name, data=data)
+
+
+def verify_datasets(path: str | Path) -> None:
+    """Read every dataset of ``path`` back: a damaged one fails its checksum (OSError)."""
+    with h5py.File(path, "r") as f:
+        def read(name, obj):
+            if isinstance(obj, h5py.Dataset):
+                obj[()]
+        f.visititems(read)
+
+
 def _write_run_attrs(f: h5py.File, settings, material) -> None:
     f.attrs["knitlad_version"] = __version__
     f.attrs["settings_json"] = json.dumps(_jsonable(settings), default=str)
@@ -65,18 +83,18 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
         _write_run_attrs(f, result.settings, result.settings.material)
         if result.frames:
             g = f.create_group("frames")
-            g.create_dataset("positions", data=np.stack(result.frames), compression=compression)
-            g.create_dataset("time", data=np.array(result.frame_times_s))
+            _dataset(g, "positions", np.stack(result.frames), compression)
+            _dataset(g, "time", result.frame_times_s)
         g = f.create_group("series")
-        g.create_dataset("time", data=np.array(result.times_s))
-        g.create_dataset("front_up", data=np.array(result.front_up))
-        g.create_dataset("front_down", data=np.array(result.front_down))
-        g.create_dataset("fx", data=np.array(result.fx_series))
+        _dataset(g, "time", result.times_s)
+        _dataset(g, "front_up", result.front_up)
+        _dataset(g, "front_down", result.front_down)
+        _dataset(g, "fx", result.fx_series)
         if result.column_history:
-            g.create_dataset("laddering_column_cells", data=np.array(result.column_history))
+            _dataset(g, "laddering_column_cells", result.column_history)
         if result.final_laddered is not None:
-            f.create_dataset("final/laddered", data=result.final_laddered)
-        f.create_dataset("topology/yarn_start", data=result.yarn_start)
+            _dataset(f.require_group("final"), "laddered", result.final_laddered)
+        _dataset(f.require_group("topology"), "yarn_start", result.yarn_start)
     return path
 
 
@@ -136,10 +154,10 @@ def write_stretched_knit(path: str | Path, knit) -> Path:
         for group, arrays in (("model", k.rods.model), ("state", k.rods.state)):
             g = f.create_group(group)
             for name, value in arrays._asdict().items():
-                g.create_dataset(name, data=value)
+                _dataset(g, name, value)
         g = f.create_group("knit")
         for name in ("courses", "bars", "node_t", "left_end", "right_end"):
-            g.create_dataset(name, data=np.asarray(getattr(k, name)))
+            _dataset(g, name, getattr(k, name))
     return path
 
 

@@ -1,0 +1,256 @@
+"""No lost work and no silently wrong result: concurrency, faults and bad input (small, seconds each)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+import yaml
+
+from knitlad.io.folders import LOCK_NAME, FolderError, FolderLock
+from knitlad.io.summary import read_summary
+from knitlad.runner import ABANDONED, job_path, run_job, run_sweep, trusted_attrs
+from knitlad.sweep import SweepError, load_sweep
+
+ROOT = Path(__file__).resolve().parents[1]
+KNITLAD = [sys.executable, "-m", "knitlad.cli"]
+TINY = {"n_x": 6, "n_y": 8, "resolution": 16, "max_time_ms": 3, "arrest_ms": 1}
+
+
+def knitlad(*args, **kw):
+    return subprocess.run([*KNITLAD, *args], capture_output=True, text=True, cwd=ROOT, **kw)
+
+
+def one_line_error(p, code: int = 2) -> str:
+    assert p.returncode == code, (p.returncode, p.stderr)
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in p.stderr, p.stderr
+    return lines[0]
+
+
+def config(tmp_path: Path, cfg: dict, name: str = "c.yaml") -> Path:
+    path = tmp_path / name
+    path.write_text(yaml.safe_dump(cfg))
+    return path
+
+
+def fake_jobs(tmp_path: Path, mus: list[float]):
+    return load_sweep(config(tmp_path, {"fixed": {**TINY, "lx": 0.4}, "sweep": {"axes": {"mu": mus}}}))[1]
+
+
+# ------------------------------------------------------------------ work lost
+def test_a_second_sweep_on_the_same_folder_is_refused_and_the_first_runs_every_job_once(tmp_path):
+    cfg = config(tmp_path, {"fixed": {**TINY, "lx": 0.38}, "sweep": {"axes": {"mu": [0.1, 0.2]}}})
+    out = tmp_path / "out"
+    first = subprocess.Popen([*KNITLAD, "sweep", str(cfg), "--out", str(out), "--workers", "1"], cwd=ROOT,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 60
+    while time.time() < deadline and not (out / LOCK_NAME).exists():
+        time.sleep(0.05)
+    second = knitlad("sweep", str(cfg), "--out", str(out), "--workers", "1")
+    assert "in use by another knitlad sweep" in one_line_error(second)
+    stdout, stderr = first.communicate(timeout=300)
+    assert first.returncode == 0, stderr
+    assert "2 jobs run (0 failed), 0 already done" in stdout
+    assert (read_summary(out)["status"] == "ok").all() and not (out / LOCK_NAME).exists()
+
+
+def test_a_stale_lock_of_a_dead_process_is_taken_over(tmp_path):
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / LOCK_NAME).write_text(json.dumps({"pid": dead.pid, "host": os.uname().nodename,
+                                                          "token": "old", "started": "then"}))
+    lock = FolderLock(tmp_path / "out").acquire()
+    assert lock.took_over["token"] == "old"
+    with pytest.raises(FolderError, match="in use by another knitlad sweep"):
+        FolderLock(tmp_path / "out").acquire()  # a live owner (this process) is respected
+    lock.release()
+    assert not (tmp_path / "out" / LOCK_NAME).exists()
+
+
+@pytest.mark.parametrize("command", [["cut", "--stitches", "6x8", "--lx", "0.38"], ["diagram", "--ly", "0.25"],
+                                     ["sweep", "configs/smoke.yaml"]])
+def test_an_output_path_that_cannot_be_a_folder_is_refused_before_any_compute(tmp_path, command):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    for out in (blocker, blocker / "sub"):
+        p = knitlad(*command, "--out", str(out))
+        assert str(out) in one_line_error(p)
+        assert "stretch" not in p.stdout and "f_x = 0 at" not in p.stdout
+
+
+def test_a_job_whose_file_cannot_be_written_fails_alone(tmp_path, monkeypatch):
+    """A full disk or an I/O error while writing: the job is failed, with the reason; the
+    sweep goes on (below, in a pool)."""
+    from knitlad import registry
+
+    job = fake_jobs(tmp_path, [0.4])[0]
+    (tmp_path / "jobs").mkdir()
+
+    def no_space(cfg, output):
+        def write(path, record):
+            raise OSError(28, "No space left on device")
+
+        return {"fx_ini": 1.0}, write
+
+    monkeypatch.setitem(registry.SCENES, "ladder", dataclasses.replace(registry.SCENES["ladder"], run=no_space))
+    row = run_job(job, str(tmp_path / "jobs"))
+    assert row["status"] == "failed" and "No space left on device" in row["error"]
+    assert trusted_attrs(job_path(tmp_path / "jobs", job), job)[0]["status"] == "failed"
+
+
+def test_a_failing_task_and_a_dead_worker_fail_only_their_jobs_and_a_rerun_says_so(tmp_path):
+    """Two jobs in flight when a worker dies: the pool breaks and both are lost with it; each
+    is run again alone, and only the one that kills its worker fails. A task that raises (a
+    failed write outside the job) fails alone too."""
+    from tests.sweep_helpers import fake_runner
+
+    jobs = fake_jobs(tmp_path, [0.1, 0.0, 0.2, 0.3, 0.4])
+    outcome = run_sweep(jobs, tmp_path / "out", workers=2, runner=fake_runner, progress=False)
+    df = read_summary(tmp_path / "out")
+    assert list(df["status"]) == ["ok", "failed", "failed", "ok", "ok"]
+    assert "worker process died" in df["error"][1] and "No space left" in df["error"][2]
+    assert outcome.failed == 2 and len(outcome.failed_rows) == 2
+    again = run_sweep(jobs, tmp_path / "out", workers=2, runner=fake_runner, progress=False)
+    assert again.ran == 0 and len(again.failed_rows) == 2  # the CLI exits 1 on these (below)
+
+
+def test_a_rerun_that_leaves_failed_jobs_exits_1_and_names_them(tmp_path):
+    cfg = config(tmp_path, {"scene": "stitch", "fixed": {"lx": 0.35, "ly": 0.25, "resolution": 16},
+                            "sweep": {"axes": {"d_over_l0": [0.05]}}})
+    for _ in range(2):
+        p = knitlad("sweep", str(cfg), "--out", str(tmp_path / "out"), "--workers", "1")
+        assert p.returncode == 1 and "1 of 1 jobs failed" in p.stderr and "--retry-failed" in p.stderr
+
+
+# ------------------------------------------------------------------ silently wrong
+def _real_job_file(tmp_path: Path, job):
+    """A job file written as a finished ladder job's is, with datasets (and their checksums)."""
+    from knitlad.io.hdf5 import _set_attrs
+    from knitlad.runner import _record
+
+    path = job_path(tmp_path / "jobs", job)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with h5py.File(path, "w") as f:
+        _set_attrs(f, _record(job, "ok", "", 1.0))
+        f.create_dataset("series/fx", data=np.linspace(0, 1, 4096), fletcher32=True)
+    return path
+
+
+def test_a_job_file_that_is_another_jobs_or_damaged_is_not_trusted_and_the_job_runs_again(tmp_path):
+    a, b = fake_jobs(tmp_path, [0.1, 0.3])
+    path_a = _real_job_file(tmp_path, a)
+    assert trusted_attrs(path_a, a)[0] is not None
+    path_b = job_path(tmp_path / "jobs", b)
+    path_b.write_bytes(path_a.read_bytes())  # left over or copied: a's file under b's name
+    assert "belongs to job" in trusted_attrs(path_b, b)[1]
+    with h5py.File(path_a, "r") as f:
+        offset = f["series/fx"].id.get_chunk_info(0).byte_offset
+    raw = bytearray(path_a.read_bytes())
+    raw[offset + 100] ^= 0xFF  # one damaged byte in the data
+    path_a.write_bytes(bytes(raw))
+    assert "damaged" in trusted_attrs(path_a, a)[1]
+    from tests.sweep_helpers import fake_runner
+
+    outcome = run_sweep([a, b], tmp_path, workers=1, runner=fake_runner, progress=False)
+    assert outcome.ran == 2 and outcome.skipped == 0
+    assert all(trusted_attrs(job_path(tmp_path / "jobs", j), j)[0] is not None for j in (a, b))
+
+
+def test_plot_checks_the_summary_against_the_job_files(tmp_path):
+    from tests.sweep_helpers import fake_runner
+
+    jobs = fake_jobs(tmp_path, [0.1, 0.3, 0.4])
+    run_sweep(jobs, tmp_path / "out", workers=1, runner=fake_runner, progress=False,
+              config_text=(tmp_path / "c.yaml").read_text())
+    summary = tmp_path / "out" / "summary.csv"
+    summary.write_text("".join(summary.read_text().splitlines(keepends=True)[:2]))  # truncated: one row left
+    p = knitlad("plot", str(tmp_path / "out"), "--no-diagrams")
+    assert p.returncode == 1 and p.stderr.count("missing from summary.csv") == 2
+    summary.write_bytes(os.urandom(256))
+    (tmp_path / "out" / "sweep.yaml").unlink()
+    assert "summary.csv" in one_line_error(knitlad("plot", str(tmp_path / "out")))
+
+
+def test_a_job_that_outlives_its_sweep_writes_nothing(tmp_path):
+    """After Ctrl-C the sweep releases its folder's lock; a task still running on a cluster
+    then finds the lock gone and leaves no file the summary does not know of."""
+    job = fake_jobs(tmp_path, [0.4])[0]
+    jobs_dir = tmp_path / "out" / "jobs"
+    jobs_dir.mkdir(parents=True)
+    with FolderLock(tmp_path / "out"):
+        pass  # the sweep has stopped: its token no longer holds the folder
+    from tests.sweep_helpers import fast_ladder_scene
+
+    with fast_ladder_scene():
+        row = run_job(job, str(jobs_dir), token="the stopped sweep's")
+    assert row["status"] == "pending" and row["error"] == ABANDONED and not list(jobs_dir.iterdir())
+
+
+@pytest.mark.parametrize("cfg, where", [
+    ({"fixed": {**TINY, "lx": 0.4, "resolution": 16}, "sweep": {"axes": {"preset": ["fast", "accurate"]}}},
+     "preset"),
+    ({"fixed": {**TINY, "lx": 0.4, "observe_every_us": 50}, "sweep": {"axes": {"mu": [0.4]}},
+      "output": {"frame_every_us": 20}}, "frame_every_us"),
+    ({"fixed": {**TINY, "lx": 0.4, "n_x": True}, "sweep": {"axes": {"mu": [0.4]}}}, "n_x"),
+    ({"fixed": {**TINY, "lx": float("nan")}, "sweep": {"axes": {"mu": [0.4]}}}, "finite number"),
+    ({"fixed": {**TINY, "lx": 0.4}, "sweep": {"axes": {"mu": {"start": 0, "stop": 1, "step": 1e-300}}}}, "jobs"),
+    ({"fixed": {**TINY, "lx": 0.4}, "sweep": {"axes": {"mu": {"start": 0, "stop": float("inf"), "step": 1}}}},
+     "finite number"),
+    ({"fixed": {**TINY}, "sweep": {"axes": {"lx": {"start": 0.3, "stop": 0.4, "num": 1000},
+                                            "mu": {"start": 0, "stop": 1, "num": 1000}}}}, "1e+06 jobs"),
+])
+def test_settings_that_would_be_taken_silently_or_hang_are_refused_at_once(tmp_path, cfg, where):
+    t = time.perf_counter()
+    with pytest.raises(SweepError) as e:
+        load_sweep(config(tmp_path, cfg))
+    assert where in str(e.value) and "\n" not in str(e.value)
+    assert time.perf_counter() - t < 5
+
+
+def test_a_duplicated_yaml_key_is_refused(tmp_path):
+    path = tmp_path / "dup.yaml"
+    path.write_text("fixed: {n_x: 6, n_y: 8, lx: 0.4}\nsweep: {axes: {mu: [0.4]}}\nsweep: {axes: {mu: [0.0]}}\n")
+    with pytest.raises(SweepError, match="given twice"):
+        load_sweep(path)
+
+
+# ------------------------------------------------------------------ hangs, resources, tracebacks
+def test_a_knit_larger_than_the_memory_is_refused_before_allocating(tmp_path):
+    p = knitlad("cut", "--stitches", "200x200", "--resolution", "280", "--lx", "0.4", "--out", str(tmp_path / "o"))
+    assert "GiB" in one_line_error(p) and not (tmp_path / "o").exists()
+
+
+def test_bad_files_and_schedulers_are_one_line_within_seconds(tmp_path):
+    binary = tmp_path / "binary.yaml"
+    binary.write_bytes(bytes(range(256)))
+    assert "not a text file" in one_line_error(knitlad("sweep", str(binary)))
+    t = time.perf_counter()
+    for address in ("tcp://127.0.0.1:9", "nonsense://host"):
+        p = knitlad("sweep", "configs/smoke.yaml", "--executor", "dask", "--scheduler", address,
+                    "--out", str(tmp_path / "o"))
+        assert "--scheduler" in one_line_error(p)
+    assert time.perf_counter() - t < 60 and not (tmp_path / "o").exists()
+    assert "finite number" in one_line_error(knitlad("cut", "--fx", "nan", "--stitches", "6x8"))
+
+
+def test_sigterm_ends_a_sweep_with_exit_code_143(tmp_path):
+    cfg = config(tmp_path, {"fixed": {**TINY, "lx": 0.38}, "sweep": {"axes": {"mu": [0.1, 0.2]}}})
+    proc = subprocess.Popen([*KNITLAD, "sweep", str(cfg), "--out", str(tmp_path / "out"), "--workers", "1"],
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 60
+    while time.time() < deadline and not (tmp_path / "out" / LOCK_NAME).exists():
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143 and "terminated" in err and "Traceback" not in err
