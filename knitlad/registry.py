@@ -1,8 +1,9 @@
 """The scenes a sweep can run: each names its config, its runner and its summary columns once.
 
-A runner takes the validated config of one job and the job's output options, runs
-it, and returns its summary (a dict of scalars) and a writer ``write(path, record)``
-of its file (``record``: the sweep's job attributes: id, status, config).
+A runner takes the validated config of one job, the job's output options and the
+sweep's folder, runs it, and returns its summary (a dict of scalars) and a writer
+``write(path, record)`` of its file (``record``: the sweep's job attributes: id,
+status, config).
 To add a scene: a pydantic config in :mod:`knitlad.config`, a runner here, one entry.
 """
 
@@ -22,18 +23,39 @@ from knitlad.config import CutConfig, LoopConfig, StitchConfig
 @dataclass(frozen=True)
 class Scene:
     config: type[BaseModel]
-    run: Callable  # (config, output options) -> (summary, write)
+    run: Callable  # (config, output options, sweep folder) -> (summary, write)
     summary_keys: tuple[str, ...]  # the results a sweep's summary table shows, in order
     description: str
+    shared_work: Callable | None = None  # config -> key of work that jobs with the same key share
 
 
-def run_ladder_job(cfg: CutConfig, output):
-    """The laddering experiment (`knitlad cut`); its file holds the frames and series (:mod:`knitlad.io.hdf5`)."""
+def stretch_of(cfg: CutConfig) -> str:
+    """Laddering jobs with the same stretch settings share one stretched knit."""
+    from knitlad.io.knit_cache import stretch_key
+
+    return stretch_key(cfg.stretch_settings())
+
+
+def run_ladder_job(cfg: CutConfig, output, folder: Path | None = None):
+    """The laddering experiment (`knitlad cut`); its file holds the frames and series (:mod:`knitlad.io.hdf5`).
+
+    The stretched knit is kept in ``folder/stretched`` and reused by the jobs that share
+    its settings (:mod:`knitlad.io.knit_cache`): a sweep over the dynamics stretches once."""
+    import time
+
     from knitlad.io.hdf5 import write_ladder_result
-    from knitlad.protocol import require_memory, run_ladder
+    from knitlad.io.knit_cache import cached_stretch
+    from knitlad.protocol import analyse, cut, propagate, require_memory, stretch
 
     require_memory(cfg.memory_estimate_bytes(), f"a {cfg.n_x} x {cfg.n_y} knit at {cfg.resolution} nodes per stitch")
-    result = run_ladder(cfg.settings())
+    t0 = time.perf_counter()
+    if folder is None:
+        knit, reused = stretch(cfg.stretch_settings()), False
+    else:
+        knit, reused = cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch)
+    if reused:  # the stretch cost this job only the reading
+        knit = dataclasses.replace(knit, wall_s=time.perf_counter() - t0)
+    result = analyse(propagate(cut(knit, cfg.dynamics_settings())))
     if not output.frames:
         result.frames, result.frame_times_s = [], []
     compression = None if output.compression == "none" else output.compression
@@ -41,7 +63,7 @@ def run_ladder_job(cfg: CutConfig, output):
     def write(path: Path, record: dict) -> None:
         write_ladder_result(path, result, compression=compression, attrs=record)
 
-    return result.summary(), write
+    return {**result.summary(), "stretch_reused": reused}, write
 
 
 def _attributes_only(result):
@@ -59,13 +81,13 @@ def _attributes_only(result):
     return summary, write
 
 
-def run_loop_job(cfg: LoopConfig, output):
+def run_loop_job(cfg: LoopConfig, output, folder: Path | None = None):
     from knitlad.loop_model import LoopRun
 
     return _attributes_only(LoopRun(cfg.settings()).run())
 
 
-def run_stitch_job(cfg: StitchConfig, output):
+def run_stitch_job(cfg: StitchConfig, output, folder: Path | None = None):
     from knitlad.stitch_model import StitchRun
 
     return _attributes_only(StitchRun(cfg.settings()).run())
@@ -75,8 +97,8 @@ SCENES: dict[str, Scene] = {
     "ladder": Scene(CutConfig, run_ladder_job, (
         "fx_ini", "fx_fin", "n_lad", "n_lad_over_ny", "v_lad_over_cb", "lx_over_l0", "ly_over_l0",
         "box_lx_over_l0", "fx_within_tolerance", "peak_overlap_over_d", "reached_edge", "stop_reason",
-        "laddering_column", "v_fit_stitches", "nodes", "steps", "relax_steps", "wall_s", "wall_stretch_s",
-        "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment"),
+        "laddering_column", "v_fit_stitches", "nodes", "steps", "relax_steps", "stretch_reused", "wall_s",
+        "wall_stretch_s", "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment", stretch_of),
     "loop": Scene(LoopConfig, run_loop_job, (
         "tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before", "steps",
         "nodes", "wall_s", "job_wall_s"), "`knitlad loop`: the single-loop model"),

@@ -74,7 +74,7 @@ def run_job(job: Job, jobs_dir: str, threads: int | None = 1, token: str | None 
     path = job_path(jobs_dir, job)
     t0 = time.perf_counter()
     try:
-        summary, write = SCENES[job.scene].run(job.scene_config(), job.output)
+        summary, write = SCENES[job.scene].run(job.scene_config(), job.output, Path(jobs_dir).parent)
         record = _record(job, "ok", "", time.perf_counter() - t0)
     except KeyboardInterrupt:
         raise
@@ -245,6 +245,18 @@ def _plan(jobs: list[Job], jobs_dir: Path, force: bool, retry_failed: bool, outc
     return todo
 
 
+def _sharing_first(todo: list[Job]) -> list[Job]:
+    """The first job of each group that shares work (a stretched knit) first, then the others:
+    by the time a job that can reuse the work starts, the work is usually done."""
+    rank, seen = {}, {}
+    for job in todo:
+        share = SCENES[job.scene].shared_work
+        key = (job.scene, share(job.scene_config())) if share else (job.scene, job.id)
+        rank[job.id] = seen.get(key, 0)
+        seen[key] = rank[job.id] + 1
+    return sorted(todo, key=lambda job: rank[job.id])  # stable: config order within a rank
+
+
 def run_sweep(
     jobs: list[Job],
     out_dir: str | Path,
@@ -273,7 +285,7 @@ def run_sweep(
             with atomic_path(out / "sweep.yaml") as tmp:
                 tmp.write_text(config_text)
         outcome = SweepOutcome()
-        todo = _plan(jobs, jobs_dir, force, retry_failed, outcome)
+        todo = _sharing_first(_plan(jobs, jobs_dir, force, retry_failed, outcome))
         write_summary(out, list(outcome.rows.values()))
         bar = SweepProgress(len(jobs), outcome.skipped) if progress else None
 

@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+import h5py
 import pandas as pd
 import pytest
 import yaml
@@ -236,3 +237,19 @@ def test_a_stitch_sweep_maps_the_tension_sign(tmp_path):
     df = read_summary(tmp_path / "out")
     assert list(df["status"]) == ["ok", "ok"]
     assert df["fx"][0] < 0 < df["fx"][1]  # compressed at 0.30 l0, stretched at 0.40 l0 (l_y = 0.25 l0)
+
+
+def test_jobs_that_share_a_stretch_stretch_once_and_ladder_as_fresh_runs(tmp_path):
+    """A sweep over the dynamics (here mu) stretches its knit once (`<out>/stretched/`); the job
+    that reuses it gives the very ladder a fresh run gives."""
+    from knitlad.protocol import run_ladder
+
+    cfg = {"fixed": {**TINY, "lx": 0.38, "max_time_ms": 0.5}, "sweep": {"axes": {"mu": [0.4, 0.0]}}}
+    _, jobs = load_sweep(write_config(tmp_path / "c.yaml", cfg))
+    run_sweep(jobs, tmp_path / "out", workers=1, progress=False)
+    df = read_summary(tmp_path / "out")
+    assert list(df["status"]) == ["ok", "ok"] and list(df["stretch_reused"]) == [False, True]
+    assert len(list((tmp_path / "out" / "stretched").glob("*.h5"))) == 1
+    fresh = run_ladder(jobs[1].scene_config().settings())
+    with h5py.File(tmp_path / "out" / "jobs" / f"{jobs[1].id}.h5", "r") as f:
+        assert list(f["series/fx"][()]) == fresh.fx_series

@@ -34,9 +34,9 @@ from knitlad.io.atomic import atomic_path
 from knitlad.units import Scales
 
 
-def _jsonable(obj):
+def jsonable(obj):
     if dataclasses.is_dataclass(obj):
-        return {f.name: _jsonable(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+        return {f.name: jsonable(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
     if isinstance(obj, enum.Enum):
         return obj.value
     if isinstance(obj, (np.floating, np.integer)):
@@ -69,7 +69,7 @@ def verify_datasets(path: str | Path) -> None:
 
 def _write_run_attrs(f: h5py.File, settings, material) -> None:
     f.attrs["knitlad_version"] = __version__
-    f.attrs["settings_json"] = json.dumps(_jsonable(settings), default=str)
+    f.attrs["settings_json"] = json.dumps(jsonable(settings), default=str)
     for key, value in Scales(material).as_attributes().items():
         f.attrs[f"scale_{key}"] = value
 
@@ -147,7 +147,7 @@ def write_stretched_knit(path: str | Path, knit) -> Path:
     k = knit.knit
     with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
         _write_run_attrs(f, knit.settings, knit.settings.material)
-        f.attrs["geometry_json"] = json.dumps(_jsonable(k.geometry))
+        f.attrs["geometry_json"] = json.dumps(jsonable(k.geometry))
         f.attrs["H"] = k.H
         for name in _KNIT_SCALARS:
             f.attrs[name] = getattr(knit, name)
