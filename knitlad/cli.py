@@ -182,21 +182,29 @@ def cut(
     from knitlad.simulation import SimulationBlowUp
     from knitlad.stretching import OutOfReach
 
+    out_dir = Path(out) if out else Path("runs") / time.strftime("cut-%Y%m%d-%H%M%S")
+    made = not out_dir.exists()
     try:  # before any compute: a run of hours must not end in an unwritable folder
         require_memory(cfg.memory_estimate_bytes(), f"--stitches {n_x}x{n_y} at --resolution {cfg.resolution}")
-        out_dir = writable_folder(Path(out) if out else Path("runs") / time.strftime("cut-%Y%m%d-%H%M%S"))
+        writable_folder(out_dir)
     except (KnitTooLarge, FolderError) as e:
         fail(str(e) if isinstance(e, KnitTooLarge) else f"--out {e}")
+
+    def nothing_written() -> None:
+        if made and out_dir.is_dir() and not any(out_dir.iterdir()):
+            out_dir.rmdir()
 
     progress = _StageProgress()
     try:
         result = run_ladder(cfg.settings(), progress=progress)
     except KeyboardInterrupt:
         progress.close()
+        nothing_written()
         typer.echo("knitlad: interrupted; nothing written", err=True)
         raise typer.Exit(130)
     except (OutOfReach, Interpenetration, SimulationBlowUp) as e:  # the run failed (not bad input): one line, exit 1
         progress.close()
+        nothing_written()
         typer.echo(f"knitlad: run failed: {e}", err=True)
         raise typer.Exit(1)
     progress.close()
