@@ -1,4 +1,4 @@
-"""Command line: ``knitlad cut``, ``sweep``, ``plot``, ``stitch``, ``diagram``, ``loop``, ``demo``, ``scales``.
+"""Command line: ``knitlad cut``, ``render``, ``movie``, ``sweep``, ``plot``, ``stitch``, ``diagram``, ``loop``, ``demo``, ``scales``.
 
 The options of ``cut``, ``loop`` and ``stitch`` are the fields of their pydantic
 configs (:mod:`knitlad.config`: default, unit and description declared once).
@@ -208,7 +208,10 @@ def cut(
         typer.echo(f"knitlad: run failed: {e}", err=True)
         raise typer.Exit(1)
     progress.close()
+    from knitlad.render import write_xdmf
+
     h5 = write_ladder_result(out_dir / "ladder.h5", result)
+    write_xdmf(h5)
     png = spatio_temporal_diagram(result, out_dir / "spatio_temporal.png")
     summary = result.summary()
     if not result.fx_within_tolerance:
@@ -229,7 +232,7 @@ def cut(
         f"  l_x/l0, l_y/l0 = {result.lx_over_l0:.3f}, {result.ly_over_l0:.3f}\n"
         f"  stop: {result.stop_reason}\n"
         f"  wall time   = {summary['wall_s']:.1f} s (stretch {result.wall_s.get('stretch', 0):.1f} s, propagate {result.wall_s.get('propagate', 0):.1f} s)\n"
-        f"  wrote {h5} and {png}"
+        f"  wrote {h5}, {h5.with_suffix('.xdmf').name} (ParaView) and {png.name}; pictures: knitlad render {out_dir}"
     )
 
 
@@ -456,17 +459,27 @@ def _sweep_table(folder):
 
 @app.command()
 def plot(
-    folder: str = typer.Argument(..., help="A sweep folder (with summary.csv) written by knitlad sweep."),
+    folder: str = typer.Argument(..., help="A sweep folder (with summary.csv) or a run folder (with ladder.h5)."),
     diagrams: bool = typer.Option(True, "--diagrams/--no-diagrams", help="Also draw each job's spatio-temporal diagram."),
 ) -> None:
-    """PNG figures of a sweep: n_lad/n_y, f_x^fin and v_lad/c_b against f_x^ini, and the spatio-temporal diagrams.
+    """PNG figures of a sweep (n_lad/n_y, f_x^fin and v_lad/c_b against f_x^ini, each job's diagrams)
+    or of one run (its cell and midline diagrams and renders).
 
-    The summary is checked against the job files first; what is missing or wrong is said on
-    stderr, the figures are drawn from what the files hold, and the exit code is 1.
+    A sweep's summary is checked against the job files first; what is missing or wrong is
+    said on stderr, the figures are drawn from what the files hold, and the exit code is 1.
     """
     from pathlib import Path
 
-    from knitlad.plots import spatio_temporal_from_file, summary_plots
+    from knitlad.plots import column_midline_diagram, spatio_temporal_from_file, summary_plots
+
+    if (Path(folder) / "ladder.h5").is_file():
+        from knitlad.render import render_run
+
+        h5 = Path(folder) / "ladder.h5"
+        paths = [spatio_temporal_from_file(h5, Path(folder) / "spatio_temporal.png"),
+                 column_midline_diagram(h5, Path(folder) / "midline_diagram.png"), *render_run(h5, Path(folder) / "render")]
+        typer.echo(f"wrote {len(paths)} figures in {folder}")
+        return
 
     df, problems = _sweep_table(folder)
     if not (df["status"] == "ok").any():
@@ -485,6 +498,62 @@ def plot(
         typer.echo(f"knitlad: {line}", err=True)
     if problems:
         raise typer.Exit(1)
+
+
+def _run_file(run: str):
+    """The ``ladder.h5`` of a run folder (or the file itself); one line and exit 2 if there is none."""
+    from pathlib import Path
+
+    path = Path(run)
+    path = path / "ladder.h5" if path.is_dir() else path
+    if not path.is_file():
+        fail(f"{run}: no ladder.h5 (a folder written by knitlad cut, or its file)")
+    return path
+
+
+@app.command()
+def render(
+    run: str = typer.Argument(..., help="A run folder written by knitlad cut (or its ladder.h5)."),
+    at_ms: list[float] = typer.Option(None, "--at-ms", help="Instants after the cut [ms] (repeat); default: just "
+                                      "after the cut, then four evenly spaced instants of the ladder."),
+    view: list[str] = typer.Option(None, "--view", help="front (the x-y plane) and/or oblique (repeat); default both."),
+    width: int = typer.Option(1200, "--width", help="Image width [pixels]; height 3/4 of it."),
+) -> None:
+    """Images of the fabric: yarns as tubes of their diameter coloured by course, the cut course black, undone cells red."""
+    from knitlad.render import render_run
+
+    h5 = _run_file(run)
+    views = tuple(view or ("front", "oblique"))
+    if not set(views) <= {"front", "oblique"}:
+        fail(f"--view: front or oblique, got {', '.join(views)}")
+    if width < 64:
+        fail(f"--width: at least 64, got {width}")
+    try:
+        paths = render_run(h5, h5.parent / "render", [t * 1e-3 for t in at_ms] if at_ms else None, views,
+                           (width, width * 3 // 4))
+    except ValueError as e:
+        fail(str(e))
+    typer.echo(f"wrote {len(paths)} images in {h5.parent / 'render'}")
+
+
+@app.command()
+def movie(
+    run: str = typer.Argument(..., help="A run folder written by knitlad cut (or its ladder.h5)."),
+    gif: bool = typer.Option(False, "--gif", help="An animated GIF instead of an MP4."),
+    fps: int = typer.Option(12, "--fps", help="Frames per second of the movie."),
+    width: int = typer.Option(960, "--width", help="Frame width [pixels]; height 3/4 of it."),
+) -> None:
+    """A movie of the laddering: every stored frame, front view, with a time stamp and the undone cells."""
+    from knitlad.render import movie as make_movie
+
+    h5 = _run_file(run)
+    if fps < 1 or width < 64:
+        fail("--fps must be >= 1 and --width >= 64")
+    try:
+        path = make_movie(h5, h5.with_suffix(".gif" if gif else ".mp4"), fps=fps, size=(width, width * 3 // 4))
+    except ValueError as e:
+        fail(str(e))
+    typer.echo(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB)")
 
 
 def main() -> None:  # pragma: no cover - console entry point

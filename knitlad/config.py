@@ -19,6 +19,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 # the single loop at 0.7 (1 %); halving the contact overlap moved v_lad by up to 9 %, within
 # the knit's run-to-run scatter.
 Preset = Literal["fast", "default", "accurate"]
+AUTO_FRAMES = 60  # frames over the expected ladder duration when frame_every_us is not given
 LADDER_RESOLUTION = {"fast": 16, "default": 24, "accurate": 48}
 LOOP_RESOLUTION = {"fast": 24, "default": 36, "accurate": 48}
 STITCH_RESOLUTION = {"fast": 24, "default": 36, "accurate": 64}
@@ -77,7 +78,9 @@ class CutConfig(_WithPreset):
     max_time_ms: float = Field(30.0, gt=0, description="longest laddering time simulated after the cut [ms]")
     arrest_ms: float = Field(2.0, gt=0, description="the ladder has stopped when no cell changed for this long [ms]")
     observe_every_us: float = Field(20.0, gt=0, description="interval between front/tension samples [us]")
-    frame_every_us: float = Field(100.0, gt=0, description="interval between stored position frames [us]")
+    frame_every_us: float | None = Field(None, gt=0, description=(
+        "interval between stored frames (positions, velocities, laddered cells) [us]; default: 1/60 of the "
+        "ladder's expected duration, n_y l_y / 2 over the paper's velocity 0.1 f_x^ini c_b, for a movie of 50+ frames"))
     drag_per_s: float = Field(0.0, ge=0, le=1e5, json_schema_extra={"cli": "--drag"}, description=(
         "global drag -gamma m v on every node during the laddering [1/s]; 0 is the physics. 2e3 brings the "
         "42 x 42 runs to the paper's two DER velocities (docs/accuracy.md); 3e4 stops the ladder"))
@@ -110,7 +113,7 @@ class CutConfig(_WithPreset):
             raise ValueError("give either fx (force control) or lx (position control), not both")
         if self.fx is None and self.lx is None:
             raise ValueError("give fx (force control) or lx (position control)")
-        if self.frame_every_us < self.observe_every_us:
+        if self.frame_every_us is not None and self.frame_every_us < self.observe_every_us:
             raise ValueError(f"frame_every_us: {self.frame_every_us:g} is shorter than observe_every_us "
                              f"({self.observe_every_us:g}): frames are taken at observations")
         return self
@@ -123,8 +126,8 @@ class CutConfig(_WithPreset):
     def memory_estimate_bytes(self) -> int:
         """What a run holds in memory, about: ~2 kB per node (model, state, work arrays and contact
         buffers of 4 pairs per edge) and the position frames (float32) kept until written."""
-        frames = int(self.max_time_ms * 1e3 / self.frame_every_us) + 2
-        return self.nodes * (2048 + 12 * frames)
+        frames = int(self.max_time_ms * 1e3 / self.frame_every_us) + 2 if self.frame_every_us else AUTO_FRAMES + 2
+        return self.nodes * (2048 + 24 * frames)  # positions and velocities, float32
 
     def stretch_settings(self):
         from knitlad.protocol import StretchSettings
@@ -146,7 +149,8 @@ class CutConfig(_WithPreset):
             contact_damping_ratio=self.contact_damping_ratio, stretch_damping_ratio=self.stretch_damping_ratio,
             dt_safety=self.dt_safety, drag_per_s=self.drag_per_s, twist=self.twist,
             observe_every_s=self.observe_every_us * 1e-6, arrest_s=self.arrest_ms * 1e-3,
-            max_time_s=self.max_time_ms * 1e-3, frame_every_s=self.frame_every_us * 1e-6,
+            max_time_s=self.max_time_ms * 1e-3,
+            frame_every_s=None if self.frame_every_us is None else self.frame_every_us * 1e-6,
         )
 
     def settings(self):

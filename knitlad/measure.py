@@ -148,3 +148,26 @@ def laddering_velocity(times: np.ndarray, front: np.ndarray, l_y: float, first: 
     arrival = np.array([times[np.argmax(front >= k)] for k in levels])
     slope = np.polyfit(arrival, levels, 1)[0]
     return float(slope * l_y)
+
+
+def node_strain_and_curvature(x: np.ndarray, edges: np.ndarray, rest: np.ndarray):
+    """Per node: the mean axial strain of its edges, and the turning angle over the Voronoi length."""
+    n = x.shape[0]
+    e = x[edges[:, 1]] - x[edges[:, 0]]
+    length = np.linalg.norm(e, axis=1)
+    strain_e = length / rest - 1.0
+    strain = np.zeros(n)
+    count = np.zeros(n)
+    for side in (0, 1):
+        np.add.at(strain, edges[:, side], strain_e)
+        np.add.at(count, edges[:, side], 1.0)
+    strain /= np.maximum(count, 1.0)
+    curvature = np.zeros(n)
+    # consecutive edges share a node: edge k ends where edge k + 1 starts
+    joined = edges[:-1, 1] == edges[1:, 0]
+    k = np.flatnonzero(joined)
+    t0 = e[k] / length[k, None]
+    t1 = e[k + 1] / length[k + 1, None]
+    angle = np.arccos(np.clip(np.einsum("ij,ij->i", t0, t1), -1.0, 1.0))
+    curvature[edges[k, 1]] = angle / (0.5 * (length[k] + length[k + 1]))
+    return strain, curvature

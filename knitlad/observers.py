@@ -14,6 +14,7 @@ from typing import Protocol
 import numpy as np
 
 from knitlad.measure import ladder_front
+from knitlad.units import VELOCITY
 
 MAX_OVERLAP_OVER_D = 0.5  # deeper than this, a yarn may pass through another: the run stops with an error
 
@@ -81,19 +82,25 @@ class TensionRecorder:
 
 
 class FrameRecorder:
-    """Node positions [m] as float32 every ``every_s`` (the first observation included)."""
+    """Node positions [m] and velocities [m/s] as float32, and the undone cells, every ``every_s``;
+    ``last=True`` records the final state whatever the interval."""
 
     def __init__(self, every_s: float) -> None:
         self.every_s = every_s
         self.frames: list[np.ndarray] = []
+        self.velocities: list[np.ndarray] = []
+        self.laddered: list[np.ndarray] = []
         self.times_s: list[float] = []
         self._next = 0.0
 
-    def observe(self, t: float, run, undone: np.ndarray) -> None:
-        if t >= self._next:
+    def observe(self, t: float, run, undone: np.ndarray, last: bool = False) -> None:
+        if t >= self._next or (last and (not self.times_s or self.times_s[-1] < t)):
             self.frames.append(run.sim.positions_m().astype(np.float32))
+            self.velocities.append((run.sim.state.v * VELOCITY).astype(np.float32))
+            self.laddered.append(undone.copy())
             self.times_s.append(t)
-            self._next += self.every_s
+            while self._next <= t:
+                self._next += self.every_s
 
 
 class EdgeReached:

@@ -75,6 +75,33 @@ def spatio_temporal_from_file(h5_path: str | Path, path: str | Path) -> Path:
                                     path)
 
 
+def column_midline_diagram(h5_path: str | Path, path: str | Path) -> Path:
+    """The paper's spatio-temporal diagram (Fig. 3b,d; the appendix's simulation figure): the y of
+    the yarn crossing the middle line of the laddering column against time, from the frames."""
+    import h5py
+
+    from knitlad.io.hdf5 import read_attrs
+
+    attrs = read_attrs(h5_path)
+    with h5py.File(h5_path, "r") as f:
+        x = f["frames/positions"][()]
+        t_ms = f["frames/time"][()] * 1e3
+        centres = f["cells/centres"][()]
+    column = int(attrs["laddering_column"])
+    x_mid = centres[0, column, 0]
+    l_x = float(attrs["box_lx_over_l0"]) * float(attrs["scale_l0_m"])
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(5, 3.5), dpi=120)
+    for k in range(len(t_ms)):
+        near = np.abs(x[k, :, 0] - x_mid) < 0.04 * l_x
+        ax.plot(np.full(near.sum(), t_ms[k]), 1e3 * x[k, near, 1], "k.", ms=1.2)
+    ax.set_xlabel("time since the cut [ms]")
+    ax.set_ylabel("y of the yarn on the column's middle line [mm]")
+    ax.set_title(_title(float(attrs["fx_ini"]), float(attrs["v_lad_over_cb"])) + f", column {column}", fontsize=9)
+    fig.tight_layout()
+    return _save(fig, Path(path))
+
+
 PAPER_DER_VELOCITY = ((1.58, 0.176), (15.67, 1.05))  # 42 x 42, mu = 0.4, l_y/l0 = 0.25 (paper, Fig. 7)
 
 SUMMARY_PLOTS = {

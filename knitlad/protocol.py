@@ -123,7 +123,7 @@ class DynamicsSettings:
     observe_every_s: float
     arrest_s: float
     max_time_s: float
-    frame_every_s: float
+    frame_every_s: float | None  # None: AUTO_FRAMES over the expected ladder duration (frame_interval)
 
 
 @dataclass(frozen=True)
@@ -341,16 +341,47 @@ class LadderTrace:
     fx: np.ndarray  # f_x at each observation
     fronts: tuple[np.ndarray, ...]  # per column: (n_obs, 2) upward and downward extents [stitches]
     column_cells: tuple[np.ndarray, ...]  # per column: (n_obs, n_y) laddered flags
-    frames: list
-    frame_times_s: list
+    frames: FrameRecorder  # positions, velocities and undone cells at the frame times
     baseline: np.ndarray
     final_laddered: np.ndarray  # cells undone after the cut
     stop_reason: str
     reached_edge: bool
     steps: int
     yarn_start: np.ndarray  # of the cut knit (the frames' topology)
+    edges: np.ndarray  # (ne, 2) node pairs of its edges
+    cut_node: int  # the node at the start of the cut edge
+    cell_centres: np.ndarray  # (n_y, n_x, 2) x, y of each cell at the cut [m]
     peak_overlap_over_d: float
     wall_s: float
+
+
+def cell_centres(run: Laddering) -> np.ndarray:
+    """(n_y, n_x, 2) centre of each cell [m] in the stretched knit: the column's head x, and
+    halfway between the mean heights of the cell's course and the one above."""
+    k = run.knit
+    x = k.knit.rods.state.x
+    rows = k.gauge.rows(x)
+    heights = np.array([r[:, 1].mean() for r in rows])
+    centre_y = 0.5 * (heights[:-1] + heights[1:])
+    centre_x = k.gauge.column_centres(k.box_lx)
+    out = np.empty((len(centre_y), len(centre_x), 2))
+    out[:, :, 0] = centre_x[None, :]
+    out[:, :, 1] = centre_y[:, None]
+    return out * units.LENGTH
+
+
+def frame_interval(run: Laddering) -> float:
+    """The frame interval [s]: the dynamics' setting, or AUTO_FRAMES frames over the ladder's
+    expected duration: half the courses at the paper's velocity line 0.1 f_x^ini c_b (at
+    least 1), no longer than max_time_s, no shorter than the observation interval."""
+    from knitlad.config import AUTO_FRAMES
+
+    d, k = run.dynamics, run.knit
+    if d.frame_every_s is not None:
+        return d.frame_every_s
+    m = k.settings.material
+    expected = 0.5 * k.settings.n_y * k.box_ly * m.stitch_length / (0.1 * max(k.fx_ini, 1.0) * m.c_b)
+    return max(min(expected, d.max_time_s) / AUTO_FRAMES, d.observe_every_s)
 
 
 def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Callable[[str, float], None] | None = None,
@@ -365,10 +396,12 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
     d = run.dynamics
     columns = (run.cut_column - 1, run.cut_column)
     guard = OverlapGuard(run.knit.settings.material.diameter)
-    fronts, tension, frames = FrontRecorder(columns, run.cut_row), TensionRecorder(), FrameRecorder(d.frame_every_s)
+    fronts, tension = FrontRecorder(columns, run.cut_row), TensionRecorder()
+    frames = FrameRecorder(frame_interval(run))
     rules = list(stop_rules) if stop_rules is not None else [EdgeReached(), Arrested(d.arrest_s), TimeLimit(d.max_time_s)]
     undone = np.zeros_like(run.baseline)
     t_start = run.sim.time_s
+    frames.observe(0.0, run, undone)  # the stretched knit just cut, before the first step
     times: list[float] = []
     while True:
         run.sim.run(d.observe_every_s)
@@ -384,12 +417,15 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
         if fired:
             break
     rule, reason = fired
+    frames.observe(t, run, undone, last=True)  # the state at the stop
     return LadderTrace(
         knit=run.knit, dynamics=d, cut_row=run.cut_row, columns=columns, times_s=np.array(times),
-        fx=np.array(tension.fx), fronts=fronts.extents(), column_cells=fronts.cells(), frames=frames.frames,
-        frame_times_s=frames.times_s, baseline=run.baseline, final_laddered=undone, stop_reason=reason,
+        fx=np.array(tension.fx), fronts=fronts.extents(), column_cells=fronts.cells(), frames=frames,
+        baseline=run.baseline, final_laddered=undone, stop_reason=reason,
         reached_edge=isinstance(rule, EdgeReached), steps=run.sim.steps,
         yarn_start=run.sim.model.yarn_start.copy(), peak_overlap_over_d=guard.peak_over_d,
+        edges=np.column_stack([run.sim.model.edge_a, run.sim.model.edge_b]),
+        cut_node=int(run.knit.knit.rods.model.edge_a[run.cut_edge]), cell_centres=cell_centres(run),
         wall_s=run.wall_s + time.perf_counter() - t0,
     )
 
@@ -419,6 +455,12 @@ class LadderResult:
     column_history: list = field(default_factory=list)  # laddered flags of the laddering column over time
     frames: list = field(default_factory=list)
     frame_times_s: list = field(default_factory=list)
+    frame_velocities: list = field(default_factory=list)  # (n, 3) float32 [m/s] at each frame
+    frame_laddered: list = field(default_factory=list)  # (n_y, n_x) undone cells at each frame
+    node_course: np.ndarray | None = None  # course of each node (-1: the held bottom course, n_y: the top one)
+    cut_node: int = -1  # the node at the start of the cut edge
+    cell_centres: np.ndarray | None = None  # (n_y, n_x, 2) x, y of each cell [m] at the cut
+    edges: np.ndarray | None = None  # (ne, 2) node pairs of the edges after the cut
     final_laddered: np.ndarray | None = None
     baseline_laddered: np.ndarray | None = None
     yarn_start: np.ndarray | None = None  # topology of the frames
@@ -433,7 +475,8 @@ class LadderResult:
         """The scalar results, and the settings a reader needs beside them (mu, twist, drag)."""
         d = self.settings.dynamics
         skip = {"settings", "wall_s", "times_s", "front_up", "front_down", "fx_series", "column_history", "frames",
-                "frame_times_s", "final_laddered", "baseline_laddered", "yarn_start"}
+                "frame_times_s", "final_laddered", "baseline_laddered", "yarn_start", "frame_velocities",
+                "frame_laddered", "node_course", "cut_node", "cell_centres", "edges"}
         out = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in skip}
         out["v_fit_stitches"] = list(self.v_fit_stitches)
         out.update(mu=d.mu, twist=d.twist, drag_per_s=d.drag_per_s, wall_s=float(sum(self.wall_s.values())))
@@ -465,7 +508,10 @@ def analyse(trace: LadderTrace) -> LadderResult:
         stop_reason=trace.stop_reason, v_fit_stitches=(first, last),
         wall_s={"stretch": knit.wall_s, "propagate": trace.wall_s}, times_s=list(trace.times_s),
         front_up=[int(u) for u in front[:, 0]], front_down=[int(v) for v in front[:, 1]], fx_series=list(trace.fx),
-        column_history=list(trace.column_cells[best]), frames=trace.frames, frame_times_s=trace.frame_times_s,
+        column_history=list(trace.column_cells[best]), frames=trace.frames.frames,
+        frame_times_s=trace.frames.times_s, frame_velocities=trace.frames.velocities,
+        frame_laddered=trace.frames.laddered, node_course=knit.knit.node_course(), cut_node=trace.cut_node,
+        cell_centres=trace.cell_centres, edges=trace.edges,
         final_laddered=trace.final_laddered, baseline_laddered=trace.baseline, yarn_start=trace.yarn_start,
         nodes=knit.knit.rods.model.n_nodes, steps=trace.steps, relax_steps=knit.relax_steps,
         fx_within_tolerance=knit.fx_within_tolerance, box_lx_over_l0=knit.box_lx,

@@ -4,14 +4,18 @@ A laddering run (``ladder.h5``, a sweep's ``jobs/<id>.h5``)::
 
     /attrs              summary (f_x^ini, f_x^fin, n_lad/n_y, v_lad/c_b, mu, twist, ...), knitlad version,
                         the settings (JSON) and the scales (SI) of units.Scales.as_attributes
-    /frames/positions   (n_frames, n_nodes, 3) float32 [m]
+    /frames/positions   (n_frames, n_nodes, 3) float32 [m]; the first frame is the knit just cut, the last the stop
+    /frames/velocities  (n_frames, n_nodes, 3) float32 [m/s]
+    /frames/laddered    (n_frames, n_y, n_x) bool: cells undone since the cut
     /frames/time        (n_frames,) [s]
+    /fields/axial_strain, curvature   (n_frames, n_nodes) float32 [-], [1/m]
     /series/time        (n_obs,) [s] since the cut
     /series/front_up, front_down   ladder extent [stitches]
     /series/fx          tension per thread f_x
     /series/laddering_column_cells  (n_obs, n_y) bool
     /final/laddered     (n_y, n_x) bool
-    /topology/yarn_start
+    /cells/centres      (n_y, n_x, 2) x, y of each cell at the cut [m]
+    /topology/yarn_start, edges (ne, 2), node_course (n,): -1 and n_y for the held courses; attr cut_node
 
 A stretched knit (:class:`knitlad.protocol.StretchedKnit`, ``stretched.h5``): its scalars
 and settings as attributes, ``/model/*`` and ``/state/*`` (the arrays of
@@ -58,6 +62,17 @@ def _dataset(group, name: str, data, compression: str | None = None) -> None:
         group.create_dataset(name, data=data)
 
 
+def _node_fields(group, frames: np.ndarray, edges: np.ndarray, compression) -> None:
+    """Per node and frame: axial strain (against the edge lengths of the first frame, the knit
+    at rest just cut) and curvature [1/m], float32 (for ParaView: knitlad.render.write_xdmf)."""
+    from knitlad.measure import node_strain_and_curvature
+
+    rest = np.linalg.norm(frames[0][edges[:, 1]].astype(float) - frames[0][edges[:, 0]], axis=1)
+    fields = [node_strain_and_curvature(np.asarray(x, dtype=float), edges, rest) for x in frames]
+    _dataset(group, "axial_strain", np.array([s for s, _ in fields], dtype=np.float32), compression)
+    _dataset(group, "curvature", np.array([c for _, c in fields], dtype=np.float32), compression)
+
+
 def verify_datasets(path: str | Path) -> None:
     """Read every dataset of ``path`` back: a damaged one fails its checksum (OSError)."""
     with h5py.File(path, "r") as f:
@@ -85,6 +100,12 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
             g = f.create_group("frames")
             _dataset(g, "positions", np.stack(result.frames), compression)
             _dataset(g, "time", result.frame_times_s)
+            if result.frame_velocities:
+                _dataset(g, "velocities", np.stack(result.frame_velocities), compression)
+            if result.frame_laddered:
+                _dataset(g, "laddered", np.stack(result.frame_laddered), compression)
+            if result.edges is not None:
+                _node_fields(f.require_group("fields"), np.stack(result.frames), result.edges, compression)
         g = f.create_group("series")
         _dataset(g, "time", result.times_s)
         _dataset(g, "front_up", result.front_up)
@@ -94,7 +115,14 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
             _dataset(g, "laddering_column_cells", result.column_history)
         if result.final_laddered is not None:
             _dataset(f.require_group("final"), "laddered", result.final_laddered)
-        _dataset(f.require_group("topology"), "yarn_start", result.yarn_start)
+        g = f.require_group("topology")
+        _dataset(g, "yarn_start", result.yarn_start)
+        for name in ("node_course", "edges"):
+            if getattr(result, name) is not None:
+                _dataset(g, name, getattr(result, name))
+        g.attrs["cut_node"] = result.cut_node
+        if result.cell_centres is not None:
+            _dataset(f.require_group("cells"), "centres", result.cell_centres)
     return path
 
 

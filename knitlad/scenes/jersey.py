@@ -178,6 +178,14 @@ class KnitScene:
         """Node slices of the free courses, bottom to top, then of the held top course."""
         return [self._yarn_nodes(y) for y in self.courses + [self.bars[1]]]
 
+    def node_course(self) -> np.ndarray:
+        """The course of each node: 0 to n_y - 1 for the free courses, -1 and n_y for the held ones."""
+        out = np.empty(self.rods.model.n_nodes, dtype=np.int64)
+        out[self._yarn_nodes(self.bars[0])] = -1
+        for k, nodes in enumerate(self.row_nodes()):
+            out[nodes] = k
+        return out
+
     def _yarn_nodes(self, y: int) -> slice:
         start = self.rods.model.yarn_start  # as built: this scene is never cut
         return slice(int(start[y]), int(start[y + 1]))

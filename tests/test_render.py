@@ -1,0 +1,98 @@
+"""Pictures of a run: renders (off screen), a movie, the ParaView file read back by VTK, the midline diagram."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def run_folder(tmp_path_factory):
+    out = tmp_path_factory.mktemp("run") / "cut"
+    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "cut", "--stitches", "6x8", "--lx", "0.40",
+                        "--resolution", "16", "--max-time-ms", "0.3", "--out", str(out)],
+                       capture_output=True, text=True, cwd=ROOT)
+    assert p.returncode == 0, p.stderr
+    return out
+
+
+def test_a_render_shows_the_fabric_as_tubes_with_the_cut_course_marked(run_folder):
+    import imageio.v2 as imageio
+
+    from knitlad.render import render_run
+
+    paths = render_run(run_folder / "ladder.h5", run_folder / "render", [0.0, 0.2e-3], ("front", "oblique"), (320, 240))
+    assert len(paths) == 4
+    for path in paths:
+        image = imageio.imread(path)[..., :3].astype(int)
+        assert image.shape == (240, 320, 3)
+        drawn = (image < 235).any(axis=2)
+        assert 0.02 < drawn.mean() < 0.9  # a fabric, not a blank or a filled frame
+        assert (image.max(axis=2) < 60).sum() > 20  # the cut course, drawn black
+        assert len({tuple(c) for c in image[drawn][::7]}) > 20  # shaded tubes, several courses' colours
+
+
+def test_the_first_frame_is_the_knit_just_cut_and_the_last_the_stop(run_folder):
+    with h5py.File(run_folder / "ladder.h5", "r") as f:
+        t = f["frames/time"][()]
+        assert t[0] == 0.0 and t[-1] == pytest.approx(f["series/time"][-1])
+        assert f["frames/velocities"].shape == f["frames/positions"].shape
+        assert not f["frames/laddered"][0].any()
+
+
+def test_a_movie_has_every_frame(run_folder):
+    import imageio.v2 as imageio
+
+    from knitlad.render import movie
+
+    path = movie(run_folder / "ladder.h5", run_folder / "ladder.gif", size=(160, 120))
+    with h5py.File(run_folder / "ladder.h5", "r") as f:
+        n = f["frames/time"].shape[0]
+    assert len(imageio.mimread(path)) == n
+
+
+def test_paraview_opens_the_trajectory_with_its_fields(run_folder):
+    """The XDMF written by knitlad cut, read with VTK's own reader: one step per frame, the nodes
+    and edges of the knit, and the per-node fields, the velocity equal to the stored one."""
+    import vtk
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    reader = vtk.vtkXdmfReader()
+    reader.SetFileName(str(run_folder / "ladder.xdmf"))
+    reader.UpdateInformation()
+    steps = reader.GetOutputInformation(0).Get(vtk.vtkStreamingDemandDrivenPipeline.TIME_STEPS())
+    with h5py.File(run_folder / "ladder.h5", "r") as f:
+        times = f["frames/time"][()]
+        velocity = f["frames/velocities"][2]
+        n_nodes, n_edges = f["frames/positions"].shape[1], f["topology/edges"].shape[0]
+        positions = f["frames/positions"][2]
+    assert np.allclose(steps, times)
+    reader.UpdateTimeStep(steps[2])
+    grid = reader.GetOutputDataObject(0)
+    assert grid.GetNumberOfPoints() == n_nodes and grid.GetNumberOfCells() == n_edges
+    data = grid.GetPointData()
+    assert {data.GetArrayName(i) for i in range(data.GetNumberOfArrays())} >= {"course", "velocity", "axial_strain",
+                                                                               "curvature"}
+    assert np.allclose(vtk_to_numpy(data.GetArray("velocity")), velocity)
+    assert np.allclose(vtk_to_numpy(grid.GetPoints().GetData()), positions)
+
+
+def test_plot_of_a_run_folder_draws_its_diagrams_and_renders(run_folder):
+    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "plot", str(run_folder)], capture_output=True,
+                       text=True, cwd=ROOT)
+    assert p.returncode == 0, p.stderr
+    assert (run_folder / "midline_diagram.png").stat().st_size > 5000
+    assert len(list((run_folder / "render").glob("render_front_*.png"))) >= 5
+
+
+def test_render_of_a_folder_without_a_run_is_one_line(tmp_path):
+    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(tmp_path)], capture_output=True, text=True,
+                       cwd=ROOT)
+    assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and "no ladder.h5" in p.stderr
