@@ -344,6 +344,7 @@ def sweep(
     retry_failed: bool = typer.Option(False, "--retry-failed", help="Rerun jobs recorded as failed."),
     dry_run: bool = typer.Option(False, "--dry-run", help="Validate and list the jobs, run nothing."),
     max_jobs: int = typer.Option(10_000, "--max-jobs", help="Refuse a sweep of more jobs than this."),
+    render: bool = typer.Option(False, "--render", help="Render each finished ladder job (<out>/renders/<id>/)."),
 ) -> None:
     """Run a sweep: one job per point of the config, in a process pool or on a Dask cluster.
 
@@ -404,6 +405,9 @@ def sweep(
                    "run the same command again to go on", err=True)
         raise typer.Exit(143 if outcome.terminated else 130)
     typer.echo(f"{outcome.ran} jobs run ({outcome.failed} failed), {outcome.skipped} already done; summary: {summary}")
+    if render:
+        _render_jobs(out_dir, [row["job_id"] for row in outcome.rows.values()
+                               if row["status"] == "ok" and row["scene"] == "ladder"])
     failed = outcome.failed_rows
     if failed:
         for row in failed:
@@ -470,14 +474,15 @@ def plot(
     """
     from pathlib import Path
 
-    from knitlad.plots import column_midline_diagram, spatio_temporal_from_file, summary_plots
+    from knitlad.plots import column_midline_diagram, spatio_temporal_from_file, summary_plots, tension_history_plot
 
     if (Path(folder) / "ladder.h5").is_file():
         from knitlad.render import render_run
 
         h5 = Path(folder) / "ladder.h5"
         paths = [spatio_temporal_from_file(h5, Path(folder) / "spatio_temporal.png"),
-                 column_midline_diagram(h5, Path(folder) / "midline_diagram.png"), *render_run(h5, Path(folder) / "render")]
+                 column_midline_diagram(h5, Path(folder) / "midline_diagram.png"),
+                 tension_history_plot(h5, Path(folder) / "tension_history.png"), *render_run(h5, Path(folder) / "render")]
         typer.echo(f"wrote {len(paths)} figures in {folder}")
         return
 
@@ -498,6 +503,18 @@ def plot(
         typer.echo(f"knitlad: {line}", err=True)
     if problems:
         raise typer.Exit(1)
+
+
+def _render_jobs(out_dir, job_ids: list[str]) -> None:
+    """The default renders (front view) of each ladder job, in ``out_dir/renders/<id>/``."""
+    from knitlad.render import render_run
+
+    for job in job_ids:
+        try:
+            render_run(out_dir / "jobs" / f"{job}.h5", out_dir / "renders" / job, views=("front",))
+        except (OSError, KeyError, ValueError) as e:
+            typer.echo(f"knitlad: job {job}: no render ({type(e).__name__}: {str(e).splitlines()[0]})", err=True)
+    typer.echo(f"rendered {len(job_ids)} jobs in {out_dir / 'renders'}")
 
 
 def _run_file(run: str):

@@ -81,14 +81,36 @@ class TensionRecorder:
         self.fx.append(run.tension())
 
 
+FREE, TOUCHING, SLIDING = 0, 1, 2  # contact state of a node (FrameRecorder.contact)
+
+
+def node_contact_state(sim) -> np.ndarray:
+    """Per node: FREE, TOUCHING (an edge of it touches another yarn) or SLIDING (at the Coulomb limit)."""
+    from knitlad.kernels.contact import OVERLAP
+    from knitlad.kernels.contact import SLIDING as SLIDING_COLUMN
+
+    state = np.zeros(sim.model.n_nodes, dtype=np.uint8)
+    c = sim.contacts
+    n = int(c.n_pairs[0])
+    if n == 0:
+        return state
+    results, edges = c.pair_results[:n], c.pairs[:n]
+    for flag, mask in ((TOUCHING, results[:, OVERLAP] > 0), (SLIDING, results[:, SLIDING_COLUMN] > 0)):
+        touched = edges[mask].ravel()
+        for ends in (sim.model.edge_a, sim.model.edge_b):
+            state[ends[touched]] = np.maximum(state[ends[touched]], flag)
+    return state
+
+
 class FrameRecorder:
-    """Node positions [m] and velocities [m/s] as float32, and the undone cells, every ``every_s``;
-    ``last=True`` records the final state whatever the interval."""
+    """Node positions [m] and velocities [m/s] as float32, their contact state, and the undone
+    cells, every ``every_s``; ``last=True`` records the final state whatever the interval."""
 
     def __init__(self, every_s: float) -> None:
         self.every_s = every_s
         self.frames: list[np.ndarray] = []
         self.velocities: list[np.ndarray] = []
+        self.contact: list[np.ndarray] = []
         self.laddered: list[np.ndarray] = []
         self.times_s: list[float] = []
         self._next = 0.0
@@ -97,6 +119,7 @@ class FrameRecorder:
         if t >= self._next or (last and (not self.times_s or self.times_s[-1] < t)):
             self.frames.append(run.sim.positions_m().astype(np.float32))
             self.velocities.append((run.sim.state.v * VELOCITY).astype(np.float32))
+            self.contact.append(node_contact_state(run.sim))
             self.laddered.append(undone.copy())
             self.times_s.append(t)
             while self._next <= t:

@@ -102,6 +102,31 @@ def column_midline_diagram(h5_path: str | Path, path: str | Path) -> Path:
     return _save(fig, Path(path))
 
 
+def tension_history_plot(h5_path: str | Path, path: str | Path) -> Path:
+    """f_x through the whole run, as the paper's force-time curves (appendix): the stretch at mu = 0
+    (its relaxed readings, against FIRE steps), then the laddering after the cut, against time."""
+    import h5py
+
+    with h5py.File(h5_path, "r") as f:
+        steps, box, fx_stretch = (f[f"stretch/{k}"][()] for k in ("relax_steps", "box_lx_over_l0", "fx"))
+        t_ms, fx = f["series/time"][()] * 1e3, f["series/fx"][()]
+    plt = _pyplot()
+    fig, (left, right) = plt.subplots(1, 2, figsize=(7.5, 3.2), dpi=120, sharey=True,
+                                      gridspec_kw={"width_ratios": [1, 1.3]})
+    left.plot(steps / 1e3, fx_stretch, "k.-", ms=2, lw=0.6)
+    left.set_xlabel("stretch at mu = 0: FIRE steps [1e3]")
+    left.set_ylabel("f_x")
+    twin = left.twiny()
+    twin.set_xlim(box.min(), box.max()) if box.size and box.max() > box.min() else None
+    twin.set_xlabel("box l_x/l0", fontsize=8)
+    right.plot(t_ms, fx, "tab:red", lw=1.0)
+    right.set_xlabel("time since the cut [ms]")
+    right.axhline(fx_stretch[-1] if fx_stretch.size else np.nan, color="k", ls=":", lw=0.7, label="f_x^ini")
+    right.legend(fontsize=7)
+    fig.tight_layout()
+    return _save(fig, Path(path))
+
+
 PAPER_DER_VELOCITY = ((1.58, 0.176), (15.67, 1.05))  # 42 x 42, mu = 0.4, l_y/l0 = 0.25 (paper, Fig. 7)
 
 SUMMARY_PLOTS = {

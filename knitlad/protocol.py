@@ -192,6 +192,7 @@ class StretchedKnit:
     peak_overlap_over_d: float  # deepest yarn-yarn overlap while stretching, in d
     dt_s: float  # the stretch's time step: the dynamics take no larger one
     wall_s: float
+    tension_history: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # FIRE steps, box l_x/l0, f_x
 
     @property
     def gauge(self) -> KnitGauge:
@@ -224,6 +225,7 @@ class KnitBox:
         self.gauge = KnitGauge(self.knit, m)
         self.relax_steps = 0
         self.guard = OverlapGuard(m.diameter)
+        self.readings: list[tuple[float, float, float]] = []  # (FIRE steps so far, box l_x/l0, f_x)
 
     def deform(self, lx: float, ly: float) -> None:
         x = self.sim.state.x
@@ -237,7 +239,9 @@ class KnitBox:
         return info
 
     def tension(self) -> float:
-        return self.gauge.tension(self.sim)
+        fx = self.gauge.tension(self.sim)
+        self.readings.append((self.relax_steps, self.lx, fx))
+        return fx
 
     def stretched(self, fx: float, within_tolerance: bool, wall_s: float) -> StretchedKnit:
         """The knit as it is now, as a :class:`StretchedKnit` (its f_x measured: ``fx``); stops on a deep overlap."""
@@ -249,6 +253,7 @@ class KnitBox:
             settings=self.s, knit=self.knit, box_lx=self.lx, box_ly=self.ly, fx_ini=fx, lx_over_l0=lx_m / l0,
             ly_over_l0=ly_m / l0, fx_within_tolerance=within_tolerance, relax_steps=self.relax_steps,
             peak_overlap_over_d=self.guard.peak_over_d, dt_s=self.sim.dt_s, wall_s=wall_s,
+            tension_history=np.array(self.readings, dtype=float).reshape(-1, 3),
         )
 
 
@@ -457,10 +462,12 @@ class LadderResult:
     frame_times_s: list = field(default_factory=list)
     frame_velocities: list = field(default_factory=list)  # (n, 3) float32 [m/s] at each frame
     frame_laddered: list = field(default_factory=list)  # (n_y, n_x) undone cells at each frame
+    frame_contact: list = field(default_factory=list)  # (n,) FREE, TOUCHING or SLIDING at each frame
     node_course: np.ndarray | None = None  # course of each node (-1: the held bottom course, n_y: the top one)
     cut_node: int = -1  # the node at the start of the cut edge
     cell_centres: np.ndarray | None = None  # (n_y, n_x, 2) x, y of each cell [m] at the cut
     edges: np.ndarray | None = None  # (ne, 2) node pairs of the edges after the cut
+    stretch_tension: np.ndarray | None = None  # (k, 3) FIRE steps, box l_x/l0, f_x of the stretch's readings
     final_laddered: np.ndarray | None = None
     baseline_laddered: np.ndarray | None = None
     yarn_start: np.ndarray | None = None  # topology of the frames
@@ -476,7 +483,7 @@ class LadderResult:
         d = self.settings.dynamics
         skip = {"settings", "wall_s", "times_s", "front_up", "front_down", "fx_series", "column_history", "frames",
                 "frame_times_s", "final_laddered", "baseline_laddered", "yarn_start", "frame_velocities",
-                "frame_laddered", "node_course", "cut_node", "cell_centres", "edges"}
+                "frame_laddered", "frame_contact", "stretch_tension", "node_course", "cut_node", "cell_centres", "edges"}
         out = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in skip}
         out["v_fit_stitches"] = list(self.v_fit_stitches)
         out.update(mu=d.mu, twist=d.twist, drag_per_s=d.drag_per_s, wall_s=float(sum(self.wall_s.values())))
@@ -510,8 +517,8 @@ def analyse(trace: LadderTrace) -> LadderResult:
         front_up=[int(u) for u in front[:, 0]], front_down=[int(v) for v in front[:, 1]], fx_series=list(trace.fx),
         column_history=list(trace.column_cells[best]), frames=trace.frames.frames,
         frame_times_s=trace.frames.times_s, frame_velocities=trace.frames.velocities,
-        frame_laddered=trace.frames.laddered, node_course=knit.knit.node_course(), cut_node=trace.cut_node,
-        cell_centres=trace.cell_centres, edges=trace.edges,
+        frame_laddered=trace.frames.laddered, frame_contact=trace.frames.contact, node_course=knit.knit.node_course(), cut_node=trace.cut_node,
+        cell_centres=trace.cell_centres, edges=trace.edges, stretch_tension=knit.tension_history,
         final_laddered=trace.final_laddered, baseline_laddered=trace.baseline, yarn_start=trace.yarn_start,
         nodes=knit.knit.rods.model.n_nodes, steps=trace.steps, relax_steps=knit.relax_steps,
         fx_within_tolerance=knit.fx_within_tolerance, box_lx_over_l0=knit.box_lx,

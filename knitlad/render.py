@@ -9,7 +9,7 @@
   wheel carries ffmpeg) or GIF.
 * :func:`write_xdmf`: ``ladder.xdmf`` beside the file, through which ParaView opens the
   trajectory as line cells with per-node fields over time (course, velocity, axial strain,
-  curvature).
+  curvature, contact state).
 """
 
 from __future__ import annotations
@@ -235,7 +235,8 @@ def movie(h5: str | Path, path: str | Path, fps: int = 12, size=(960, 720)) -> P
 
 def write_xdmf(h5: str | Path) -> Path:
     """``ladder.xdmf`` beside ``h5``: a temporal collection of line meshes over the frames, with
-    per-node course, velocity [m/s], axial strain and curvature [1/m] (``/fields`` of ``h5``)."""
+    per-node course, velocity [m/s], axial strain, curvature [1/m] (``/fields`` of ``h5``) and contact
+    state (0 free, 1 touching, 2 sliding)."""
     h5 = Path(h5)
     with h5py.File(h5, "r") as f:
         if "fields" not in f:
@@ -243,8 +244,18 @@ def write_xdmf(h5: str | Path) -> Path:
         n_frames, n = f["frames/positions"].shape[:2]
         edges = f["topology/edges"][()]
         times = f["frames/time"][()]
+        has_contact = "contact" in f["frames"]
     name = h5.name
     steps = []
+
+    def contact(k: int) -> str:
+        if not has_contact:
+            return ""
+        return (f'<Attribute Name="contact" Center="Node" AttributeType="Scalar"><DataItem ItemType="HyperSlab" '
+                f'Dimensions="{n}" Type="HyperSlab"><DataItem Dimensions="3 2" Format="XML">{k} 0 1 1 1 {n}</DataItem>'
+                f'<DataItem Dimensions="{n_frames} {n}" NumberType="UChar" Precision="1" Format="HDF">'
+                f'{name}:/frames/contact</DataItem></DataItem></Attribute>')
+
     for k, t in enumerate(times):
         def item(path, cols):
             dims = f"{n} {cols}" if cols > 1 else f"{n}"
@@ -265,7 +276,7 @@ def write_xdmf(h5: str | Path) -> Path:
             f'<Attribute Name="axial_strain" Center="Node" AttributeType="Scalar">{item("/fields/axial_strain", 1)}'
             f'</Attribute>'
             f'<Attribute Name="curvature" Center="Node" AttributeType="Scalar">{item("/fields/curvature", 1)}'
-            f'</Attribute></Grid>')
+            f'</Attribute>{contact(k)}</Grid>')
     text = ('<?xml version="1.0" ?>\n<Xdmf Version="2.0"><Domain><Grid Name="ladder" GridType="Collection" '
             'CollectionType="Temporal">' + "".join(steps) + "</Grid></Domain></Xdmf>\n")
     xdmf = h5.with_suffix(".xdmf")

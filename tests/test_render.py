@@ -79,7 +79,9 @@ def test_paraview_opens_the_trajectory_with_its_fields(run_folder):
     assert grid.GetNumberOfPoints() == n_nodes and grid.GetNumberOfCells() == n_edges
     data = grid.GetPointData()
     assert {data.GetArrayName(i) for i in range(data.GetNumberOfArrays())} >= {"course", "velocity", "axial_strain",
-                                                                               "curvature"}
+                                                                               "curvature", "contact"}
+    contact = vtk_to_numpy(data.GetArray("contact"))
+    assert set(np.unique(contact)) <= {0, 1, 2} and (contact > 0).mean() > 0.2  # a knit: most nodes touch
     assert np.allclose(vtk_to_numpy(data.GetArray("velocity")), velocity)
     assert np.allclose(vtk_to_numpy(grid.GetPoints().GetData()), positions)
 
@@ -89,6 +91,9 @@ def test_plot_of_a_run_folder_draws_its_diagrams_and_renders(run_folder):
                        text=True, cwd=ROOT)
     assert p.returncode == 0, p.stderr
     assert (run_folder / "midline_diagram.png").stat().st_size > 5000
+    assert (run_folder / "tension_history.png").stat().st_size > 5000
+    with h5py.File(run_folder / "ladder.h5", "r") as f:  # the stretch's readings end at f_x^ini
+        assert f["stretch/fx"][-1] == pytest.approx(f.attrs["fx_ini"], rel=0.05)
     assert len(list((run_folder / "render").glob("render_front_*.png"))) >= 5
 
 

@@ -136,6 +136,13 @@ def test_rerunning_skips_finished_jobs_and_force_reruns_them(smoke):
     assert [f.stat().st_mtime_ns for f in files] == stamps
 
 
+def test_a_sweep_renders_its_ladder_jobs_on_request(smoke):
+    p = knitlad("sweep", "configs/smoke.yaml", "--out", str(smoke), "--render")
+    assert p.returncode == 0 and "rendered 2 jobs" in p.stdout, p.stderr
+    for job in read_summary(smoke)["job_id"]:
+        assert len(list((smoke / "renders" / job).glob("render_front_*.png"))) == 5
+
+
 def test_dask_on_a_local_cluster_gives_the_same_summary_as_the_pool(smoke, tmp_path):
     pytest.importorskip("distributed")
     p = knitlad("sweep", "configs/smoke.yaml", "--out", str(tmp_path), "--executor", "dask")

@@ -7,12 +7,14 @@ A laddering run (``ladder.h5``, a sweep's ``jobs/<id>.h5``)::
     /frames/positions   (n_frames, n_nodes, 3) float32 [m]; the first frame is the knit just cut, the last the stop
     /frames/velocities  (n_frames, n_nodes, 3) float32 [m/s]
     /frames/laddered    (n_frames, n_y, n_x) bool: cells undone since the cut
+    /frames/contact     (n_frames, n_nodes) uint8: 0 free, 1 touching another yarn, 2 sliding on it
     /frames/time        (n_frames,) [s]
     /fields/axial_strain, curvature   (n_frames, n_nodes) float32 [-], [1/m]
     /series/time        (n_obs,) [s] since the cut
     /series/front_up, front_down   ladder extent [stitches]
     /series/fx          tension per thread f_x
     /series/laddering_column_cells  (n_obs, n_y) bool
+    /stretch/relax_steps, box_lx_over_l0, fx   the stretch's tension readings (FIRE steps so far, box, f_x)
     /final/laddered     (n_y, n_x) bool
     /cells/centres      (n_y, n_x, 2) x, y of each cell at the cut [m]
     /topology/yarn_start, edges (ne, 2), node_course (n,): -1 and n_y for the held courses; attr cut_node
@@ -104,6 +106,8 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
                 _dataset(g, "velocities", np.stack(result.frame_velocities), compression)
             if result.frame_laddered:
                 _dataset(g, "laddered", np.stack(result.frame_laddered), compression)
+            if result.frame_contact:
+                _dataset(g, "contact", np.stack(result.frame_contact), compression)
             if result.edges is not None:
                 _node_fields(f.require_group("fields"), np.stack(result.frames), result.edges, compression)
         g = f.create_group("series")
@@ -115,6 +119,10 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
             _dataset(g, "laddering_column_cells", result.column_history)
         if result.final_laddered is not None:
             _dataset(f.require_group("final"), "laddered", result.final_laddered)
+        if result.stretch_tension is not None:
+            g = f.require_group("stretch")
+            for k, name in enumerate(("relax_steps", "box_lx_over_l0", "fx")):
+                _dataset(g, name, result.stretch_tension[:, k])
         g = f.require_group("topology")
         _dataset(g, "yarn_start", result.yarn_start)
         for name in ("node_course", "edges"):
@@ -183,6 +191,7 @@ def write_stretched_knit(path: str | Path, knit) -> Path:
             g = f.create_group(group)
             for name, value in arrays._asdict().items():
                 _dataset(g, name, value)
+        _dataset(f, "tension_history", knit.tension_history)
         g = f.create_group("knit")
         for name in ("courses", "bars", "node_t", "left_end", "right_end"):
             _dataset(g, name, getattr(k, name))
@@ -209,6 +218,7 @@ def read_stretched_knit(path: str | Path):
                          node_t=g["node_t"][()], left_end=g["left_end"][()], right_end=g["right_end"][()])
         scalars = {name: f.attrs[name].item() if isinstance(f.attrs[name], np.generic) else f.attrs[name]
                    for name in _KNIT_SCALARS}
+        scalars["tension_history"] = f["tension_history"][()].reshape(-1, 3) if "tension_history" in f else np.zeros((0, 3))
     scalars["fx_within_tolerance"] = bool(scalars["fx_within_tolerance"])
     scalars["relax_steps"] = int(scalars["relax_steps"])
     return StretchedKnit(settings=StretchSettings(material=material, **settings), knit=knit, **scalars)
