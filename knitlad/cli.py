@@ -333,6 +333,22 @@ def diagram(
     typer.echo(f"wrote {out_dir / 'fx0_curve.csv'} and {png}")
 
 
+def _check_sweep_options(executor: str, scheduler: str | None, workers: int | None, max_jobs: int) -> None:
+    if executor not in ("pool", "dask"):
+        fail(f"--executor: must be pool or dask, got {executor!r}")
+    if scheduler and executor != "dask":
+        fail("--scheduler: only with --executor dask")
+    if workers is not None and workers < 1:
+        fail(f"--workers: must be >= 1, got {workers}")
+    if executor == "dask":
+        try:
+            import distributed  # noqa: F401
+        except ImportError:
+            fail("--executor dask: needs the optional extra (pip install 'knitlad[dask]')")
+    if max_jobs < 1:
+        fail(f"--max-jobs: must be >= 1, got {max_jobs}")
+
+
 @app.command()
 def sweep(
     config: str = typer.Argument(..., help="Sweep config (YAML); see configs/ and knitlad.sweep."),
@@ -357,19 +373,7 @@ def sweep(
 
     from knitlad.sweep import SweepError, load_sweep
 
-    if executor not in ("pool", "dask"):
-        fail(f"--executor: must be pool or dask, got {executor!r}")
-    if scheduler and executor != "dask":
-        fail("--scheduler: only with --executor dask")
-    if workers is not None and workers < 1:
-        fail(f"--workers: must be >= 1, got {workers}")
-    if executor == "dask":
-        try:
-            import distributed  # noqa: F401
-        except ImportError:
-            fail("--executor dask: needs the optional extra (pip install 'knitlad[dask]')")
-    if max_jobs < 1:
-        fail(f"--max-jobs: must be >= 1, got {max_jobs}")
+    _check_sweep_options(executor, scheduler, workers, max_jobs)
     try:
         cfg, jobs = load_sweep(config, max_jobs=max_jobs)
     except SweepError as e:

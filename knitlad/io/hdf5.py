@@ -55,7 +55,7 @@ def _set_attrs(f: h5py.File, attrs: dict) -> None:
         f.attrs[key] = json.dumps(value) if isinstance(value, (list, dict)) else ("" if value is None else value)
 
 
-def _dataset(group, name: str, data, compression: str | None = None) -> None:
+def checksummed_dataset(group, name: str, data, compression: str | None = None) -> None:
     """A dataset with a checksum (fletcher32; read back by :func:`verify_datasets`); empty ones cannot carry one."""
     data = np.asarray(data)
     if data.size:
@@ -71,8 +71,8 @@ def _node_fields(group, frames: np.ndarray, edges: np.ndarray, compression) -> N
 
     rest = np.linalg.norm(frames[0][edges[:, 1]].astype(float) - frames[0][edges[:, 0]], axis=1)
     fields = [node_strain_and_curvature(np.asarray(x, dtype=float), edges, rest) for x in frames]
-    _dataset(group, "axial_strain", np.array([s for s, _ in fields], dtype=np.float32), compression)
-    _dataset(group, "curvature", np.array([c for _, c in fields], dtype=np.float32), compression)
+    checksummed_dataset(group, "axial_strain", np.array([s for s, _ in fields], dtype=np.float32), compression)
+    checksummed_dataset(group, "curvature", np.array([c for _, c in fields], dtype=np.float32), compression)
 
 
 def verify_datasets(path: str | Path) -> None:
@@ -100,37 +100,37 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
         _write_run_attrs(f, result.settings, result.settings.material)
         if result.frames:
             g = f.create_group("frames")
-            _dataset(g, "positions", np.stack(result.frames), compression)
-            _dataset(g, "time", result.frame_times_s)
+            checksummed_dataset(g, "positions", np.stack(result.frames), compression)
+            checksummed_dataset(g, "time", result.frame_times_s)
             if result.frame_velocities:
-                _dataset(g, "velocities", np.stack(result.frame_velocities), compression)
+                checksummed_dataset(g, "velocities", np.stack(result.frame_velocities), compression)
             if result.frame_laddered:
-                _dataset(g, "laddered", np.stack(result.frame_laddered), compression)
+                checksummed_dataset(g, "laddered", np.stack(result.frame_laddered), compression)
             if result.frame_contact:
-                _dataset(g, "contact", np.stack(result.frame_contact), compression)
+                checksummed_dataset(g, "contact", np.stack(result.frame_contact), compression)
             if result.edges is not None:
                 _node_fields(f.require_group("fields"), np.stack(result.frames), result.edges, compression)
         g = f.create_group("series")
-        _dataset(g, "time", result.times_s)
-        _dataset(g, "front_up", result.front_up)
-        _dataset(g, "front_down", result.front_down)
-        _dataset(g, "fx", result.fx_series)
+        checksummed_dataset(g, "time", result.times_s)
+        checksummed_dataset(g, "front_up", result.front_up)
+        checksummed_dataset(g, "front_down", result.front_down)
+        checksummed_dataset(g, "fx", result.fx_series)
         if result.column_history:
-            _dataset(g, "laddering_column_cells", result.column_history)
+            checksummed_dataset(g, "laddering_column_cells", result.column_history)
         if result.final_laddered is not None:
-            _dataset(f.require_group("final"), "laddered", result.final_laddered)
+            checksummed_dataset(f.require_group("final"), "laddered", result.final_laddered)
         if result.stretch_tension is not None:
             g = f.require_group("stretch")
             for k, name in enumerate(("relax_steps", "box_lx_over_l0", "fx")):
-                _dataset(g, name, result.stretch_tension[:, k])
+                checksummed_dataset(g, name, result.stretch_tension[:, k])
         g = f.require_group("topology")
-        _dataset(g, "yarn_start", result.yarn_start)
+        checksummed_dataset(g, "yarn_start", result.yarn_start)
         for name in ("node_course", "edges"):
             if getattr(result, name) is not None:
-                _dataset(g, name, getattr(result, name))
+                checksummed_dataset(g, name, getattr(result, name))
         g.attrs["cut_node"] = result.cut_node
         if result.cell_centres is not None:
-            _dataset(f.require_group("cells"), "centres", result.cell_centres)
+            checksummed_dataset(f.require_group("cells"), "centres", result.cell_centres)
     return path
 
 
@@ -190,11 +190,11 @@ def write_stretched_knit(path: str | Path, knit) -> Path:
         for group, arrays in (("model", k.rods.model), ("state", k.rods.state)):
             g = f.create_group(group)
             for name, value in arrays._asdict().items():
-                _dataset(g, name, value)
-        _dataset(f, "tension_history", knit.tension_history)
+                checksummed_dataset(g, name, value)
+        checksummed_dataset(f, "tension_history", knit.tension_history)
         g = f.create_group("knit")
         for name in ("courses", "bars", "node_t", "left_end", "right_end"):
-            _dataset(g, name, getattr(k, name))
+            checksummed_dataset(g, name, getattr(k, name))
     return path
 
 
