@@ -61,7 +61,7 @@ def run_ladder_job(cfg: CutConfig, output, folder: Path | None = None):
     compression = None if output.compression == "none" else output.compression
 
     def write(path: Path, record: dict) -> None:
-        write_ladder_result(path, result, compression=compression, attrs=record)
+        write_ladder_result(path, result, compression=compression, attrs={**record, "stretch_reused": reused})
 
     return {**result.summary(), "stretch_reused": reused}, write
 
