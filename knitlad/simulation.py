@@ -66,20 +66,11 @@ class Simulation:
     contact: yarn-yarn contact (:class:`knitlad.contact.ContactModel`), or None.
     """
 
-    def __init__(
-        self,
-        rods: Rods,
-        dt_s: float | None = None,
-        safety: float = DEFAULT_SAFETY,
-        drag_per_s: float = 0.0,
-        guard_every: int = 500,
-        contact: ContactModel | None = None,
-    ) -> None:
+    def __init__(self, rods: Rods, dt_s: float | None = None, safety: float = DEFAULT_SAFETY, drag_per_s: float = 0.0,
+                 guard_every: int = 500, contact: ContactModel | None = None) -> None:
         if not 0.0 < safety <= 1.0:
             raise ValueError(f"safety must lie in (0, 1], got {safety}")
         self.rods = rods
-        self.model = rods.model
-        self.state = rods.state
         self.twist = rods.twist
         self.work = Workspace.for_model(self.model)
         self.contact_model = contact
@@ -121,6 +112,16 @@ class Simulation:
         self.drag = per_s * units.TIME
 
     @property
+    def model(self):
+        """The scene's :class:`knitlad.state.RodModel` (replaced, never changed, by :meth:`replace_model`)."""
+        return self.rods.model
+
+    @property
+    def state(self):
+        """The :class:`knitlad.state.RodState` this simulation advances in place."""
+        return self.rods.state
+
+    @property
     def has_contact(self) -> bool:
         """Yarn-yarn contact is on (a contact model was given)."""
         return self.contact_model is not None
@@ -128,7 +129,6 @@ class Simulation:
     def replace_model(self, **arrays) -> None:
         """Replace model arrays of the same shapes (e.g. a periodic cell's shifts) from the next step on."""
         self.rods = self.rods.replace_model(**arrays)
-        self.model = self.rods.model
 
     def set_external_forces(self, forces_N) -> None:
         """Replace the constant external forces [N], (n, 3) or one 3-vector for all, from now on (a new model).
