@@ -276,7 +276,28 @@ def run_sweep(
     after every finished job and once more at the end, also after Ctrl-C or SIGTERM (then
     ``interrupted`` is set, the workers are stopped and the unfinished jobs stay pending).
     """
-    out = writable_folder(out_dir)
+    outcome = SweepOutcome()
+    # SIGTERM is handled as Ctrl-C from the start: one arriving while the folder is being
+    # locked or planned stops the sweep as cleanly as one arriving while jobs run
+    previous = signal.getsignal(signal.SIGTERM)
+    main_thread = threading.current_thread() is threading.main_thread()
+    if main_thread:
+        signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        _locked_sweep(jobs, writable_folder(out_dir), executor, workers, scheduler, force, retry_failed, progress,
+                      runner, config_text, outcome)
+    except KeyboardInterrupt as e:
+        outcome.interrupted = True
+        outcome.terminated = isinstance(e, _Terminated)
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, previous)
+    return outcome
+
+
+def _locked_sweep(jobs, out: Path, executor, workers, scheduler, force, retry_failed, progress, runner, config_text,
+                  outcome: SweepOutcome) -> None:
+    """run_sweep with the folder locked; KeyboardInterrupt (Ctrl-C, SIGTERM) leaves a consistent folder."""
     jobs_dir = writable_folder(out / "jobs")
     with FolderLock(out) as lock:
         for stale in jobs_dir.glob("*.tmp"):  # left by a job killed while writing (the lock says none runs)
@@ -284,7 +305,6 @@ def run_sweep(
         if config_text is not None:
             with atomic_path(out / "sweep.yaml") as tmp:
                 tmp.write_text(config_text)
-        outcome = SweepOutcome()
         todo = _sharing_first(_plan(jobs, jobs_dir, force, retry_failed, outcome))
         write_summary(out, list(outcome.rows.values()))
         bar = SweepProgress(len(jobs), outcome.skipped) if progress else None
@@ -297,17 +317,10 @@ def run_sweep(
             if bar:
                 bar.update(row["status"])
 
-        previous = signal.getsignal(signal.SIGTERM)
-        main_thread = threading.current_thread() is threading.main_thread()
-        if main_thread:
-            signal.signal(signal.SIGTERM, _on_sigterm)
         try:
             if todo:
                 run = _run_dask if executor == "dask" else _run_pool
                 run(todo, jobs_dir, workers, scheduler, runner, finish, lock.token)
-        except KeyboardInterrupt as e:
-            outcome.interrupted = True
-            outcome.terminated = isinstance(e, _Terminated)
         finally:
             lock.release()  # from here on, a job still running elsewhere writes nothing
             for stale in jobs_dir.glob("*.tmp"):
@@ -315,9 +328,6 @@ def run_sweep(
             write_summary(out, list(outcome.rows.values()))
             if bar:
                 bar.close()
-            if main_thread:
-                signal.signal(signal.SIGTERM, previous)
-    return outcome
 
 
 def _failed_row(jobs_dir: Path, job: Job, message: str) -> dict:
