@@ -109,12 +109,6 @@ def summary_row(job: Job, attrs: dict | None) -> dict:
     return row
 
 
-def finished_row(jobs_dir: str | Path, job: Job) -> dict | None:
-    """The row of a job whose file is its own and intact, else None (see :func:`trusted_attrs`)."""
-    attrs, _ = trusted_attrs(job_path(jobs_dir, job), job)
-    return None if attrs is None else summary_row(job, attrs)
-
-
 def trusted_attrs(path: Path, job: Job) -> tuple[dict | None, str]:
     """(the file's attributes, "") if ``path`` is ``job``'s file and intact, else (None, why not).
 
