@@ -126,11 +126,23 @@ class FrameRecorder:
                 self._next += self.every_s
 
 
+TOP_ROWS_HELD = 1  # rows of cells under the held top course that cannot ladder
+
+
 class EdgeReached:
-    """The ladder has reached the bottom or the top course."""
+    """The ladder has reached the bottom or the top of the fabric.
+
+    The rows of cells run from course 0 to the top free course, whose cell lies
+    under the held top course: that cell cannot come undone (the held course's
+    sinkers cannot move; 16 x 16 at f_x^ini 13.6: the ladder reached the row below
+    it at 0.8 ms and was still there 2 ms later), so the top is the row below it
+    (:data:`TOP_ROWS_HELD`).
+    """
 
     def check(self, t: float, undone: np.ndarray) -> str | None:
-        return "ladder reached an edge course" if undone[-1].any() or undone[0].any() else None
+        top = undone.shape[0] - 1 - TOP_ROWS_HELD
+        return "ladder reached an edge course" if undone[top].any() or undone[0].any() else None
+
 
 
 class Arrested:

@@ -44,6 +44,7 @@ from knitlad.observers import (
     FrontRecorder,
     Observer,
     OverlapGuard,
+    TOP_ROWS_HELD,
     StopRule,
     TensionRecorder,
     TimeLimit,
@@ -503,7 +504,7 @@ def analyse(trace: LadderTrace) -> LadderResult:
     # f_x after arrest: mean over the last arrest window (the force rings after the cut)
     window = trace.times_s >= trace.times_s[-1] - 0.5 * d.arrest_s
     # the paper fits stitches 2 to 10; a small knit offers fewer rows above the cut
-    last = min(10, s.n_y - 1 - trace.cut_row)
+    last = min(10, s.n_y - 1 - TOP_ROWS_HELD - trace.cut_row)
     first = min(2, max(last - 2, 1))
     l_y = knit.box_ly * s.material.stitch_length
     v_lad = laddering_velocity(trace.times_s, front[:, 0], l_y, first, last)
