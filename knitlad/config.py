@@ -66,7 +66,7 @@ class CutConfig(_WithPreset):
     ADDED_LATER: ClassVar[tuple[str, ...]] = (
         "drag_per_s", "twist", "d_over_l0", "contact_force_f0", "overlap_fraction", "contact_counting", "edge",
         "contact_damping_ratio", "stretch_damping_ratio", "stretch_increment", "steps_per_increment",
-        "fx_tolerance", "dt_safety")
+        "fx_tolerance", "dt_safety", "stretch_start")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -103,6 +103,9 @@ class CutConfig(_WithPreset):
     stretch_increment: float = Field(0.005, gt=0, le=0.05, description="affine stretch per relaxation round [l/l0]")
     steps_per_increment: int = Field(750, ge=1, description="FIRE steps per relaxation round [-]")
     fx_tolerance: float = Field(0.02, gt=0, lt=1, description="force control: accepted relative error of f_x^ini [-]")
+    stretch_start: Literal["tiled", "affine"] = Field("tiled", description=(
+        "how the knit reaches its stretch: tiled with the periodised stitch stretched to the target, "
+        "then corrected (clamped ends; tails always affine), or affine increments of the built knit [-]"))
     dt_safety: float = Field(0.35, gt=0, le=1, description=(
         "time step of the laddering dynamics, fraction of the stability limit [-]; 0.35, not 0.7: from one "
         "stretched 16 x 16 knit at f_x^ini 3.92, v_lad was 0.312 at 0.7, 0.270 at 0.35, 0.266 at 0.175"))
@@ -136,7 +139,7 @@ class CutConfig(_WithPreset):
             n_x=self.n_x, n_y=self.n_y, lx_over_l0=self.lx, fx_target=self.fx, ly_over_l0=self.ly,
             nodes_per_stitch=self.resolution, contact_force_f0=self.contact_force_f0,
             overlap_fraction=self.overlap_fraction, edge=self.edge, stretch_increment=self.stretch_increment,
-            steps_per_increment=self.steps_per_increment, fx_tolerance=self.fx_tolerance,
+            steps_per_increment=self.steps_per_increment, fx_tolerance=self.fx_tolerance, start=self.stretch_start,
             material=material_for(self.d_over_l0),
         )
 

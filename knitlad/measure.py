@@ -141,7 +141,7 @@ def laddering_velocity(times: np.ndarray, front: np.ndarray, l_y: float, first: 
     """
     times = np.asarray(times, dtype=float)
     front = np.asarray(front, dtype=float)
-    if front.size == 0 or np.nanmax(front) < last:
+    if front.size == 0 or last < first or np.nanmax(front) < last:
         return float("nan")
     # first arrival at each stitch level: a monotone front, robust to flicker
     levels = np.arange(first, last + 1)

@@ -50,7 +50,8 @@ from knitlad.observers import (
     TimeLimit,
 )
 from knitlad.scenes.jersey import BUILD_LX, Jersey, KnitScene, build_jersey, widest_fitting_width
-from knitlad.simulation import Simulation
+from knitlad.simulation import Simulation, numba_threads
+from knitlad.stitch_model import StitchRun, StitchSettings
 from knitlad.state import cut_edge, with_twist
 from knitlad.stretching import force_control, relax_to_steady_tension, stretch_to
 from knitlad.timestep import critical_time_steps
@@ -103,6 +104,7 @@ class StretchSettings:
     stretch_increment: float  # l/l0 per affine step
     steps_per_increment: int  # FIRE steps per round
     fx_tolerance: float  # force control: relative
+    start: str  # "tiled" from the periodised stitch (clamped ends), or "affine" from the built knit
     material: Material
 
     def __post_init__(self) -> None:
@@ -244,6 +246,33 @@ class KnitBox:
         self.readings.append((self.relax_steps, self.lx, fx))
         return fx
 
+    def tile(self, cell: StitchRun) -> None:
+        """Every course, the edge courses too, at the relaxed shape of the periodised stitch ``cell``,
+        one copy per column and per course, and the box at the cell's (l_x, l_y).
+
+        Course r is built as n_x stitches of ``nodes_per_stitch`` nodes from a sinker, plus
+        the closing node (clamped ends): node k of it is the cell's node k mod n shifted by
+        (k // n) l_x columns and r l_y courses. The cell is periodic, so the tiled knit is
+        the infinite relaxed fabric cut to n_x x n_y: it is at equilibrium but at its two
+        edge columns, which miss their neighbours' contacts and relax locally.
+        """
+        g, n = self.knit.geometry, self.knit.geometry.nodes_per_stitch
+        l0 = self.s.material.stitch_length / units.LENGTH
+        cell_x = cell.sim.state.x[:n]  # the real yarn's nodes come first
+        k = np.arange(g.n_x * n + 1)
+        shift = np.zeros((k.size, 3))
+        shift[:, 0] = (k // n - 0.5 * (g.n_x - 1)) * cell.lx * l0
+        start = self.knit.rods.model.yarn_start  # as built: rows -1 to n_y
+        x = self.sim.state.x
+        for row, y in enumerate([self.knit.bars[0]] + self.knit.courses + [self.knit.bars[1]], start=-1):
+            nodes = slice(int(start[y]), int(start[y + 1]))
+            if nodes.stop - nodes.start != k.size:
+                raise ValueError("tiling needs clamped course ends (a course of n_x stitches and one node)")
+            shift[:, 1] = row * cell.ly * l0
+            x[nodes] = cell_x[k % n] + shift
+        self.sim.state.v[:] = 0.0
+        self.lx, self.ly = cell.lx, cell.ly
+
     def stretched(self, fx: float, within_tolerance: bool, wall_s: float) -> StretchedKnit:
         """The knit as it is now, as a :class:`StretchedKnit` (its f_x measured: ``fx``); stops on a deep overlap."""
         self.guard.check(self.sim, "while stretching")
@@ -264,13 +293,75 @@ def stretch(s: StretchSettings, progress: Callable[[str, float], None] | None = 
     report = (lambda frac: progress("stretch", frac)) if progress else None
     box = KnitBox(s)
     within = True
-    if s.lx_over_l0 is not None:
+    if s.start == "tiled" and s.edge == "clamped":
+        fx, within = stretch_tiled(box, report)
+    elif s.lx_over_l0 is not None:
         stretch_to(box, s.lx_over_l0, s.ly_over_l0, s.stretch_increment, progress=report)
         fx = relax_to_steady_tension(box)
     else:
         fx, within = force_control(box, s.fx_target, s.fx_tolerance, s.stretch_increment, box.build_lx,
                                    progress=report)
     return box.stretched(fx, within, time.perf_counter() - t0)
+
+
+def stitch_of(s: StretchSettings, lx_over_l0: float) -> StitchRun:
+    """The periodised stitch of the knit ``s`` (its resolution, contact and increments), built at
+    min(``lx_over_l0``, 0.30) (:class:`knitlad.stitch_model.StitchRun`) and relaxed."""
+    cell = StitchRun(StitchSettings(
+        lx_over_l0=lx_over_l0, ly_over_l0=s.ly_over_l0, nodes_per_stitch=s.nodes_per_stitch,
+        material=s.material, contact_force_f0=s.contact_force_f0, overlap_fraction=s.overlap_fraction,
+        stretch_increment=s.stretch_increment))
+    cell.relax()
+    return cell
+
+
+def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
+                  corrections: int = 3) -> tuple[float, bool]:
+    """The stretch from the periodised stitch (clamped ends); returns (f_x, within the tolerance).
+
+    The stitch, a few hundred nodes, is stretched to the target (l_x, or f_x by force
+    control) and relaxed; the knit is tiled with it (:meth:`KnitBox.tile`) and relaxed
+    to a steady f_x, which differs from the stitch's by its edges. Force control then
+    corrects the stitch's target by the ratio of the two tensions and tiles again
+    (at most ``corrections`` times). The stitch takes under a second, and the knit
+    relaxes only near its edge columns instead of through every affine increment.
+    """
+    s = box.s
+    report = report or (lambda fraction: None)
+    with numba_threads(1):  # the stitch has a few hundred nodes
+        # from the knit's build width: tall cells are built narrower (build_width)
+        cell = stitch_of(s, box.build_lx)
+        stretch_to(cell, cell.lx, s.ly_over_l0, s.stretch_increment, min_increments=0)
+        if s.lx_over_l0 is not None:
+            stretch_to(cell, s.lx_over_l0, s.ly_over_l0, s.stretch_increment, min_increments=0)
+            target = None
+        else:
+            target = s.fx_target
+            force_control(cell, target, 0.25 * s.fx_tolerance, s.stretch_increment, cell.lx)
+        cell_fx = settle(cell)
+    report(0.2)
+    box.tile(cell)
+    fx = relax_to_steady_tension(box)
+    if target is None:
+        report(1.0)
+        return fx, True
+    for k in range(corrections):
+        if abs(fx - target) <= s.fx_tolerance * target or fx <= 0 or cell_fx <= 0:
+            break
+        with numba_threads(1):
+            force_control(cell, target * cell_fx / fx, 0.25 * s.fx_tolerance, s.stretch_increment, MIN_BUILD_LX)
+            cell_fx = settle(cell)
+        box.tile(cell)
+        fx = relax_to_steady_tension(box)
+        report(0.2 + 0.8 * (k + 1) / corrections)
+    report(1.0)
+    return fx, bool(abs(fx - target) <= s.fx_tolerance * target)
+
+
+def settle(cell: StitchRun) -> float:
+    """Relax the stitch to its final tolerance; its f_x."""
+    cell.settle()
+    return cell.tension()
 
 
 # ------------------------------------------------------------------ stage 2: cut

@@ -110,12 +110,16 @@ class StitchRun:
     def tension(self) -> float:
         return self.tensions()[0]
 
+    def settle(self) -> dict:
+        """The final relaxation, to ``force_tol_f0``."""
+        return self._relax(20 * self.s.relax_steps, self.s.force_tol_f0)
+
     def stretch(self) -> None:
         """Relax as built, stretch affinely to the target (knitlad.stretching), relax to ``force_tol_f0``."""
         s = self.s
         self.relax()
         stretch_to(self, s.lx_over_l0, s.ly_over_l0, s.stretch_increment, min_increments=0)
-        self.result.converged = self._relax(20 * s.relax_steps, s.force_tol_f0)["converged"]
+        self.result.converged = self.settle()["converged"]
 
     def tensions(self) -> tuple[float, float]:
         return cell_tensions(self.sim, self.cell, self.s.material.f0)

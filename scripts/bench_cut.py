@@ -1,46 +1,64 @@
-"""Benchmark: `knitlad cut` on a full knit; wall time per stage and node-steps/s.
+"""Benchmark: `knitlad cut` on a full knit, per preset and with twist off and on.
 
-    python scripts/bench_cut.py [--fx 13.6] [--stitches 42] [--resolution 24]
+    python scripts/bench_cut.py [--fx 13.6] [--stitches 42] [--presets default accurate]
+                                [--twist off on] [--threads 2]
 
-Runs the CLI in a subprocess (as a user would, compile time included on a cold
-cache) and prints the summary's timing fields.
+For each run: wall time per stage (stretch, cut + propagate), steps, node-steps/s of
+the dynamics, and that rate over the rate of a lean stretch + bend kernel (one
+straight-at-rest rod, ``scripts/bench_rod.py``) timed in the same process on one
+thread, so the figures compare across machines. The first run of a fresh clone
+also pays Numba's compilation (printed apart: a warm-up run on a 6 x 6 knit first).
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import subprocess
 import sys
-import tempfile
 import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+from bench_rod import build, measure  # noqa: E402
+
+from knitlad.config import CutConfig  # noqa: E402
+from knitlad.protocol import run_ladder  # noqa: E402
+from knitlad.simulation import numba_threads  # noqa: E402
+
+
+def lean_rate() -> float:
+    """node-steps/s of the lean stretch + bend kernel on one thread (20,000 nodes)."""
+    with numba_threads(1):
+        return measure(build(20_000), 1_000)
 
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--fx", type=float, default=13.6)
-    p.add_argument("--stitches", default="42")
-    p.add_argument("--resolution", type=int, default=24)
+    p.add_argument("--stitches", type=int, default=42)
+    p.add_argument("--presets", nargs="+", default=["default", "accurate"], choices=["fast", "default", "accurate"])
+    p.add_argument("--twist", nargs="+", default=["off", "on"], choices=["off", "on"])
+    p.add_argument("--threads", type=int, default=2)
     args = p.parse_args()
-    with tempfile.TemporaryDirectory() as out:
-        t = time.perf_counter()
-        proc = subprocess.run(
-            [sys.executable, "-m", "knitlad.cli", "cut", "--fx", str(args.fx), "--stitches", args.stitches,
-             "--resolution", str(args.resolution), "--out", out, "--json"],
-            capture_output=True, text=True,
-        )
-        total = time.perf_counter() - t
-    if proc.returncode != 0:
-        sys.exit(proc.stderr)
-    s = json.loads(proc.stdout.strip().splitlines()[-1])
-    node_steps = s["nodes"] * (s["steps"] + s["relax_steps"])
-    print(f"knit {args.stitches}, {args.resolution} nodes/stitch: {s['nodes']} nodes")
-    print(f"  stretch + relax : {s['wall_stretch_s']:8.1f} s  ({s['relax_steps']} FIRE steps)")
-    print(f"  cut + propagate : {s['wall_propagate_s']:8.1f} s  ({s['steps']} steps)")
-    print(f"  process total   : {total:8.1f} s  (includes start-up and compilation)")
-    print(f"  node-steps/s    : {node_steps / s['wall_s']:.3e}")
-    print(f"  f_x^ini {s['fx_ini']:.2f}, f_x^fin {s['fx_fin']:.2f}, n_lad/n_y {s['n_lad_over_ny']:.2f}, "
-          f"v_lad/c_b {s['v_lad_over_cb']:.3f}, stop: {s['stop_reason']}")
+    t = time.perf_counter()
+    with numba_threads(args.threads):
+        run_ladder(CutConfig(n_x=6, n_y=6, fx=4.0, twist=True, max_time_ms=0.2).settings())
+        run_ladder(CutConfig(n_x=6, n_y=6, fx=4.0, max_time_ms=0.2).settings())
+    print(f"warm-up (compilation on a fresh clone): {time.perf_counter() - t:.1f} s")
+    lean = lean_rate()
+    print(f"lean stretch + bend kernel, 1 thread: {lean:.3e} node-steps/s\n")
+    print(f"| {args.stitches} x {args.stitches}, f_x {args.fx:g} | twist | nodes | stretch [s] | cut + propagate [s] "
+          "| total [s] | steps | node-steps/s | / lean | f_x^ini | v_lad/c_b | n_lad/n_y | f_x^fin |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for preset in args.presets:
+        for twist in args.twist:
+            cfg = CutConfig(n_x=args.stitches, n_y=args.stitches, fx=args.fx, preset=preset, twist=twist == "on")
+            with numba_threads(args.threads):
+                r = run_ladder(cfg.settings())
+            stretch_s, propagate_s = r.wall_s["stretch"], r.wall_s["propagate"]
+            rate = r.nodes * r.steps / propagate_s
+            print(f"| {preset} ({cfg.resolution}) | {twist} | {r.nodes} | {stretch_s:.1f} | {propagate_s:.1f} | "
+                  f"{stretch_s + propagate_s:.1f} | {r.steps} | {rate:.3e} | {rate / lean:.2f} | {r.fx_ini:.2f} | "
+                  f"{r.v_lad_over_cb:.3f} | {r.n_lad_over_ny:.2f} | {r.fx_fin:.2f} |", flush=True)
 
 
 if __name__ == "__main__":

@@ -29,11 +29,25 @@ def test_tall_cells_are_built_narrower_so_that_the_loops_interlock():
     assert overlap > 2 * d
 
 
-@pytest.mark.parametrize("ly", [0.302])
-def test_force_control_reaches_its_target_in_a_tall_knit(ly):
-    knit = stretch(config(n_x=6, n_y=8, fx=4.0, ly=ly, resolution=16).stretch_settings())
+@pytest.mark.parametrize("start", ["tiled", "affine"])
+def test_force_control_reaches_its_target_in_a_tall_knit(start):
+    knit = stretch(config(n_x=6, n_y=8, fx=4.0, ly=0.302, resolution=16, stretch_start=start).stretch_settings())
     assert knit.fx_within_tolerance
     assert knit.fx_ini == pytest.approx(4.0, rel=0.02)
+
+
+def test_the_tiled_stretch_relaxes_only_what_the_edges_change():
+    """Force control from the periodised stitch: the knit reaches f_x 8 within the tolerance in
+    fewer FIRE steps than one affine increment takes (the tiled knit is already at equilibrium
+    but near its edges), and the stretch of a knit with tails, which the stitch has no copy of,
+    stays affine."""
+    cfg = config(n_x=8, n_y=8, fx=8.0)
+    knit = stretch(cfg.stretch_settings())
+    assert knit.fx_within_tolerance and knit.fx_ini == pytest.approx(8.0, rel=0.02)
+    assert knit.relax_steps < cfg.steps_per_increment
+    assert knit.box_lx == pytest.approx(knit.lx_over_l0, rel=0.002)
+    tail = stretch(config(n_x=4, n_y=4, lx=0.33, edge="tail", resolution=16).stretch_settings())
+    assert tail.relax_steps > 0 and tail.tension_history.shape[0] > 2
 
 
 def test_dashpot_and_drag_settings_reach_the_knit_and_the_laddering_dynamics():

@@ -208,6 +208,7 @@ def read_stretched_knit(path: str | Path):
     with h5py.File(path, "r") as f:
         settings = json.loads(f.attrs["settings_json"])
         material = Material(**settings.pop("material"))
+        settings.setdefault("start", "affine")  # knits stretched before the tiled start were affine
         geometry = json.loads(f.attrs["geometry_json"])
         geometry["material"] = material
         model = RodModel(**{name: f["model"][name][()] for name in RodModel._fields})

@@ -170,7 +170,7 @@ def _hinge_material_curvature(e, elen, d1, d2, k0, k1):
 @njit(**NUMBA_OPTS)
 def framed_bending_twisting_forces(
     e, elen, d1, d2, edge_a, edge_b, hinge_e0, hinge_e1,
-    B_over_l, GJ_over_l, kappa_bar, ref_twist, twist_bar, theta, F, torque,
+    B_over_l, GJ_over_l, kappa_bar, ref_twist, twist_bar, theta, F, torque, first=0, last=-1,
 ):
     """DER bending with natural curvature, and twisting, with material frames.
 
@@ -184,9 +184,11 @@ def framed_bending_twisting_forces(
         d kappa_2/d e^h     = (-kappa_2 t~ + t^{h-1} x d~_1)/|e^h|
         d kappa_1/d theta^j = -kb.d1^j/2,  d kappa_2/d theta^j = -kb.d2^j/2
         d m/d e^{h-1} = kb/(2|e^{h-1}|),  d m/d e^h = kb/(2|e^h|).
-    Forces go to F (n, 3), torques about the edge tangents to ``torque`` (ne,).
+    Forces go to F (n, 3), torques about the edge tangents to ``torque`` (ne,). Hinges [first, last).
     """
-    for h in range(hinge_e0.shape[0]):
+    if last < 0:
+        last = hinge_e0.shape[0]
+    for h in range(first, last):
         k0 = hinge_e0[h]
         k1 = hinge_e1[h]
         t0x, t0y, t0z, t1x, t1y, t1z, chi, kbx, kby, kbz = _hinge_tangents(e, elen, k0, k1)

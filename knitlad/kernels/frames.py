@@ -45,9 +45,11 @@ def _signed_angle(ux, uy, uz, wx, wy, wz, nx, ny, nz):
 
 
 @njit(**NUMBA_OPTS)
-def transport_reference_frames(e, elen, tangent, ref_u):
-    """Carry u^k from the stored tangent to the current one, in place (both updated)."""
-    for k in range(e.shape[0]):
+def transport_reference_frames(e, elen, tangent, ref_u, first=0, last=-1):
+    """Carry u^k from the stored tangent to the current one, in place (both updated); edges [first, last)."""
+    if last < 0:
+        last = e.shape[0]
+    for k in range(first, last):
         inv = 1.0 / elen[k]
         bx, by, bz = e[k, 0] * inv, e[k, 1] * inv, e[k, 2] * inv
         ux, uy, uz = parallel_transport(ref_u[k, 0], ref_u[k, 1], ref_u[k, 2], tangent[k, 0], tangent[k, 1], tangent[k, 2], bx, by, bz)
@@ -66,9 +68,11 @@ def transport_reference_frames(e, elen, tangent, ref_u):
 
 
 @njit(**NUMBA_OPTS)
-def update_reference_twist(tangent, ref_u, hinge_e0, hinge_e1, ref_twist):
-    """Advance the reference twist of every hinge, keeping it continuous in time."""
-    for h in range(hinge_e0.shape[0]):
+def update_reference_twist(tangent, ref_u, hinge_e0, hinge_e1, ref_twist, first=0, last=-1):
+    """Advance the reference twist of every hinge in [first, last), keeping it continuous in time."""
+    if last < 0:
+        last = hinge_e0.shape[0]
+    for h in range(first, last):
         k0 = hinge_e0[h]
         k1 = hinge_e1[h]
         px, py, pz = parallel_transport(
@@ -86,9 +90,11 @@ def update_reference_twist(tangent, ref_u, hinge_e0, hinge_e1, ref_twist):
 
 
 @njit(**NUMBA_OPTS)
-def material_frames(tangent, ref_u, theta, d1, d2):
-    """d1, d2 of every edge from the reference frame and the twist angle theta."""
-    for k in range(theta.shape[0]):
+def material_frames(tangent, ref_u, theta, d1, d2, first=0, last=-1):
+    """d1, d2 of every edge in [first, last) from the reference frame and the twist angle theta."""
+    if last < 0:
+        last = theta.shape[0]
+    for k in range(first, last):
         tx, ty, tz = tangent[k, 0], tangent[k, 1], tangent[k, 2]
         ux, uy, uz = ref_u[k, 0], ref_u[k, 1], ref_u[k, 2]
         vx, vy, vz = cross(tx, ty, tz, ux, uy, uz)

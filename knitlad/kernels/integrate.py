@@ -47,6 +47,25 @@ def elastic_forces_by_yarn(m, s, w):
                        w.yarn_hinges[y], w.yarn_hinges[y + 1])
 
 
+@njit(**PARALLEL_OPTS)
+def framed_forces_by_yarn(m, s, w):
+    """Stretching, and bending and twisting with material frames (framed DER), yarn by yarn in
+    parallel: the frames of a yarn's edges and its hinges' forces and torques touch only its own
+    nodes and edges (as :func:`elastic_forces_by_yarn`)."""
+    for y in prange(w.yarn_edges.shape[0] - 1):
+        e0, e1 = w.yarn_edges[y], w.yarn_edges[y + 1]
+        h0, h1 = w.yarn_hinges[y], w.yarn_hinges[y + 1]
+        edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen, e0, e1)
+        stretching_forces(w.e, w.elen, s.v, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force, e0, e1)
+        transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u, e0, e1)
+        update_reference_twist(s.tangent, s.ref_u, m.hinge_e0, m.hinge_e1, s.ref_twist, h0, h1)
+        material_frames(s.tangent, s.ref_u, s.theta, w.d1, w.d2, e0, e1)
+        framed_bending_twisting_forces(
+            w.e, w.elen, w.d1, w.d2, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1,
+            m.B_over_l, m.GJ_over_l, m.kappa_bar, s.ref_twist, m.twist_bar, s.theta, w.force, w.torque, h0, h1,
+        )
+
+
 @njit(**NUMBA_OPTS)
 def compute_forces(m, s, w, c, twist, contact, drag, dt):
     """Total force on every node (``w.force``) and torque on every edge (``w.torque``).
@@ -67,15 +86,7 @@ def compute_forces(m, s, w, c, twist, contact, drag, dt):
                 w.force[i, k] -= drag * m.mass[i] * s.v[i, k]
     w.torque[:] = 0.0
     if twist:
-        edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen)
-        stretching_forces(w.e, w.elen, s.v, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force)
-        transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u)
-        update_reference_twist(s.tangent, s.ref_u, m.hinge_e0, m.hinge_e1, s.ref_twist)
-        material_frames(s.tangent, s.ref_u, s.theta, w.d1, w.d2)
-        framed_bending_twisting_forces(
-            w.e, w.elen, w.d1, w.d2, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1,
-            m.B_over_l, m.GJ_over_l, m.kappa_bar, s.ref_twist, m.twist_bar, s.theta, w.force, w.torque,
-        )
+        framed_forces_by_yarn(m, s, w)
     else:
         elastic_forces_by_yarn(m, s, w)
     if contact:
