@@ -66,7 +66,7 @@ class CutConfig(_WithPreset):
     ADDED_LATER: ClassVar[tuple[str, ...]] = (
         "drag_per_s", "twist", "d_over_l0", "contact_force_f0", "overlap_fraction", "contact_counting", "edge",
         "contact_damping_ratio", "stretch_damping_ratio", "stretch_increment", "steps_per_increment",
-        "fx_tolerance", "dt_safety", "stretch_start")
+        "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -103,6 +103,9 @@ class CutConfig(_WithPreset):
     stretch_increment: float = Field(0.005, gt=0, le=0.05, description="affine stretch per relaxation round [l/l0]")
     steps_per_increment: int = Field(750, ge=1, description="FIRE steps per relaxation round [-]")
     fx_tolerance: float = Field(0.02, gt=0, lt=1, description="force control: accepted relative error of f_x^ini [-]")
+    natural_curvature: float = Field(0.0, ge=0, le=20, description=(
+        "the yarn's memory of its knitted shape: mean (kappa_bar/kappa0)^2 of its natural curvature, a "
+        "fraction of the unloaded fabric's curvature (the paper measures ~1, up to 3.5) [-]; > 0 turns twist on"))
     stretch_start: Literal["tiled", "affine"] = Field("tiled", description=(
         "how the knit reaches its stretch: tiled with the periodised stitch stretched to the target, "
         "then corrected (clamped ends; tails always affine), or affine increments of the built knit [-]"))
@@ -110,12 +113,26 @@ class CutConfig(_WithPreset):
         "time step of the laddering dynamics, fraction of the stability limit [-]; 0.35, not 0.7: from one "
         "stretched 16 x 16 knit at f_x^ini 3.92, v_lad was 0.312 at 0.7, 0.270 at 0.35, 0.266 at 0.175"))
 
+    @model_validator(mode="before")
+    @classmethod
+    def natural_curvature_carries_twist(cls, data):
+        """A yarn with natural curvature carries twist (its curvature lives in its material frame)."""
+        if isinstance(data, dict) and isinstance(data.get("natural_curvature"), (int, float)) \
+                and not isinstance(data.get("natural_curvature"), bool) and data["natural_curvature"] > 0:
+            if data.get("twist") is False:
+                raise ValueError("natural_curvature: a yarn with natural curvature carries twist (twist: true)")
+            data = {**data, "twist": True}
+        return data
+
     @model_validator(mode="after")
     def one_control(self) -> "CutConfig":
         if self.fx is not None and self.lx is not None:
             raise ValueError("give either fx (force control) or lx (position control), not both")
         if self.fx is None and self.lx is None:
             raise ValueError("give fx (force control) or lx (position control)")
+        if self.natural_curvature > 0 and (self.stretch_start, self.edge) != ("tiled", "clamped"):
+            raise ValueError("natural_curvature: set in the periodised stitch and tiled over the knit, it needs "
+                             "stretch_start tiled and edge clamped")
         if self.frame_every_us is not None and self.frame_every_us < self.observe_every_us:
             raise ValueError(f"frame_every_us: {self.frame_every_us:g} is shorter than observe_every_us "
                              f"({self.observe_every_us:g}): frames are taken at observations")
@@ -140,6 +157,7 @@ class CutConfig(_WithPreset):
             nodes_per_stitch=self.resolution, contact_force_f0=self.contact_force_f0,
             overlap_fraction=self.overlap_fraction, edge=self.edge, stretch_increment=self.stretch_increment,
             steps_per_increment=self.steps_per_increment, fx_tolerance=self.fx_tolerance, start=self.stretch_start,
+            natural_curvature=self.natural_curvature,
             material=material_for(self.d_over_l0),
         )
 

@@ -27,6 +27,7 @@ each setting with its default and unit (``CutConfig(...).settings()``).
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass, field, fields
@@ -105,11 +106,15 @@ class StretchSettings:
     steps_per_increment: int  # FIRE steps per round
     fx_tolerance: float  # force control: relative
     start: str  # "tiled" from the periodised stitch (clamped ends), or "affine" from the built knit
+    natural_curvature: float  # K = mean (kappa_bar/kappa0)^2 the yarn remembers (0: straight at rest)
     material: Material
 
     def __post_init__(self) -> None:
         if (self.lx_over_l0 is None) == (self.fx_target is None):
             raise ValueError("give exactly one of lx_over_l0 (position control) and fx_target (force control)")
+        if self.natural_curvature > 0 and (self.start, self.edge) != ("tiled", "clamped"):
+            raise ValueError("natural_curvature needs the tiled stretch and clamped ends: it is set in the "
+                             "periodised stitch and tiled over the knit")
 
 
 @dataclass(frozen=True)
@@ -271,7 +276,39 @@ class KnitBox:
             shift[:, 1] = row * cell.ly * l0
             x[nodes] = cell_x[k % n] + shift
         self.sim.state.v[:] = 0.0
+        if cell.sim.twist:
+            self.tile_frames(cell)
         self.lx, self.ly = cell.lx, cell.ly
+
+    def tile_frames(self, cell: StitchRun) -> None:
+        """The cell's material frames, twist and natural curvature on every course: edge k of a course
+        is the cell's edge k mod n, the hinge between edges k - 1 and k the cell's hinge k mod n (the
+        cell's hinge j joins its edges j - 1 and j, hinge 0 across the seam). Switches twist on."""
+        m = self.s.material
+        if not self.sim.twist:
+            rods = with_twist(self.sim.rods, m.twisting_stiffness / m.bending_stiffness)
+            self.knit.rods = rods
+            self.sim = Simulation(rods, contact=self.sim.contact_model)
+        n = self.knit.geometry.nodes_per_stitch
+        src_model, src = cell.sim.model, cell.sim.state
+        model, state = self.sim.model, self.sim.state
+        edge_yarn = model.node_yarn[model.edge_a]
+        hinge_yarn = edge_yarn[model.hinge_e1]
+        kappa_bar, twist_bar = model.kappa_bar.copy(), model.twist_bar.copy()
+        for y in [self.knit.bars[0]] + self.knit.courses + [self.knit.bars[1]]:
+            edges = np.flatnonzero(edge_yarn == y)
+            hinges = np.flatnonzero(hinge_yarn == y)
+            j = np.arange(edges.size) % n
+            for name in ("tangent", "ref_u", "theta"):
+                getattr(state, name)[edges] = getattr(src, name)[j]
+            state.omega[edges] = 0.0
+            jh = np.arange(1, hinges.size + 1) % n
+            state.ref_twist[hinges] = src.ref_twist[jh]
+            kappa_bar[hinges] = src_model.kappa_bar[jh]
+            twist_bar[hinges] = src_model.twist_bar[jh]
+        rods = self.sim.rods.replace_model(kappa_bar=kappa_bar, twist_bar=twist_bar)
+        self.knit.rods = rods
+        self.sim = Simulation(rods, contact=self.sim.contact_model)
 
     def stretched(self, fx: float, within_tolerance: bool, wall_s: float) -> StretchedKnit:
         """The knit as it is now, as a :class:`StretchedKnit` (its f_x measured: ``fx``); stops on a deep overlap."""
@@ -332,6 +369,8 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
         # from the knit's build width: tall cells are built narrower (build_width)
         cell = stitch_of(s, box.build_lx)
         stretch_to(cell, cell.lx, s.ly_over_l0, s.stretch_increment, min_increments=0)
+        if s.natural_curvature > 0:
+            remember_unloaded_shape(cell, s)
         if s.lx_over_l0 is not None:
             stretch_to(cell, s.lx_over_l0, s.ly_over_l0, s.stretch_increment, min_increments=0)
             target = None
@@ -356,6 +395,24 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
         report(0.2 + 0.8 * (k + 1) / corrections)
     report(1.0)
     return fx, bool(abs(fx - target) <= s.fx_tolerance * target)
+
+
+@functools.lru_cache(maxsize=16)
+def unloaded_width(ly_over_l0: float, nodes_per_stitch: int, material: Material) -> float:
+    """l_x/l0 of the periodised stitch on the f_x = 0 curve at this l_y (cached: a sweep asks it often)."""
+    from knitlad.stitch_model import zero_tension_lx
+
+    return zero_tension_lx(ly_over_l0, material=material, nodes_per_stitch=nodes_per_stitch)
+
+
+def remember_unloaded_shape(cell: StitchRun, s: StretchSettings) -> None:
+    """The stitch is taken to the f_x = 0 curve (the unloaded fabric), relaxed, and remembers that shape
+    with mean (kappa_bar/kappa0)^2 = K (:mod:`knitlad.natural_curvature`); relaxed again, twist on."""
+    stretch_to(cell, unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material), s.ly_over_l0,
+               s.stretch_increment, min_increments=0)
+    cell.settle()
+    cell.remember_shape(s.natural_curvature)
+    cell.settle()
 
 
 def settle(cell: StitchRun) -> float:
@@ -411,7 +468,7 @@ def cut(knit: StretchedKnit, dynamics: DynamicsSettings) -> Laddering:
     rods = cut_edge(rods, edge)
     rods = rods.replace_model(
         stretch_damping=rods.model.stretch_damping * (dynamics.stretch_damping_ratio / STRETCH_AXIAL_DAMPING))
-    if dynamics.twist:
+    if dynamics.twist and not rods.twist:  # a yarn with natural curvature carries twist from the stretch
         rods = with_twist(rods, m.twisting_stiffness / m.bending_stiffness)
     contact = stretch_contact(s, damping_ratio=dynamics.contact_damping_ratio,
                               tangential_damping_ratio=dynamics.contact_damping_ratio,
@@ -578,7 +635,8 @@ class LadderResult:
                 "frame_laddered", "frame_contact", "stretch_tension", "node_course", "cut_node", "cell_centres", "edges"}
         out = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in skip}
         out["v_fit_stitches"] = list(self.v_fit_stitches)
-        out.update(mu=d.mu, twist=d.twist, drag_per_s=d.drag_per_s, wall_s=float(sum(self.wall_s.values())))
+        out.update(mu=d.mu, twist=d.twist, drag_per_s=d.drag_per_s, natural_curvature=self.settings.stretch.natural_curvature,
+                   wall_s=float(sum(self.wall_s.values())))
         out.update({f"wall_{k}_s": v for k, v in self.wall_s.items()})
         return out
 

@@ -14,8 +14,9 @@ taken by central differences under an affine deformation of the relaxed cell:
 at equilibrium the internal relaxation does not change E to first order, so
 this is the total derivative (the virial tension). One cell holds one course
 and one column, so these are the forces per thread. E_cell counts the yarn's
-own stretching and bending, its contacts with itself, and half of each contact
-with an image (the other half belongs to the neighbouring cell).
+own stretching and bending (and twisting, with natural curvature: framed DER),
+its contacts with itself, and half of each contact with an image (the other
+half belongs to the neighbouring cell).
 """
 
 from __future__ import annotations
@@ -29,7 +30,9 @@ import numpy as np
 from knitlad import units
 from knitlad.contact import ContactModel
 from knitlad.kernels.contact import contact_energy
-from knitlad.kernels.elastic import bending_energy, edge_vectors, stretching_energy
+from knitlad.kernels.elastic import bending_energy, edge_vectors, framed_bending_twisting_energy, stretching_energy
+from knitlad.kernels.frames import material_frames, transport_reference_frames, update_reference_twist
+from knitlad.natural_curvature import remember_shape
 from knitlad.scenes.jersey import BUILD_LX, Jersey, widest_fitting_width
 from knitlad.scenes.stitch import PeriodicStitch, build_periodic_stitch
 from knitlad.simulation import Simulation, numba_threads
@@ -110,6 +113,14 @@ class StitchRun:
     def tension(self) -> float:
         return self.tensions()[0]
 
+    def remember_shape(self, K: float) -> None:
+        """From here on the yarn carries twist and remembers its current shape: its natural curvature is
+        the fraction of the current curvature whose mean (kappa_bar/kappa0)^2 is ``K``
+        (:func:`knitlad.natural_curvature.remember_shape`)."""
+        rods = remember_shape(self.sim.rods, K, self.cell.real_hinges, self.s.material)
+        self.cell.rods = rods
+        self.sim = Simulation(rods, contact=self.sim.contact_model)
+
     def settle(self) -> dict:
         """The final relaxation, to ``force_tol_f0``."""
         return self._relax(20 * self.s.relax_steps, self.s.force_tol_f0)
@@ -175,7 +186,10 @@ def cell_energy(sim: Simulation, cell: PeriodicStitch) -> float:
     real = cell.real_edges
     e = stretching_energy(w.elen[real], m.rest_length[real], m.EA[real])
     h = cell.real_hinges
-    e += bending_energy(w.e, w.elen, m.hinge_e0[h], m.hinge_e1[h], m.B_over_l[h])
+    if sim.twist:
+        e += sum(framed_energy(sim, h))
+    else:
+        e += bending_energy(w.e, w.elen, m.hinge_e0[h], m.hinge_e1[h], m.B_over_l[h])
     if c.pairs.shape[0] == 0:
         return float(e)
     n = int(c.n_pairs[0])
@@ -185,6 +199,20 @@ def cell_energy(sim: Simulation, cell: PeriodicStitch) -> float:
         p = np.ascontiguousarray(pairs[mask])
         e += weight * contact_energy(x, m.edge_a, m.edge_b, m.edge_shift, c, p, np.ascontiguousarray(slip[mask]))
     return float(e)
+
+
+def framed_energy(sim: Simulation, hinges: np.ndarray) -> tuple[float, float]:
+    """(bending, twisting) energy of ``hinges`` at the current positions, with the reference frames
+    carried from the last step's tangents to the current ones (as a step would; the state is untouched)."""
+    m, s, w = sim.model, sim.state, sim.work
+    tangent, ref_u, ref_twist = s.tangent.copy(), s.ref_u.copy(), s.ref_twist.copy()
+    transport_reference_frames(w.e, w.elen, tangent, ref_u)
+    update_reference_twist(tangent, ref_u, m.hinge_e0, m.hinge_e1, ref_twist)
+    d1, d2 = np.zeros_like(tangent), np.zeros_like(tangent)
+    material_frames(tangent, ref_u, s.theta, d1, d2)
+    return framed_bending_twisting_energy(
+        w.e, w.elen, d1, d2, m.hinge_e0[hinges], m.hinge_e1[hinges], m.B_over_l[hinges], m.GJ_over_l[hinges],
+        np.ascontiguousarray(m.kappa_bar[hinges]), ref_twist[hinges], m.twist_bar[hinges], s.theta)
 
 
 def cell_tensions(sim: Simulation, cell: PeriodicStitch, f0_N: float, rel_step: float = 1e-5) -> tuple[float, float]:

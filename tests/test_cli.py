@@ -103,3 +103,16 @@ def test_the_drag_of_cut_reaches_the_laddering_settings_and_defaults_to_none():
     assert CutConfig(fx=4, drag_per_s=2e3).dynamics_settings().drag_per_s == 2e3
     assert CutConfig(fx=4).dynamics_settings().twist is False
     assert CutConfig(fx=4, twist=True).dynamics_settings().twist is True
+
+
+def test_natural_curvature_turns_twist_on_and_needs_the_tiled_stretch():
+    from knitlad.config import CutConfig
+
+    assert CutConfig(fx=4, natural_curvature=2).twist
+    assert not CutConfig(fx=4).twist
+    with pytest.raises(ValueError, match="natural_curvature"):
+        CutConfig(fx=4, natural_curvature=2, twist=False)
+    with pytest.raises(ValueError, match="natural_curvature"):
+        CutConfig(fx=4, natural_curvature=2, stretch_start="affine")
+    with pytest.raises(ValueError, match="natural_curvature"):
+        CutConfig(fx=4, natural_curvature=-1)

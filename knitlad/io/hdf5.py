@@ -185,6 +185,7 @@ def write_stretched_knit(path: str | Path, knit) -> Path:
         _write_run_attrs(f, knit.settings, knit.settings.material)
         f.attrs["geometry_json"] = json.dumps(jsonable(k.geometry))
         f.attrs["H"] = k.H
+        f.attrs["rods_twist"] = bool(k.rods.twist)
         for name in _KNIT_SCALARS:
             f.attrs[name] = getattr(knit, name)
         for group, arrays in (("model", k.rods.model), ("state", k.rods.state)):
@@ -209,12 +210,13 @@ def read_stretched_knit(path: str | Path):
         settings = json.loads(f.attrs["settings_json"])
         material = Material(**settings.pop("material"))
         settings.setdefault("start", "affine")  # knits stretched before the tiled start were affine
+        settings.setdefault("natural_curvature", 0.0)
         geometry = json.loads(f.attrs["geometry_json"])
         geometry["material"] = material
         model = RodModel(**{name: f["model"][name][()] for name in RodModel._fields})
         state = RodState(**{name: f["state"][name][()] for name in RodState._fields})
         g = f["knit"]
-        knit = KnitScene(geometry=Jersey(**geometry), rods=Rods(model, state, twist=False), H=float(f.attrs["H"]),
+        knit = KnitScene(geometry=Jersey(**geometry), rods=Rods(model, state, twist=bool(f.attrs.get("rods_twist", False))), H=float(f.attrs["H"]),
                          courses=[int(c) for c in g["courses"][()]], bars=[int(b) for b in g["bars"][()]],
                          node_t=g["node_t"][()], left_end=g["left_end"][()], right_end=g["right_end"][()])
         scalars = {name: f.attrs[name].item() if isinstance(f.attrs[name], np.generic) else f.attrs[name]

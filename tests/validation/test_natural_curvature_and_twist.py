@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 import knitlad as kl
 from knitlad.contact import make_contacts
@@ -81,3 +82,40 @@ def test_twisted_rod_carries_torque_GJ_phi_over_L():
     # the twist relaxed to a uniform rate
     rate = np.diff(rods.state.theta)
     np.testing.assert_allclose(rate, phi / (n - 2), rtol=1e-6)
+
+
+def test_a_course_freed_of_the_knit_relaxes_to_the_natural_curvature_it_was_given():
+    """The paper's extraction measurement, in simulation: a 4 x 4 knit whose yarn remembers the
+    unloaded fabric's shape with K = mean (kappa_bar/kappa0)^2 = 1 (CutConfig.natural_curvature),
+    stretched to f_x 4, then freed of its holds and of contact: a course relaxes (FIRE, twist on)
+    to a shape whose mean (kappa/kappa0)^2, read from the positions alone (|kb| = 2 tan(phi/2)
+    over the Voronoi length), is K within 2 %. Stretched, the same course is bent more (1.86)."""
+    from knitlad.config import CutConfig
+    from knitlad.kernels.elastic import edge_vectors
+    from knitlad.natural_curvature import voronoi_lengths
+    from knitlad.protocol import stretch
+    from knitlad.simulation import Simulation
+
+    K = 1.0
+    cfg = CutConfig(n_x=4, n_y=4, fx=4.0, natural_curvature=K)
+    knit = stretch(cfg.stretch_settings())
+    rods, material = knit.knit.rods, cfg.stretch_settings().material
+    assert rods.twist and cfg.twist
+    m = rods.model
+    hinges = np.flatnonzero(m.node_yarn[m.edge_a[m.hinge_e1]] == knit.knit.courses[1])
+
+    def mean_squared_curvature(x):
+        e, elen = np.zeros((m.edge_a.size, 3)), np.zeros(m.edge_a.size)
+        edge_vectors(x, m.edge_a, m.edge_b, m.edge_shift, e, elen)
+        t0 = e[m.hinge_e0[hinges]] / elen[m.hinge_e0[hinges], None]
+        t1 = e[m.hinge_e1[hinges]] / elen[m.hinge_e1[hinges], None]
+        kb = 2 * np.linalg.norm(np.cross(t0, t1), axis=1) / (1 + np.sum(t0 * t1, axis=1))
+        kappa0 = material.kappa0 * kl.units.LENGTH
+        return float(np.mean((kb / (voronoi_lengths(rods)[hinges] * kappa0)) ** 2))
+
+    stretched = mean_squared_curvature(rods.state.x)
+    free = rods.copy().replace_model(held=np.zeros_like(m.held), v_prescribed=np.zeros_like(m.v_prescribed))
+    sim = Simulation(free, contact=None)
+    assert sim.relax(force_tol_N=1e-7, max_steps=400_000)["converged"]
+    assert mean_squared_curvature(sim.state.x) == pytest.approx(K, rel=0.02)
+    assert stretched > 1.5 * K

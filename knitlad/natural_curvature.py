@@ -1,0 +1,72 @@
+"""The natural curvature of a knitted thread: the yarn remembers the shape it was knitted in.
+
+The paper (appendix "Natural curvature") measures on threads pulled out of the fabric
+(kbar/kappa0)^2 of about 1 on average and 3.5 at most over four stitches, and proposes
+that this memory sets the threshold tension f_x^thr = (kbar/kappa0)^2. Here the
+memory is a fraction of the shape of the unloaded fabric: the natural material
+curvature of every hinge is
+
+    kappa_bar_h = alpha (kappa_1, kappa_2)_h of the reference shape,
+
+alpha chosen so that the mean over the hinges of (|kappa_bar_h| / (l_h kappa0))^2 is
+the given K (DER's discrete curvature: the integrated material curvature over the
+Voronoi length l_h). The reference is the periodised stitch relaxed on the f_x = 0
+curve (the fabric neither pulled nor compressed), in its own material frames, which
+the stretch then carries to the target continuously; the natural twist is the
+reference twist there, so a thread freed of the fabric relaxes to alpha times the
+reference curvature with no twist stored. alpha = sqrt(K / K_ref), K_ref the mean of
+the reference shape itself.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from knitlad import units
+from knitlad.kernels.elastic import edge_vectors, material_curvatures
+from knitlad.kernels.frames import material_frames
+from knitlad.state import Rods, with_twist
+from knitlad.units import Material
+
+
+def material_curvature(rods: Rods) -> np.ndarray:
+    """(kappa_1, kappa_2) of every hinge (nh, 2), integrated (dimensionless), in the current material frames."""
+    m, s = rods.model, rods.state
+    ne = m.edge_a.shape[0]
+    e, elen = np.zeros((ne, 3)), np.zeros(ne)
+    edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, e, elen)
+    d1, d2 = np.zeros((ne, 3)), np.zeros((ne, 3))
+    material_frames(s.tangent, s.ref_u, s.theta, d1, d2)
+    out = np.zeros((m.hinge_e0.shape[0], 2))
+    material_curvatures(e, elen, d1, d2, m.hinge_e0, m.hinge_e1, out)
+    return out
+
+
+def voronoi_lengths(rods: Rods) -> np.ndarray:
+    """l_h = (|e_bar^{h-1}| + |e_bar^h|) / 2 of every hinge [internal length]."""
+    m = rods.model
+    return 0.5 * (m.rest_length[m.hinge_e0] + m.rest_length[m.hinge_e1])
+
+
+def mean_squared_curvature(kappa: np.ndarray, lengths: np.ndarray, material: Material) -> float:
+    """mean over hinges of (|kappa_h| / (l_h kappa0))^2, ``kappa`` (nh, 2) integrated, ``lengths`` internal."""
+    kappa0 = material.kappa0 * units.LENGTH  # [1 / internal length]
+    return float(np.mean(np.sum(kappa**2, axis=1) / (lengths * kappa0) ** 2))
+
+
+def remember_shape(rods: Rods, K: float, hinges: np.ndarray, material: Material) -> Rods:
+    """A copy of ``rods`` carrying twist whose natural curvature is alpha x its current material curvature,
+    alpha set so that the mean of (kappa_bar / kappa0)^2 over ``hinges`` is ``K`` (module docstring).
+
+    Twist is switched on first (:func:`knitlad.state.with_twist`: Bishop frames along the current
+    tangents, natural twist = the current reference twist), if it is not on yet.
+    """
+    if K < 0:
+        raise ValueError(f"the natural curvature K must be >= 0, got {K!r}")
+    if not rods.twist:
+        rods = with_twist(rods, material.twisting_stiffness / material.bending_stiffness)
+    kappa = material_curvature(rods)
+    lengths = voronoi_lengths(rods)
+    reference = mean_squared_curvature(kappa[hinges], lengths[hinges], material)
+    alpha = np.sqrt(K / reference) if reference > 0 else 0.0
+    return rods.replace_model(kappa_bar=alpha * kappa, twist_bar=rods.state.ref_twist.copy())
