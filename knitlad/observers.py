@@ -133,10 +133,12 @@ class EdgeReached:
     """The ladder has reached the bottom or the top of the fabric.
 
     The rows of cells run from course 0 to the top free course, whose cell lies
-    under the held top course: that cell cannot come undone (the held course's
-    sinkers cannot move; 16 x 16 at f_x^ini 13.6: the ladder reached the row below
-    it at 0.8 ms and was still there 2 ms later), so the top is the row below it
-    (:data:`TOP_ROWS_HELD`).
+    under the held top course, whose sinkers cannot move: it comes undone late if
+    at all (16 x 16 at f_x^ini 13.6: the ladder reached the row below it at 0.8 ms
+    and it still held 2 ms later), so the top is the row below it
+    (:data:`TOP_ROWS_HELD`). The run stops there: n_lad/n_y and f_x^fin of a
+    ladder that reaches an edge are those of that moment, a lower bound of the
+    damage it would end with.
     """
 
     def check(self, t: float, undone: np.ndarray) -> str | None:

@@ -1,0 +1,83 @@
+"""The laddering threshold f_x^thr(K) from sweeps over natural curvature K and f_x^ini.
+
+    python scripts/threshold.py runs/threshold16 [runs/threshold16_mu0 ...] [--png docs/threshold16.png]
+
+Reads each sweep's summary (``knitlad sweep configs/threshold16.yaml``). For each (K, mu):
+f_x^thr is bracketed between the highest f_x^ini whose damage n_lad/n_y < 0.1 (no ladder)
+and the lowest at or above which every run ladders; it is quoted as the middle of the
+bracket, +- half its width. Beside it: the paper's hypothesis f_x^thr = K, and for the
+ladders that stopped inside the fabric (not at an edge course) f_x^fin, which the
+experiments find equal to f_x^thr (Fig. 3f). Prints markdown tables; draws n_lad/n_y and
+f_x^fin against f_x^ini per K.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+NO_LADDER = 0.1  # n_lad/n_y below this: the knit did not ladder (issue's definition)
+
+
+def threshold(g: pd.DataFrame) -> tuple[float, float, float]:
+    """(lower, upper, middle) of the bracket of f_x^thr in one (K, mu) series."""
+    g = g.sort_values("fx_ini")
+    held = g[g.n_lad_over_ny < NO_LADDER].fx_ini
+    laddered = g[g.n_lad_over_ny >= NO_LADDER].fx_ini
+    lower = held.max() if len(held) else 0.0
+    above = laddered[laddered > lower]
+    upper = above.min() if len(above) else math.inf
+    return lower, upper, 0.5 * (lower + upper) if math.isfinite(upper) else math.nan
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("sweeps", nargs="+", help="sweep output folders (with summary.csv)")
+    p.add_argument("--png", default=None, help="figure to write")
+    args = p.parse_args()
+    df = pd.concat([pd.read_csv(Path(s) / "summary.csv") for s in args.sweeps], ignore_index=True)
+    df = df[df.status == "ok"].copy()
+    df["natural_curvature"] = df["natural_curvature"].fillna(0.0)
+    print("| K | mu | runs | f_x^thr bracket | f_x^thr | hypothesis f_x^thr = K | f_x^fin of ladders arrested inside (f_x^ini) |")
+    print("|---|---|---|---|---|---|---|")
+    for (K, mu), g in df.groupby(["natural_curvature", "mu"]):
+        lower, upper, mid = threshold(g)
+        inside = g[(g.n_lad_over_ny >= NO_LADDER) & (~g.reached_edge.astype(bool))]
+        fin = ", ".join(f"{r.fx_fin:.2f} ({r.fx_ini:.2f})" for r in inside.sort_values("fx_ini").itertuples()) or "none"
+        width = f"+- {0.5 * (upper - lower):.2f}" if math.isfinite(upper) else ""
+        print(f"| {K:g} | {mu:g} | {len(g)} | {lower:.2f} to {upper:.2f} | {mid:.2f} {width} | {K:g} | {fin} |")
+    print("\n| K | mu | f_x^ini | n_lad/n_y | v_lad/c_b | f_x^fin | reached edge | stop |")
+    print("|---|---|---|---|---|---|---|---|")
+    for r in df.sort_values(["natural_curvature", "mu", "fx_ini"]).itertuples():
+        print(f"| {r.natural_curvature:g} | {r.mu:g} | {r.fx_ini:.2f} | {r.n_lad_over_ny:.2f} | {r.v_lad_over_cb:.3f} | "
+              f"{r.fx_fin:.2f} | {bool(r.reached_edge)} | {r.stop_reason} |")
+    if args.png:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
+        for (K, mu), g in df.groupby(["natural_curvature", "mu"]):
+            g = g.sort_values("fx_ini")
+            label = f"K = {K:g}" + (f", mu = {mu:g}" if mu != 0.4 else "")
+            a.plot(g.fx_ini, g.n_lad_over_ny, "o-" if mu != 0 else "s--", label=label)
+            b.plot(g.fx_ini, g.fx_fin, "o-" if mu != 0 else "s--", label=label)
+        lim = max(df.fx_ini.max(), 1.0)
+        b.plot([0, lim], [0, lim], "k:", lw=0.8, label="f_x^fin = f_x^ini")
+        a.axhline(NO_LADDER, color="k", lw=0.8, ls=":")
+        a.set(xlabel="f_x^ini", ylabel="n_lad / n_y", title="damage (Fig. 3e)")
+        b.set(xlabel="f_x^ini", ylabel="f_x^fin", title="tension after the ladder (Fig. 3f)")
+        a.legend(fontsize=8)
+        b.legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(args.png, dpi=120)
+        print(f"\nwrote {args.png}")
+
+
+if __name__ == "__main__":
+    main()
