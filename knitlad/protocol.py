@@ -376,7 +376,7 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
             target = None
         else:
             target = s.fx_target
-            force_control(cell, target, 0.25 * s.fx_tolerance, s.stretch_increment, cell.lx)
+            force_control(cell, target, 0.25 * s.fx_tolerance, s.stretch_increment, MIN_BUILD_LX)
         cell_fx = settle(cell)
     report(0.2)
     box.tile(cell)

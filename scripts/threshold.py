@@ -2,9 +2,11 @@
 
     python scripts/threshold.py runs/threshold16 [runs/threshold16_mu0 ...] [--png docs/threshold16.png]
 
-Reads each sweep's summary (``knitlad sweep configs/threshold16.yaml``). For each (K, mu):
-f_x^thr is bracketed between the highest f_x^ini whose damage n_lad/n_y < 0.1 (no ladder)
-and the lowest at or above which every run ladders; it is quoted as the middle of the
+Reads each sweep's summary (``knitlad sweep configs/threshold16.yaml``). A run "does not
+ladder" when its damage is below 0.1 n_y on the paper's 42 x 42 knit, 4.2 cells: counted in
+cells, so that the criterion carries over to a smaller knit, where the cut alone undoes 1 to 2
+cells (0.06 to 0.12 n_y on 16 x 16). For each (K, mu): f_x^thr is bracketed between the
+highest f_x^ini that does not ladder and the lowest at or above which every run ladders; it is quoted as the middle of the
 bracket, +- half its width. Beside it: the paper's hypothesis f_x^thr = K, and for the
 ladders that stopped inside the fabric (not at an edge course) f_x^fin, which the
 experiments find equal to f_x^thr (Fig. 3f). Prints markdown tables; draws n_lad/n_y and
@@ -20,14 +22,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-NO_LADDER = 0.1  # n_lad/n_y below this: the knit did not ladder (issue's definition)
+NO_LADDER_CELLS = 0.1 * 42  # fewer undone cells: the knit did not ladder (n_lad/n_y < 0.1 on 42 x 42)
 
 
 def threshold(g: pd.DataFrame) -> tuple[float, float, float]:
     """(lower, upper, middle) of the bracket of f_x^thr in one (K, mu) series."""
     g = g.sort_values("fx_ini")
-    held = g[g.n_lad_over_ny < NO_LADDER].fx_ini
-    laddered = g[g.n_lad_over_ny >= NO_LADDER].fx_ini
+    held = g[g.n_lad < NO_LADDER_CELLS].fx_ini
+    laddered = g[g.n_lad >= NO_LADDER_CELLS].fx_ini
     lower = held.max() if len(held) else 0.0
     above = laddered[laddered > lower]
     upper = above.min() if len(above) else math.inf
@@ -46,14 +48,16 @@ def main() -> None:
     print("|---|---|---|---|---|---|---|")
     for (K, mu), g in df.groupby(["natural_curvature", "mu"]):
         lower, upper, mid = threshold(g)
-        inside = g[(g.n_lad_over_ny >= NO_LADDER) & (~g.reached_edge.astype(bool))]
+        if not math.isfinite(upper):
+            mid = math.nan  # no run laddered: the threshold lies above the scan
+        inside = g[(g.n_lad >= NO_LADDER_CELLS) & (~g.reached_edge.astype(bool))]
         fin = ", ".join(f"{r.fx_fin:.2f} ({r.fx_ini:.2f})" for r in inside.sort_values("fx_ini").itertuples()) or "none"
         width = f"+- {0.5 * (upper - lower):.2f}" if math.isfinite(upper) else ""
         print(f"| {K:g} | {mu:g} | {len(g)} | {lower:.2f} to {upper:.2f} | {mid:.2f} {width} | {K:g} | {fin} |")
-    print("\n| K | mu | f_x^ini | n_lad/n_y | v_lad/c_b | f_x^fin | reached edge | stop |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("\n| K | mu | f_x^ini | n_lad (cells) | n_lad/n_y | v_lad/c_b | f_x^fin | reached edge | stop |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for r in df.sort_values(["natural_curvature", "mu", "fx_ini"]).itertuples():
-        print(f"| {r.natural_curvature:g} | {r.mu:g} | {r.fx_ini:.2f} | {r.n_lad_over_ny:.2f} | {r.v_lad_over_cb:.3f} | "
+        print(f"| {r.natural_curvature:g} | {r.mu:g} | {r.fx_ini:.2f} | {r.n_lad:.0f} | {r.n_lad_over_ny:.2f} | {r.v_lad_over_cb:.3f} | "
               f"{r.fx_fin:.2f} | {bool(r.reached_edge)} | {r.stop_reason} |")
     if args.png:
         import matplotlib
@@ -69,7 +73,7 @@ def main() -> None:
             b.plot(g.fx_ini, g.fx_fin, "o-" if mu != 0 else "s--", label=label)
         lim = max(df.fx_ini.max(), 1.0)
         b.plot([0, lim], [0, lim], "k:", lw=0.8, label="f_x^fin = f_x^ini")
-        a.axhline(NO_LADDER, color="k", lw=0.8, ls=":")
+        a.axhline(NO_LADDER_CELLS / df.n_y.max(), color="k", lw=0.8, ls=":")
         a.set(xlabel="f_x^ini", ylabel="n_lad / n_y", title="damage (Fig. 3e)")
         b.set(xlabel="f_x^ini", ylabel="f_x^fin", title="tension after the ladder (Fig. 3f)")
         a.legend(fontsize=8)

@@ -1,0 +1,50 @@
+"""The laddering threshold that natural curvature gives (slow; configs/threshold16.yaml, scripts/threshold.py).
+
+"Does not ladder": fewer undone cells than 0.1 n_y of the paper's 42 x 42 knit (4.2 cells),
+counted in cells so that it carries over to 16 x 16, where the cut alone undoes 1 to 2.
+Measured on 16 x 16, mu = 0.4, twist on (2026-12-02): K = 0 ladders to an edge course at
+every f_x^ini from 0.5 to 6 (16 to 20 cells); K = 0.05 stops at 4 cells at f_x 1; K = 0.25 to
+3.5 undo 0 to 4 cells up to 6 (K >= 1) or 2.5 (K < 1) and ladder at 10 (docs/natural_curvature.md).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from knitlad.config import CutConfig
+from knitlad.protocol import run_ladder
+from knitlad.simulation import numba_threads
+
+NO_LADDER_CELLS = 0.1 * 42
+
+
+def ladder(**settings):
+    with numba_threads(1):
+        return run_ladder(CutConfig(n_x=16, n_y=16, twist=True, max_time_ms=10, **settings).settings())
+
+
+@pytest.mark.slow
+def test_a_straight_yarn_ladders_at_low_tension():
+    """K = 0 (the paper's DER runs, no natural curvature): at f_x^ini 1 the ladder runs (20 cells)."""
+    r = ladder(fx=1.0)
+    assert r.n_lad >= 2 * NO_LADDER_CELLS
+
+
+@pytest.mark.slow
+def test_a_yarn_with_natural_curvature_does_not_ladder_below_its_threshold():
+    """K = 2 at f_x^ini 1: the cut undoes no cell (measured 0), where the straight yarn ran a ladder
+    (the test above); the tension after the cut stays near f_x^ini (0.96)."""
+    r = ladder(fx=1.0, natural_curvature=2.0)
+    assert r.n_lad < NO_LADDER_CELLS
+    assert not r.reached_edge
+    assert r.fx_fin > 0.8 * r.fx_ini
+
+
+@pytest.mark.slow
+def test_a_vanishing_natural_curvature_ladders_like_the_straight_yarn():
+    """The control of the threshold: K = 1e-4 goes through the same path as K > 0 (twist on from
+    the stretch, the stitch's frames and natural curvature tiled) and ladders at f_x^ini 1 as the
+    straight yarn does (16 cells, an edge course reached), so the arrest at K > 0 is the natural
+    curvature's, not the path's."""
+    r = ladder(fx=1.0, natural_curvature=1e-4)
+    assert r.n_lad >= 2 * NO_LADDER_CELLS
