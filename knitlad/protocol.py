@@ -52,7 +52,7 @@ from knitlad.observers import (
 )
 from knitlad.scenes.jersey import BUILD_LX, Jersey, KnitScene, build_jersey, widest_fitting_width
 from knitlad.simulation import Simulation, numba_threads
-from knitlad.stitch_model import StitchRun, StitchSettings
+from knitlad.stitch_model import StitchRun, StitchSettings, zero_tension_lx
 from knitlad.state import cut_edge, with_twist
 from knitlad.stretching import force_control, relax_to_steady_tension, stretch_to
 from knitlad.timestep import critical_time_steps
@@ -81,8 +81,6 @@ def build_width(ly_over_l0: float, material: Material, nodes_per_stitch: int = 3
     """
     if ly_over_l0 <= 0.25:
         return BUILD_LX  # the f_x = 0 width is above 0.30 l0 here (0.337 at l_y/l0 = 0.25)
-    from knitlad.stitch_model import zero_tension_lx
-
     try:
         return min(BUILD_LX, zero_tension_lx(ly_over_l0, material=material, nodes_per_stitch=nodes_per_stitch) - 0.01)
     except ValueError:
@@ -285,13 +283,10 @@ class KnitBox:
         is the cell's edge k mod n, the hinge between edges k - 1 and k the cell's hinge k mod n (the
         cell's hinge j joins its edges j - 1 and j, hinge 0 across the seam). Switches twist on."""
         m = self.s.material
-        if not self.sim.twist:
-            rods = with_twist(self.sim.rods, m.twisting_stiffness / m.bending_stiffness)
-            self.knit.rods = rods
-            self.sim = Simulation(rods, contact=self.sim.contact_model)
+        rods = self.sim.rods if self.sim.twist else with_twist(self.sim.rods, m.twisting_stiffness / m.bending_stiffness)
         n = self.knit.geometry.nodes_per_stitch
         src_model, src = cell.sim.model, cell.sim.state
-        model, state = self.sim.model, self.sim.state
+        model, state = rods.model, rods.state
         edge_yarn = model.node_yarn[model.edge_a]
         hinge_yarn = edge_yarn[model.hinge_e1]
         kappa_bar, twist_bar = model.kappa_bar.copy(), model.twist_bar.copy()
@@ -306,7 +301,7 @@ class KnitBox:
             state.ref_twist[hinges] = src.ref_twist[jh]
             kappa_bar[hinges] = src_model.kappa_bar[jh]
             twist_bar[hinges] = src_model.twist_bar[jh]
-        rods = self.sim.rods.replace_model(kappa_bar=kappa_bar, twist_bar=twist_bar)
+        rods = rods.replace_model(kappa_bar=kappa_bar, twist_bar=twist_bar)
         self.knit.rods = rods
         self.sim = Simulation(rods, contact=self.sim.contact_model)
 
@@ -377,7 +372,7 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
         else:
             target = s.fx_target
             force_control(cell, target, 0.25 * s.fx_tolerance, s.stretch_increment, MIN_BUILD_LX)
-        cell_fx = settle(cell)
+        cell_fx = settled_tension(cell)
     report(0.2)
     box.tile(cell)
     fx = relax_to_steady_tension(box)
@@ -389,7 +384,7 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
             break
         with numba_threads(1):
             force_control(cell, target * cell_fx / fx, 0.25 * s.fx_tolerance, s.stretch_increment, MIN_BUILD_LX)
-            cell_fx = settle(cell)
+            cell_fx = settled_tension(cell)
         box.tile(cell)
         fx = relax_to_steady_tension(box)
         report(0.2 + 0.8 * (k + 1) / corrections)
@@ -400,8 +395,6 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
 @functools.lru_cache(maxsize=16)
 def unloaded_width(ly_over_l0: float, nodes_per_stitch: int, material: Material) -> float:
     """l_x/l0 of the periodised stitch on the f_x = 0 curve at this l_y (cached: a sweep asks it often)."""
-    from knitlad.stitch_model import zero_tension_lx
-
     return zero_tension_lx(ly_over_l0, material=material, nodes_per_stitch=nodes_per_stitch)
 
 
@@ -415,7 +408,7 @@ def remember_unloaded_shape(cell: StitchRun, s: StretchSettings) -> None:
     cell.settle()
 
 
-def settle(cell: StitchRun) -> float:
+def settled_tension(cell: StitchRun) -> float:
     """Relax the stitch to its final tolerance; its f_x."""
     cell.settle()
     return cell.tension()
