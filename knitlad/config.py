@@ -108,7 +108,7 @@ class CutConfig(_WithPreset):
         "fraction of the unloaded fabric's curvature (the paper measures ~1, up to 3.5) [-]; > 0 turns twist on"))
     stretch_start: Literal["tiled", "affine"] = Field("tiled", description=(
         "how the knit reaches its stretch: tiled with the periodised stitch stretched to the target, "
-        "then corrected (clamped ends; tails always affine), or affine increments of the built knit [-]"))
+        "then corrected (clamped ends; tails, and yarns too thick for the stitch, d/l0 = 1/20, affine), or affine increments of the built knit [-]"))
     dt_safety: float = Field(0.35, gt=0, le=1, description=(
         "time step of the laddering dynamics, fraction of the stability limit [-]; 0.35, not 0.7: from one "
         "stretched 16 x 16 knit at f_x^ini 3.92, v_lad was 0.312 at 0.7, 0.270 at 0.35, 0.266 at 0.175"))

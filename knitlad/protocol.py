@@ -50,7 +50,7 @@ from knitlad.observers import (
     TensionRecorder,
     TimeLimit,
 )
-from knitlad.scenes.jersey import BUILD_LX, Jersey, KnitScene, build_jersey, widest_fitting_width
+from knitlad.scenes.jersey import BUILD_LX, CourseTooWide, Jersey, KnitScene, build_jersey, widest_fitting_width
 from knitlad.simulation import Simulation, numba_threads
 from knitlad.stitch_model import StitchRun, StitchSettings, zero_tension_lx
 from knitlad.state import cut_edge, with_twist
@@ -324,13 +324,19 @@ def stretch(s: StretchSettings, progress: Callable[[str, float], None] | None = 
     t0 = time.perf_counter()
     report = (lambda frac: progress("stretch", frac)) if progress else None
     box = KnitBox(s)
-    within = True
+    within, fx = True, None
     if s.start == "tiled" and s.edge == "clamped":
-        fx, within = stretch_tiled(box, report)
-    elif s.lx_over_l0 is not None:
+        try:
+            fx, within = stretch_tiled(box, report)
+        except CourseTooWide:
+            # thick yarns (d/l0 = 1/20): no periodised stitch whose loops interlock by d fits, so
+            # the knit, built narrower, is stretched affinely (natural curvature needs the stitch)
+            if s.natural_curvature > 0:
+                raise
+    if fx is None and s.lx_over_l0 is not None:
         stretch_to(box, s.lx_over_l0, s.ly_over_l0, s.stretch_increment, progress=report)
         fx = relax_to_steady_tension(box)
-    else:
+    elif fx is None:
         fx, within = force_control(box, s.fx_target, s.fx_tolerance, s.stretch_increment, box.build_lx,
                                    progress=report)
     return box.stretched(fx, within, time.perf_counter() - t0)
