@@ -16,6 +16,7 @@ Writes ``<out>/step_factor.csv`` (resumable) and prints a markdown table.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
@@ -23,8 +24,10 @@ import numpy as np
 import pandas as pd
 
 from knitlad.config import CutConfig
-from knitlad.io.atomic import atomic_path
 from knitlad.protocol import analyse, cut, propagate, stretch
+
+sys.path.insert(0, str(Path(__file__).parent))
+from ensemble import ensemble_arguments, resumed_rows, save_rows, target_offsets  # noqa: E402
 
 
 def parse_settings(pairs: list[str]) -> dict:
@@ -37,22 +40,16 @@ def parse_settings(pairs: list[str]) -> dict:
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--size", type=int, default=16, help="knit size N for N x N")
-    p.add_argument("--tensions", type=float, nargs="+", default=[13.6], help="target f_x^ini values")
-    p.add_argument("--members", type=int, default=3, help="knits per tension (targets 0.5 %% apart)")
+    ensemble_arguments(p, tensions=[13.6], members=3, out="runs/step_factor")
     p.add_argument("--factors", type=float, nargs="+", default=[0.9, 0.7, 0.5, 0.35, 0.175])
     p.add_argument("--resolution", type=int, default=24, help="nodes per stitch")
     p.add_argument("--set", nargs="*", default=[], dest="settings", help="name=value laddering settings")
-    p.add_argument("--out", default="runs/step_factor")
     args = p.parse_args()
     settings = parse_settings(args.settings)
     label = ",".join(args.settings) or "as configured"
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    csv = out / "step_factor.csv"
-    rows = pd.read_csv(csv).to_dict("records") if csv.exists() else []
+    csv, rows = resumed_rows(args.out, "step_factor")
     done = {(r["variant"], r["fx_nominal"], r["member"], r["dt_safety"]) for r in rows}
-    offsets = 0.005 * (np.arange(args.members) - (args.members - 1) / 2)
+    offsets = target_offsets(args.members)
     for fx in args.tensions:
         for k, offset in enumerate(offsets):
             todo = [f for f in args.factors if (label, fx, k, f) not in done]
@@ -68,8 +65,7 @@ def main() -> None:
                              "steps": r.steps, "wall_s": time.perf_counter() - t})
                 print(f"{label} f_x {knit.fx_ini:6.3f} factor {factor:5.3f}: v {r.v_lad_over_cb:.4f} "
                       f"n_lad/n_y {r.n_lad_over_ny:.3f} f_x^fin {r.fx_fin:.3f} ({rows[-1]['wall_s']:.0f} s)", flush=True)
-                with atomic_path(csv) as tmp:
-                    pd.DataFrame(rows).to_csv(tmp, index=False)
+                save_rows(csv, rows)
     df = pd.DataFrame(rows)
     print("\n| variant | f_x^ini | factor | knits | v_lad/c_b | paired change of v | n_lad/n_y | f_x^fin |")
     print("|---|---|---|---|---|---|---|---|")

@@ -14,32 +14,28 @@ Writes ``<out>/stretch_start.csv`` (resumable) and prints a markdown table.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 from knitlad.config import CutConfig
-from knitlad.io.atomic import atomic_path
 from knitlad.protocol import analyse, cut, propagate, stretch
+
+sys.path.insert(0, str(Path(__file__).parent))
+from ensemble import ensemble_arguments, resumed_rows, save_rows, target_offsets  # noqa: E402
 
 STARTS = ("tiled", "affine")
 
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--size", type=int, default=16, help="knit size N for N x N")
-    p.add_argument("--tensions", type=float, nargs="+", default=[4.0, 13.6], help="target f_x^ini values")
-    p.add_argument("--members", type=int, default=3, help="knits per tension (targets 0.5 %% apart)")
-    p.add_argument("--out", default="runs/stretch_start")
+    ensemble_arguments(p, tensions=[4.0, 13.6], members=3, out="runs/stretch_start")
     args = p.parse_args()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    csv = out / "stretch_start.csv"
-    rows = pd.read_csv(csv).to_dict("records") if csv.exists() else []
+    csv, rows = resumed_rows(args.out, "stretch_start")
     done = {(r["size"], r["fx_nominal"], r["member"], r["start"]) for r in rows}
-    offsets = 0.005 * (np.arange(args.members) - (args.members - 1) / 2)
+    offsets = target_offsets(args.members)
     for fx in args.tensions:
         for k, offset in enumerate(offsets):
             for start in STARTS:
@@ -57,8 +53,7 @@ def main() -> None:
                 print(f"{start:6s} f_x^ini {knit.fx_ini:6.3f} l_x {knit.lx_over_l0:.4f} l_y {knit.ly_over_l0:.4f} "
                       f"({knit.relax_steps} FIRE steps, {wall_stretch:.1f} s): v {r.v_lad_over_cb:.3f} "
                       f"n_lad/n_y {r.n_lad_over_ny:.2f} f_x^fin {r.fx_fin:.2f}", flush=True)
-                with atomic_path(csv) as tmp:
-                    pd.DataFrame(rows).to_csv(tmp, index=False)
+                save_rows(csv, rows)
     df = pd.DataFrame(rows)
     print("\n| N | f_x^ini | start | knits | stretch wall [s] | FIRE steps | l_x/l0 | l_y/l0 | v_lad/c_b | n_lad/n_y | f_x^fin |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")

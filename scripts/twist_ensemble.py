@@ -15,6 +15,7 @@ Writes ``<out>/twist_ensemble.csv`` (resumable) and prints a markdown table.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
@@ -22,23 +23,19 @@ import numpy as np
 import pandas as pd
 
 from knitlad.config import CutConfig
-from knitlad.io.atomic import atomic_path
 from knitlad.protocol import analyse, cut, propagate, stretch
+
+sys.path.insert(0, str(Path(__file__).parent))
+from ensemble import ensemble_arguments, resumed_rows, save_rows, target_offsets  # noqa: E402
 
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--size", type=int, default=16, help="knit size N for N x N")
-    p.add_argument("--tensions", type=float, nargs="+", default=[1.6, 4.0, 13.6], help="target f_x^ini values")
-    p.add_argument("--members", type=int, default=5, help="knits per tension (targets 0.5 %% apart)")
-    p.add_argument("--out", default="runs/twist")
+    ensemble_arguments(p, tensions=[1.6, 4.0, 13.6], members=5, out="runs/twist")
     args = p.parse_args()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    csv = out / "twist_ensemble.csv"
-    rows = pd.read_csv(csv).to_dict("records") if csv.exists() else []
+    csv, rows = resumed_rows(args.out, "twist_ensemble")
     done = {(r["fx_nominal"], r["member"]) for r in rows}
-    offsets = 0.005 * (np.arange(args.members) - (args.members - 1) / 2)
+    offsets = target_offsets(args.members)
     for fx in args.tensions:
         for k, offset in enumerate(offsets):
             if (fx, k) in done:
@@ -56,8 +53,7 @@ def main() -> None:
             print(f"f_x {row['fx_ini']:6.3f}  v {row['v_free']:.4f} -> {row['v_twist']:.4f}   "
                   f"n_lad/n_y {row['n_free']:.3f} -> {row['n_twist']:.3f}   "
                   f"{row['wall_free_s']:.0f} s / {row['wall_twist_s']:.0f} s", flush=True)
-            with atomic_path(csv) as tmp:
-                pd.DataFrame(rows).to_csv(tmp, index=False)
+            save_rows(csv, rows)
     df = pd.DataFrame(rows)
     print("\n| f_x^ini | knits | v_lad/c_b twist-free | with twist | paired change (mean +- s.e.) "
           "| n_lad/n_y twist-free | with twist | wall with / without twist |")

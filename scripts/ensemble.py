@@ -1,0 +1,43 @@
+"""What the ensemble studies of scripts/ share: their options, the targets of an ensemble, a resumable CSV.
+
+An ensemble samples one ladder's run-to-run scatter: force-control targets a fraction of a
+percent apart (:func:`target_offsets`), each knit stretched once and laddered under each
+setting compared. Rows are kept in ``<out>/<name>.csv``, written atomically after every run,
+and read back on a rerun so that finished runs are skipped.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from knitlad.io.atomic import atomic_path
+
+
+def ensemble_arguments(p: argparse.ArgumentParser, tensions: list[float], members: int, out: str) -> None:
+    """The options every ensemble study takes, with its own defaults."""
+    p.add_argument("--size", type=int, default=16, help="knit size N for N x N")
+    p.add_argument("--tensions", type=float, nargs="+", default=tensions, help="target f_x^ini values")
+    p.add_argument("--members", type=int, default=members, help="knits per tension (targets 0.5 %% apart)")
+    p.add_argument("--out", default=out)
+
+
+def target_offsets(members: int) -> np.ndarray:
+    """Relative offsets of the members' targets: 0.5 % apart, centred on the nominal tension."""
+    return 0.005 * (np.arange(members) - (members - 1) / 2)
+
+
+def resumed_rows(out: str | Path, name: str) -> tuple[Path, list[dict]]:
+    """(the CSV of the study, the rows it already holds)."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    csv = out / f"{name}.csv"
+    return csv, pd.read_csv(csv).to_dict("records") if csv.exists() else []
+
+
+def save_rows(csv: Path, rows: list[dict]) -> None:
+    with atomic_path(csv) as tmp:
+        pd.DataFrame(rows).to_csv(tmp, index=False)
