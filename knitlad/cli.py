@@ -245,11 +245,11 @@ def loop(
     """Single-loop model (paper Fig. 5b): a loop under tension f_x lets go of the row above once the row below is removed."""
     import json
 
-    from knitlad.loop_model import LoopRun
+    from knitlad.periodic_loop import run_single_loop
 
     cfg = validated(_config.LoopConfig, options)
     try:
-        result = LoopRun(cfg.settings()).run()
+        result = run_single_loop(cfg.settings())
     except RuntimeError as e:
         typer.echo(f"knitlad: run failed: {e}", err=True)
         raise typer.Exit(1)
@@ -258,10 +258,10 @@ def loop(
         typer.echo(json.dumps(summary, default=float))
         return
     if result.released:
-        typer.echo(f"single loop, f_x = {cfg.fx}, mu = {cfg.mu}: released after tau = {result.tau_s * 1e6:.1f} us, "
+        typer.echo(f"single loop ({cfg.geometry}), f_x = {cfg.fx}, mu = {cfg.mu}: released after tau = {result.tau_s * 1e6:.1f} us, "
                    f"v_lad/c_b = {result.v_lad_over_cb:.3f} (wall {summary['wall_s']:.2f} s)")
     else:
-        typer.echo(f"single loop, f_x = {cfg.fx}, mu = {cfg.mu}: still hooked after {cfg.max_time_ms} ms "
+        typer.echo(f"single loop ({cfg.geometry}), f_x = {cfg.fx}, mu = {cfg.mu}: still hooked after {cfg.max_time_ms} ms "
                    f"(v_lad = 0; wall {summary['wall_s']:.2f} s)")
 
 

@@ -187,17 +187,44 @@ class LoopConfig(_WithPreset):
 
     fx: float = Field(8.0, gt=0, le=40, description="tension per thread pulling the loop's ends, f_x = F/f0 [-]")
     mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient after the release [-]")
-    lx: float = Field(0.30, gt=0.2, le=0.34, description="column width l_x/l0 [-] (wider, the loops no longer overlap)")
+    lx: float = Field(0.30, gt=0.2, le=0.34, description=(
+        "column width l_x/l0 [-] (wider, the loops no longer overlap); geometry tails only: the periodic rows "
+        "take theirs from f_x"))
     ly: float = Field(0.25, gt=0.2, lt=0.35, description="row spacing l_y/l0 [-]")
     resolution: int = Field(36, ge=12, le=280, description="nodes per stitch [-]; default: the preset's")
     max_time_ms: float = Field(1.0, gt=0, le=100, description="longest time simulated after the release [ms]")
+    geometry: Literal["tails", "periodic", "periodic-sinkers", "strip"] = Field("tails", description=(
+        "tails: three one-stitch rows ending in tails (knitlad.loop_model); periodic: rows periodic along the "
+        "course, one stitch per period under the imposed tension; periodic-sinkers: the same with the loop "
+        "row's sinkers held in y; strip: periodic rows of `columns` columns at fixed period, one lower loop "
+        "removed (knitlad.periodic_loop) [-]"))
+    columns: int = Field(8, ge=2, le=32, description="columns of the strip geometry [-]")
+
+    @model_validator(mode="after")
+    def geometry_fields(self) -> "LoopConfig":
+        # a resolved config names every field: only a value other than the default is a mistake
+        defaults = type(self).model_fields
+        if self.geometry != "tails" and self.lx != defaults["lx"].default:
+            raise ValueError(f"lx: the {self.geometry} geometry takes its column width from fx; give lx only "
+                             "with geometry tails")
+        if self.geometry != "strip" and self.columns != defaults["columns"].default:
+            raise ValueError("columns: only the strip geometry has columns")
+        return self
 
     def settings(self, **model_choices):
-        """The run's settings; ``model_choices``: other fields of :class:`knitlad.loop_model.LoopSettings`."""
-        from knitlad.loop_model import LoopSettings
+        """The run's settings; ``model_choices``: other fields of :class:`knitlad.loop_model.LoopSettings`
+        (geometry tails) or :class:`knitlad.periodic_loop.PeriodicLoopSettings`."""
+        if self.geometry == "tails":
+            from knitlad.loop_model import LoopSettings
 
-        return LoopSettings(fx=self.fx, mu=self.mu, lx_over_l0=self.lx, ly_over_l0=self.ly,
-                            nodes_per_stitch=self.resolution, max_time_s=self.max_time_ms * 1e-3, **model_choices)
+            return LoopSettings(fx=self.fx, mu=self.mu, lx_over_l0=self.lx, ly_over_l0=self.ly,
+                                nodes_per_stitch=self.resolution, max_time_s=self.max_time_ms * 1e-3, **model_choices)
+        from knitlad.periodic_loop import PeriodicLoopSettings
+
+        return PeriodicLoopSettings(fx=self.fx, mu=self.mu, ly_over_l0=self.ly, nodes_per_stitch=self.resolution,
+                                    max_time_s=self.max_time_ms * 1e-3,
+                                    columns=self.columns if self.geometry == "strip" else 1,
+                                    sinkers_held=self.geometry == "periodic-sinkers", **model_choices)
 
 
 class StitchConfig(_WithPreset):

@@ -39,6 +39,14 @@ from knitlad.topology import piercings
 from knitlad.units import NYLON, Material
 
 
+def check_tension_and_friction(fx: float, mu: float) -> None:
+    """A single-loop run needs a pulling tension and a non-negative friction coefficient."""
+    if not fx > 0:
+        raise ValueError(f"fx must be > 0, got {fx}")
+    if mu < 0:
+        raise ValueError(f"mu must be >= 0, got {mu}")
+
+
 @dataclass
 class LoopSettings:
     """Inputs of one single-loop run. Lengths as l/l0, tension as f_x, SI otherwise.
@@ -66,10 +74,7 @@ class LoopSettings:
     material: Material = NYLON
 
     def __post_init__(self) -> None:
-        if not self.fx > 0:
-            raise ValueError(f"fx must be > 0, got {self.fx}")
-        if self.mu < 0:
-            raise ValueError(f"mu must be >= 0, got {self.mu}")
+        check_tension_and_friction(self.fx, self.mu)
         if not (self.drag_per_s >= 0 and math.isfinite(self.drag_per_s)):  # before the relaxation, not after
             raise ValueError(f"drag_per_s must be >= 0, got {self.drag_per_s!r}")
 

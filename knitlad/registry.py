@@ -82,9 +82,9 @@ def _attributes_only(result):
 
 
 def run_loop_job(cfg: LoopConfig, output, folder: Path | None = None):
-    from knitlad.loop_model import LoopRun
+    from knitlad.periodic_loop import run_single_loop
 
-    return _attributes_only(LoopRun(cfg.settings()).run())
+    return _attributes_only(run_single_loop(cfg.settings()))
 
 
 def run_stitch_job(cfg: StitchConfig, output, folder: Path | None = None):
@@ -101,7 +101,8 @@ SCENES: dict[str, Scene] = {
         "wall_stretch_s", "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment", stretch_of),
     "loop": Scene(LoopConfig, run_loop_job, (
         "tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before", "steps",
-        "nodes", "wall_s", "job_wall_s"), "`knitlad loop`: the single-loop model"),
+        "nodes", "lx_over_l0", "lx_end_over_l0", "climb_over_ly", "wall_s", "job_wall_s"),
+        "`knitlad loop`: the single-loop model"),
     "stitch": Scene(StitchConfig, run_stitch_job, (
         "fx", "fy", "converged", "max_overlap_over_d", "relax_steps", "wall_s", "job_wall_s"),
         "`knitlad stitch`: the periodised stitch"),

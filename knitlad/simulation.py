@@ -15,7 +15,7 @@ import numpy as np
 
 from knitlad import units
 from knitlad.contact import ContactModel, Contacts, ContactStats, contact_time_step, make_contacts
-from knitlad.kernels.contact import PAIRS_NEEDED, PEAK_OVERLAP, refresh_contacts, touching_pairs_between
+from knitlad.kernels.contact import PAIRS_NEEDED, PEAK_OVERLAP, refresh_contacts, touching_pairs_among
 from knitlad.kernels.integrate import (
     compute_forces,
     fire_relax,
@@ -166,11 +166,15 @@ class Simulation:
         return self.contacts
 
     def touching_pairs(self, yarn_a: int, yarn_b: int) -> int:
-        """Pairs of edges of yarns ``yarn_a`` and ``yarn_b`` touching at the current positions."""
+        """Pairs of edges of yarns ``yarn_a`` and ``yarn_b`` touching now (images along a yarn's own period are it)."""
+        return self.touching_pairs_of_edges(self.contacts.edge_yarn == yarn_a, self.contacts.edge_yarn == yarn_b)
+
+    def touching_pairs_of_edges(self, in_a: np.ndarray, in_b: np.ndarray) -> int:
+        """Pairs of an edge of ``in_a`` and one of ``in_b`` (boolean masks over the edges) touching now."""
         if self.contact_model is None:
             return 0
         m, c = self.model, self.fresh_contacts()
-        return int(touching_pairs_between(self.state.x, m.edge_a, m.edge_b, m.edge_shift, c, yarn_a, yarn_b))
+        return int(touching_pairs_among(self.state.x, m.edge_a, m.edge_b, m.edge_shift, c, in_a, in_b))
 
     def _axial_wave_speed(self) -> float:
         m = self.model

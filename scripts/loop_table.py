@@ -1,12 +1,21 @@
 """The single-loop model's velocity table (paper, Fig. 5c): v_lad/c_b against f_x for mu = 0, 0.4, 0.8.
 
-    python scripts/loop_table.py [--fx 1 2 4 8 12 16 20] [--mu 0 0.4 0.8] [--max-time-ms 1]
+    python scripts/loop_table.py [--geometry tails|periodic|periodic-sinkers|strip] [--columns 8]
+                                 [--fx 1 2 4 8 12 16 20] [--mu 0 0.4 0.8] [--max-time-ms 1]
 
-Prints one row per (mu, f_x) beside the paper's inertial law 0.34 sqrt(f_x), and
-the wall time of each run (the issue's speed goal: one run under 10 s). Then, for
-each mu, the straight line v_lad^2 = v_0^2 + beta^2 f_x through the released runs
-with 2 <= f_x <= 12 (at mu = 0 the paper's law is beta sqrt(f_x), beta = 0.34; v_0 is the
-loop's bending recoil; tests/validation/test_single_loop.py).
+``tails`` is ``knitlad loop`` (:mod:`knitlad.loop_model`); the others are the rows
+periodic along the course (:mod:`knitlad.periodic_loop`): one stitch per period under
+an imposed tension, free in y (``periodic``) or with the loop row's sinkers held in y
+(``periodic-sinkers``), or a strip of ``--columns`` columns at fixed period (``strip``;
+with ``--force-controlled`` its period follows the tension).
+
+Prints one row per (mu, f_x) beside the paper's inertial law 0.34 sqrt(f_x) (mu = 0)
+and the straight line through the paper's two 42 x 42 DER points (mu = 0.4), with the
+wall time of each run; for the periodic geometries also the column width at t_0 and
+at the end, and how far the loop's centroid rose (in l_y: a loop that lets go by
+opening stays near 0, one that climbs out bodily rises by rows). Then, for each mu,
+the straight line v_lad^2 = v_0^2 + beta^2 f_x through the released runs with
+2 <= f_x <= 12 (the paper's mu = 0 law is beta = 0.34, v_0 = 0).
 """
 
 from __future__ import annotations
@@ -19,26 +28,54 @@ import numpy as np
 
 from knitlad.config import LoopConfig
 from knitlad.loop_model import LoopRun
+from knitlad.periodic_loop import PeriodicLoopRun, PeriodicLoopSettings
+from knitlad.plots import PAPER_DER_VELOCITY
+
+
+def paper_fabric(fx: float) -> float:
+    """v_lad/c_b on the straight line through the paper's two 42 x 42 DER points (mu = 0.4)."""
+    (f1, v1), (f2, v2) = PAPER_DER_VELOCITY
+    return v1 + (v2 - v1) * (fx - f1) / (f2 - f1)
+
+
+def run(geometry: str, fx: float, mu: float, args):
+    if geometry == "tails":
+        return LoopRun(LoopConfig(fx=fx, mu=mu, max_time_ms=args.max_time_ms, resolution=args.resolution).settings()).run()
+    settings = PeriodicLoopSettings(fx=fx, mu=mu, nodes_per_stitch=args.resolution, max_time_s=args.max_time_ms * 1e-3,
+                                    columns=args.columns if geometry == "strip" else 1,
+                                    sinkers_held=geometry == "periodic-sinkers",
+                                    force_controlled=True if args.force_controlled else None)
+    return PeriodicLoopRun(settings).run()
 
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--geometry", choices=["tails", "periodic", "periodic-sinkers", "strip"], default="tails")
+    p.add_argument("--columns", type=int, default=8, help="columns of the strip")
+    p.add_argument("--force-controlled", action="store_true", help="the strip's period follows the tension")
     p.add_argument("--fx", type=float, nargs="+", default=[1, 2, 4, 8, 12, 16, 20])
     p.add_argument("--mu", type=float, nargs="+", default=[0.0, 0.4, 0.8])
     p.add_argument("--max-time-ms", type=float, default=1.0)
     p.add_argument("--resolution", type=int, default=36)
     args = p.parse_args()
-    LoopRun(LoopConfig(fx=4.0, mu=0.0, max_time_ms=1e-2).settings()).run()  # compile outside the timings
-    print(f"{'mu':>4s} {'f_x':>5s} {'v_lad/c_b':>9s} {'0.34 sqrt f':>11s} {'tau [us]':>9s} {'released':>8s} {'wall s':>7s}")
+    periodic = args.geometry != "tails"
+    strip = f", {args.columns} columns" + (", force-controlled" if args.force_controlled else "")
+    print(f"# geometry {args.geometry}" + (strip if args.geometry == "strip" else ""))
+    head = f"{'mu':>4s} {'f_x':>5s} {'v_lad/c_b':>9s} {'paper':>6s} {'tau [us]':>9s} {'released':>8s} {'wall s':>7s}"
+    print(head + (f" {'lx0/l0':>7s} {'lx_end':>7s} {'climb/ly':>8s}" if periodic else ""), flush=True)
     fits = []
     for mu in args.mu:
         released = []
         for fx in args.fx:
             t = time.perf_counter()
-            r = LoopRun(LoopConfig(fx=fx, mu=mu, max_time_ms=args.max_time_ms, resolution=args.resolution).settings()).run()
+            r = run(args.geometry, fx, mu, args)
             wall = time.perf_counter() - t
-            print(f"{mu:4.1f} {fx:5.1f} {r.v_lad_over_cb:9.3f} {0.34 * math.sqrt(fx):11.3f} {r.tau_s * 1e6:9.1f} "
-                  f"{str(r.released):>8s} {wall:7.2f}", flush=True)
+            paper = 0.34 * math.sqrt(fx) if mu == 0 else paper_fabric(fx) if mu == 0.4 else math.nan
+            line = (f"{mu:4.1f} {fx:5.1f} {r.v_lad_over_cb:9.3f} {paper:6.3f} {r.tau_s * 1e6:9.1f} "
+                    f"{str(r.released):>8s} {wall:7.2f}")
+            if periodic:
+                line += f" {r.lx_over_l0:7.3f} {r.lx_end_over_l0:7.3f} {r.climb_over_ly:8.2f}"
+            print(line, flush=True)
             if r.released and 2 <= fx <= 12:
                 released.append((fx, r.v_lad_over_cb))
         if len(released) >= 2:

@@ -621,15 +621,14 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
 
 
 @njit(**NUMBA_OPTS)
-def touching_pairs_between(x, edge_a, edge_b, edge_shift, c, yarn_a, yarn_b):
-    """Number of counted touching pairs (overlap > 0) of ``c`` between an edge of ``yarn_a`` and one of ``yarn_b``."""
+def touching_pairs_among(x, edge_a, edge_b, edge_shift, c, in_a, in_b):
+    """Number of counted touching pairs of ``c`` between an edge of the set ``in_a`` and one of the
+    set ``in_b`` (boolean masks over the edges: a part of a yarn and its images, say)."""
     n = 0
     for p in range(c.n_pairs[0]):
         i = c.pairs[p, 0]
         j = c.pairs[p, 1]
-        ya = c.edge_yarn[i]
-        yb = c.edge_yarn[j]
-        if not ((ya == yarn_a and yb == yarn_b) or (ya == yarn_b and yb == yarn_a)):
+        if not ((in_a[i] and in_b[j]) or (in_a[j] and in_b[i])):
             continue
         overlap, _, _ = counted_overlap(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, c.union,
                                         i, j)
