@@ -120,19 +120,24 @@ class TensionBox:
     def lx(self) -> float:
         return self.rows.lx / self.l0
 
-    def energy_derivative(self, rel_step: float = 1e-5) -> float:
-        """dE/dL [internal force] under an affine stretch of the period, nodes otherwise fixed."""
+    def _derivative(self, read, rel_step: float) -> float:
+        """d(read)/dL by central differences under an affine stretch of the period, the state restored."""
         rows, sim = self.rows, self.sim
         lx, x_saved, model = rows.lx, sim.state.x.copy(), sim.model
-        energies = []
+        values = []
         for sign in (1, -1):
             rows.set_period(sim, lx * (1 + sign * rel_step))
-            energies.append(cell_energy(sim, rows))
+            values.append(read())
             sim.state.x[:] = x_saved
             sim.replace_model(edge_shift=model.edge_shift, image_shift=model.image_shift)
             rows.lx = lx
-        sim.fresh_contacts()
-        return (energies[0] - energies[1]) / (2 * rel_step * rows.period)
+        return (values[0] - values[1]) / (2 * rel_step * rows.period)
+
+    def energy_derivative(self, rel_step: float = 1e-5) -> float:
+        """dE/dL [internal force] under an affine stretch of the period, nodes otherwise fixed."""
+        f = self._derivative(lambda: cell_energy(self.sim, self.rows), rel_step)
+        self.sim.fresh_contacts()
+        return f
 
     def tension(self) -> float:
         """Tension per row f_x = (dE/dL) / (rows carrying * f0)."""
@@ -146,16 +151,7 @@ class TensionBox:
 
     def set_response(self, response_s: float, rel_step: float = 1e-3) -> None:
         """gamma from the affine stiffness at the current state."""
-        rows, sim = self.rows, self.sim
-        lx, x_saved, model = rows.lx, sim.state.x.copy(), sim.model
-        forces = []
-        for sign in (1, -1):
-            rows.set_period(sim, lx * (1 + sign * rel_step))
-            forces.append(self.energy_derivative())
-            sim.state.x[:] = x_saved
-            sim.replace_model(edge_shift=model.edge_shift, image_shift=model.image_shift)
-            rows.lx = lx
-        stiffness = (forces[0] - forces[1]) / (2 * rel_step * rows.period)
+        stiffness = self._derivative(self.energy_derivative, rel_step)
         self.gamma = max(stiffness, 1e-12) * response_s / units.TIME
 
     def follow(self, fx: float, elapsed: float) -> float:
