@@ -128,6 +128,8 @@ def tension_history_plot(h5_path: str | Path, path: str | Path) -> Path:
 
 
 PAPER_DER_VELOCITY = ((1.58, 0.176), (15.67, 1.05))  # 42 x 42, mu = 0.4, l_y/l0 = 0.25 (paper, Fig. 7)
+EXPERIMENTS_VELOCITY_SLOPE = 0.1  # the experiments' v_lad/c_b ~ 0.1 f_x^ini (paper, Fig. 5a and eq. 1)
+DAMAGE_CLASSES = (0.2, 1.0, 2.0)  # the paper's classes of n_lad/n_y (Fig. 3e): < 0.2, 0.2-1, 1-2, >= 2
 
 SUMMARY_PLOTS = {
     # file name: (y column, y label, paper figure)
@@ -186,7 +188,7 @@ def summary_plots(df, out_dir: str | Path) -> list[Path]:
         ok = ok[ok["scene"] == "ladder"]  # stitch sweeps: the table says it all
     if not len(ok):
         return paths
-    keys = [k for k in ("ly", "mu", "resolution") if k in ok and ok[k].nunique() > 1] or [None]
+    keys = [k for k in ("ly", "mu", "resolution", "natural_curvature") if k in ok and ok[k].nunique() > 1] or [None]
     groups = ok.groupby(keys if keys != [None] else (lambda _: ""), sort=True)
     for name, (column, label, figure) in SUMMARY_PLOTS.items():
         fig, ax = plt.subplots(figsize=(4.5, 3.4), dpi=120)
@@ -198,6 +200,11 @@ def summary_plots(df, out_dir: str | Path) -> list[Path]:
         if column == "v_lad_over_cb":
             px, py = zip(*PAPER_DER_VELOCITY)
             ax.plot(px, py, "k+", ms=8, label="paper, DER 42 x 42")
+            f = np.array([0.0, float(np.nanmax(ok["fx_ini"]))])
+            ax.plot(f, EXPERIMENTS_VELOCITY_SLOPE * f, "k--", lw=0.8, label="experiments, 0.1 f_x")
+        if column == "n_lad_over_ny":
+            for level in DAMAGE_CLASSES:  # the paper's damage classes
+                ax.axhline(level, color="0.6", ls=":", lw=0.7)
         if column == "fx_fin":
             lim = float(np.nanmax(ok["fx_ini"])) if len(ok) else 1.0
             ax.plot([0, lim], [0, lim], "k:", lw=0.8, label="f_x^fin = f_x^ini")
