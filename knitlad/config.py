@@ -66,7 +66,7 @@ class CutConfig(_WithPreset):
     ADDED_LATER: ClassVar[tuple[str, ...]] = (
         "drag_per_s", "twist", "d_over_l0", "contact_force_f0", "overlap_fraction", "contact_counting", "edge",
         "contact_damping_ratio", "stretch_damping_ratio", "stretch_increment", "steps_per_increment",
-        "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature")
+        "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -112,6 +112,10 @@ class CutConfig(_WithPreset):
     dt_safety: float = Field(0.35, gt=0, le=1, description=(
         "time step of the laddering dynamics, fraction of the stability limit [-]; 0.35: from identical "
         "16 x 16 knits at f_x^ini 4, 0.5 and 0.7 moved v_lad by up to 16 %, 0.35 by 3 % from 0.175 (docs/accuracy.md)"))
+
+    axial_stiffness_factor: float = Field(1.0, gt=0, le=1, description=(
+        "stretching stiffness of the laddering dynamics over the yarn's EA [-]; below 1 the axial waves "
+        "slow down and the step grows as 1/sqrt(factor), every edge keeping its tension at the cut"))
 
     @model_validator(mode="before")
     @classmethod
@@ -169,7 +173,7 @@ class CutConfig(_WithPreset):
             mu=self.mu, contact_counting=Counting(self.contact_counting),
             contact_damping_ratio=self.contact_damping_ratio, stretch_damping_ratio=self.stretch_damping_ratio,
             dt_safety=self.dt_safety, drag_per_s=self.drag_per_s, twist=self.twist,
-            observe_every_s=self.observe_every_us * 1e-6, arrest_s=self.arrest_ms * 1e-3,
+            axial_stiffness_factor=self.axial_stiffness_factor, observe_every_s=self.observe_every_us * 1e-6, arrest_s=self.arrest_ms * 1e-3,
             max_time_s=self.max_time_ms * 1e-3,
             frame_every_s=None if self.frame_every_us is None else self.frame_every_us * 1e-6,
         )

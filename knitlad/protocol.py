@@ -53,7 +53,7 @@ from knitlad.observers import (
 from knitlad.scenes.jersey import BUILD_LX, CourseTooWide, Jersey, KnitScene, build_jersey, widest_fitting_width
 from knitlad.simulation import Simulation, numba_threads
 from knitlad.stitch_model import StitchRun, StitchSettings, zero_tension_lx
-from knitlad.state import cut_edge, with_twist
+from knitlad.state import cut_edge, with_axial_stiffness, with_twist
 from knitlad.stretching import force_control, relax_to_steady_tension, stretch_to
 from knitlad.timestep import critical_time_steps
 from knitlad.units import Material
@@ -126,6 +126,7 @@ class DynamicsSettings:
     dt_safety: float  # time step as a fraction of the stability limit
     drag_per_s: float  # global drag on every node [1/s]; 0 is the physics
     twist: bool  # the yarns carry twist: friction also turns them (the friction couple)
+    axial_stiffness_factor: float  # EA of the dynamics over the yarn's, every edge keeping its tension at the cut
     observe_every_s: float
     arrest_s: float
     max_time_s: float
@@ -467,15 +468,18 @@ def cut(knit: StretchedKnit, dynamics: DynamicsSettings) -> Laddering:
     rods = cut_edge(rods, edge)
     rods = rods.replace_model(
         stretch_damping=rods.model.stretch_damping * (dynamics.stretch_damping_ratio / STRETCH_AXIAL_DAMPING))
+    if dynamics.axial_stiffness_factor != 1.0:
+        rods = with_axial_stiffness(rods, dynamics.axial_stiffness_factor)
     if dynamics.twist and not rods.twist:  # a yarn with natural curvature carries twist from the stretch
         rods = with_twist(rods, m.twisting_stiffness / m.bending_stiffness)
     contact = stretch_contact(s, damping_ratio=dynamics.contact_damping_ratio,
                               tangential_damping_ratio=dynamics.contact_damping_ratio,
                               counting=dynamics.contact_counting)
-    # the cut frees two end nodes: keep the smaller of the stretch's and the new stable step
+    # the cut frees two end nodes: keep the smaller of the stretch's step (of a yarn as soft) and the new stable step
     limit = critical_time_steps(rods.model, rods.twist, contact_time_step(rods.model, contact, spin=rods.twist))
     limit_s = limit.combined * units.TIME
-    sim = Simulation(rods, contact=contact, dt_s=min(knit.dt_s, dynamics.dt_safety * limit_s),
+    stretch_step = knit.dt_s / math.sqrt(dynamics.axial_stiffness_factor)
+    sim = Simulation(rods, contact=contact, dt_s=min(stretch_step, dynamics.dt_safety * limit_s),
                      drag_per_s=dynamics.drag_per_s)
     sim.set_friction(dynamics.mu)
     return Laddering(knit, dynamics, sim, edge, row, column, baseline, time.perf_counter() - t0)

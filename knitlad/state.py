@@ -505,3 +505,25 @@ def with_twist(rods: Rods, twist_over_bending: float) -> Rods:
     state = s.copy()._replace(tangent=tangent, ref_u=ref_u, ref_twist=ref_twist, theta=np.zeros(ne),
                               omega=np.zeros(ne))
     return Rods(model, state, twist=True)
+
+
+def with_axial_stiffness(rods: Rods, factor: float) -> Rods:
+    """A copy whose yarns' stretching stiffness is ``factor`` x EA, every edge keeping its current tension.
+
+    The axial waves (c_E = 44 c_b in the paper's Nylon) and the stiff axial springs set the
+    explicit step; the laddering runs at velocities of order c_b and strains below 1 %.
+    A softer EA' = factor EA lets the step grow as 1/sqrt(factor) (with the contact springs
+    softened alike). The rest lengths are reset so that T = EA (l/l_r - 1) is unchanged at
+    the current lengths, l_r' = l / (1 + T/EA'): the state stays at its equilibrium, and the
+    axial dashpot keeps its fraction of critical damping (it scales as sqrt(EA)).
+    """
+    if not 0 < factor <= 1:
+        raise ValueError(f"the axial stiffness factor must lie in (0, 1], got {factor!r}")
+    m = rods.model
+    ne = m.edge_a.shape[0]
+    elen = np.zeros(ne)
+    edge_vectors(rods.state.x, m.edge_a, m.edge_b, m.edge_shift, np.zeros((ne, 3)), elen)
+    tension = m.EA * (elen / m.rest_length - 1.0)
+    EA = m.EA * factor
+    return rods.replace_model(EA=EA, rest_length=elen / (1.0 + tension / EA),
+                              stretch_damping=m.stretch_damping * np.sqrt(factor))

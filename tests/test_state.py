@@ -80,3 +80,28 @@ def test_a_node_on_a_rail_moves_only_along_it():
     assert abs(tip[1]) < 1e-15 and abs(tip[2]) < 1e-15
     with pytest.raises(ValueError, match="axis"):
         scene.slide(y, [1], (0.0, 0.0, 0.0))
+
+
+def test_a_softer_yarn_keeps_its_tensions_and_takes_a_longer_step():
+    """with_axial_stiffness: EA' = EA/4 with the rest lengths reset, so every force of a stretched,
+    bent rod is unchanged to round-off, and the stretching limit of the step doubles (1/sqrt(factor))."""
+    from knitlad.state import with_axial_stiffness
+    from knitlad.timestep import critical_time_steps
+
+    n = 21
+    s = np.linspace(0.0, 1.0, n)
+    pts = np.stack([0.02 * s, 0.002 * np.sin(np.pi * s), np.zeros(n)], axis=1)
+    scene = kl.Scene(kl.NYLON)
+    y = scene.add_yarn(pts)
+    scene.hold(y, [0, n - 1])
+    rods = scene.build()
+    rods.state.x[:, 0] *= 1.002  # stretched by 0.2 %: every edge under tension
+    before = kl.Simulation(rods.copy())
+    soft = with_axial_stiffness(rods, 0.25)
+    after = kl.Simulation(soft)
+    assert np.allclose(after.work.force, before.work.force, rtol=1e-9, atol=1e-12 * np.abs(before.work.force).max())
+    assert np.allclose(soft.model.EA, 0.25 * rods.model.EA)
+    ratio = critical_time_steps(soft.model, False).stretching / critical_time_steps(rods.model, False).stretching
+    assert ratio == pytest.approx(2.0, rel=0.01)
+    with pytest.raises(ValueError, match="factor"):
+        with_axial_stiffness(rods, 1.5)
