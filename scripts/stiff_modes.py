@@ -26,7 +26,9 @@ import numpy as np
 import pandas as pd
 
 from knitlad.config import CutConfig
+from knitlad.observers import Interpenetration
 from knitlad.protocol import analyse, cut, propagate, stretch
+from knitlad.simulation import SimulationBlowUp
 
 sys.path.insert(0, str(Path(__file__).parent))
 from ensemble import ensemble_arguments, resumed_rows, save_rows, target_offsets  # noqa: E402
@@ -62,13 +64,16 @@ def main() -> None:
                 knit = knits[key]
                 t = time.perf_counter()
                 run = cut(knit, cfg.dynamics_settings())
-                dt = run.sim.dt_s
-                r = analyse(propagate(run))
-                rows.append({"variant": variant, "fx_nominal": fx, "member": k, "fx_ini": knit.fx_ini, "dt_s": dt,
-                             "v": r.v_lad_over_cb, "n_lad": r.n_lad_over_ny, "fx_fin": r.fx_fin, "steps": r.steps,
-                             "wall_s": time.perf_counter() - t})
-                print(f"{variant:>50s} f_x {knit.fx_ini:6.3f}: dt {dt:.3e} s, v {r.v_lad_over_cb:.4f} "
-                      f"n_lad/n_y {r.n_lad_over_ny:.3f} f_x^fin {r.fx_fin:.3f} ({rows[-1]['wall_s']:.0f} s)", flush=True)
+                row = {"variant": variant, "fx_nominal": fx, "member": k, "fx_ini": knit.fx_ini, "dt_s": run.sim.dt_s}
+                try:
+                    r = analyse(propagate(run))
+                    row.update(v=r.v_lad_over_cb, n_lad=r.n_lad_over_ny, fx_fin=r.fx_fin, steps=r.steps, error="")
+                except (Interpenetration, SimulationBlowUp) as e:  # too soft for this tension: a result too
+                    row.update(v=np.nan, n_lad=np.nan, fx_fin=np.nan, steps=run.sim.steps, error=str(e))
+                rows.append({**row, "wall_s": time.perf_counter() - t})
+                print(f"{variant:>50s} f_x {knit.fx_ini:6.3f}: dt {row['dt_s']:.3e} s, v {row['v']:.4f} "
+                      f"n_lad/n_y {row['n_lad']:.3f} f_x^fin {row['fx_fin']:.3f} ({rows[-1]['wall_s']:.0f} s) "
+                      f"{row['error']}", flush=True)
                 save_rows(csv, rows)
     table(pd.DataFrame(rows))
 
@@ -86,6 +91,8 @@ def table(df: pd.DataFrame) -> None:
                 change = (h[col] - ref[col].reindex(h.index)) / ref[col].reindex(h.index)
                 se = change.std(ddof=1) / np.sqrt(change.count()) if change.count() > 1 else float("nan")
                 cells.append(f"{h[col].mean():.3f} | {change.mean():+.1%} +- {se:.1%}")
+            failed = int(h.v.isna().sum())
+            variant = f"{variant} ({failed} failed, see error)" if failed else variant
             print(f"| {variant} | {fx:g} | {len(h)} | {h.dt_s.mean():.2e} | {h.steps.mean():.0f} | "
                   f"{h.wall_s.mean():.0f} s | " + " | ".join(cells) + " |")
 
