@@ -125,12 +125,20 @@ def trusted_attrs(path: Path, job: Job) -> tuple[dict | None, str]:
         return None, f"its file belongs to job {attrs.get('job_id')!r}"
     raw = attrs.get("job_json")
     try:
-        same = (Job.model_validate(raw) if isinstance(raw, dict) else Job.model_validate_json(raw or "")) == job
+        recorded = Job.model_validate(raw) if isinstance(raw, dict) else Job.model_validate_json(raw or "")
+        same = recorded == job or same_configuration(recorded, job)
     except ValueError:
         same = False
     if not same:
         return None, "its file records another configuration"
     return attrs, ""
+
+
+def same_configuration(recorded: Job, job: Job) -> bool:
+    """The two jobs are one run in today's terms: a file written before a field was added to the
+    scene's config records no value for it, and reads as that field's default."""
+    return (recorded.scene, recorded.output) == (job.scene, job.output) and \
+        recorded.scene_config() == job.scene_config()
 
 
 # ---------------------------------------------------------------------- driver

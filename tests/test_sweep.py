@@ -104,6 +104,28 @@ def test_a_field_added_later_keeps_the_ids_of_finished_jobs_at_its_neutral_value
     assert job_id("ladder", {**job.params, "twist": True}, job.output) != job.id
 
 
+def test_a_finished_job_written_before_a_field_was_added_is_still_trusted(tmp_path):
+    """A job file records its resolved config; one written before ``axial_stiffness_factor`` existed
+    lacks it. Read in today's terms (the field at its default) it is the same run: trusted, and a
+    rerun skips it. The same file with another value of a field is not."""
+    import json
+
+    from knitlad.io.hdf5 import write_record
+    from knitlad.runner import job_path, trusted_attrs
+
+    job = expand(SweepConfig.model_validate({"scene": "ladder", "fixed": {**TINY, "lx": 0.35},
+                                             "sweep": {"axes": {"mu": [0.4]}}}))[0]
+    older = json.loads(job.model_dump_json())
+    del older["params"]["axial_stiffness_factor"]
+    path = job_path(tmp_path, job)
+    write_record(path, {"job_id": job.id, "job_json": json.dumps(older), "status": "ok"})
+    attrs, why = trusted_attrs(path, job)
+    assert attrs is not None, why
+    older["params"]["mu"] = 0.0
+    write_record(path, {"job_id": job.id, "job_json": json.dumps(older), "status": "ok"})
+    assert trusted_attrs(path, job) == (None, "its file records another configuration")
+
+
 # ------------------------------------------------------------------ smoke sweep
 @pytest.fixture(scope="module")
 def smoke(tmp_path_factory):
