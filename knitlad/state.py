@@ -515,7 +515,8 @@ def with_axial_stiffness(rods: Rods, factor: float) -> Rods:
     A softer EA' = factor EA lets the step grow as 1/sqrt(factor) (with the contact springs
     softened alike). The rest lengths are reset so that T = EA (l/l_r - 1) is unchanged at
     the current lengths, l_r' = l / (1 + T/EA'): the state stays at its equilibrium, and the
-    axial dashpot keeps its fraction of critical damping (it scales as sqrt(EA)).
+    axial dashpot keeps its fraction of critical damping (it scales as sqrt(EA)). Measured on
+    the laddering, it is not free: EA/4 raises v_lad and f_x^fin by 8 to 18 % (docs/accuracy.md).
     """
     if not 0 < factor <= 1:
         raise ValueError(f"the axial stiffness factor must lie in (0, 1], got {factor!r}")
