@@ -48,10 +48,7 @@ class PeriodicRows:
     def set_period(self, sim, lx: float) -> None:
         """Deform the stack affinely along x to column width ``lx`` [internal]: every node (held
         and railed ones too), the seams and the image shifts."""
-        scale = np.array([lx / self.lx, 1.0, 1.0])
-        sim.state.x[:] *= scale
-        sim.replace_model(edge_shift=sim.model.edge_shift * scale, image_shift=sim.model.image_shift * scale)
-        self.lx = lx
+        self.set_cell(sim, lx, self.ly)
 
     def set_cell(self, sim, lx: float, ly: float) -> None:
         """As :meth:`knitlad.scenes.stitch.PeriodicStitch.set_cell` (for the cell-energy read-out): ``ly`` is
@@ -117,11 +114,7 @@ def build_periodic_rows(stitch_nodes: np.ndarray, lx: float, ly: float, rows: in
         if rest_length.shape != (k,):
             raise ValueError(f"rest_length must have one entry per stitch edge ({k}), got shape {rest_length.shape}")
         m = rods.model
-        local = (np.arange(m.edge_a.shape[0]) - _first_edge(m)[m.node_yarn[m.edge_a]]) % k
+        # every yarn is closed (as many edges as nodes), so its first edge has its first node's index
+        local = (np.arange(m.edge_a.shape[0]) - m.yarn_start[m.node_yarn[m.edge_a]]) % k
         rods = rods.replace_model(rest_length=np.asarray(rest_length, dtype=float)[local])
     return PeriodicRows(rods, rows, columns, lx, ly, images)
-
-
-def _first_edge(model) -> np.ndarray:
-    """Index of each yarn's first edge (every yarn here is closed: as many edges as nodes)."""
-    return model.yarn_start[:-1]
