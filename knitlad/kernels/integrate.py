@@ -75,15 +75,7 @@ def compute_forces(m, s, w, c, twist, contact, drag, dt):
     Returns False if the contact buffer overflowed (forces incomplete).
     """
     follow_images(s.x, s.v, m.image_node, m.image_master, m.image_shift)
-    for i in range(s.x.shape[0]):
-        for k in range(3):
-            w.force[i, k] = m.f_ext[i, k]
-    if drag != 0.0:
-        for i in range(s.x.shape[0]):
-            if m.held[i]:
-                continue  # drag on a held node would leak into its reaction force
-            for k in range(3):
-                w.force[i, k] -= drag * m.mass[i] * s.v[i, k]
+    external_forces(m.f_ext, m.held, m.mass, s.v, drag, w.force)
     w.torque[:] = 0.0
     if twist:
         framed_forces_by_yarn(m, s, w)
@@ -95,6 +87,15 @@ def compute_forces(m, s, w, c, twist, contact, drag, dt):
         contact_forces(s.x, s.v, s.omega, twist, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt, w.force, w.torque)
     rail_forces(m.rail_node, m.rail_axis, w.force)
     return True
+
+
+@njit(**PARALLEL_OPTS)
+def external_forces(f_ext, held, mass, v, drag, force):
+    """force = f_ext - drag m v (the drag on free nodes only: on a held node it would leak into its reaction)."""
+    for i in prange(force.shape[0]):
+        damp = 0.0 if held[i] else drag * mass[i]
+        for k in range(3):
+            force[i, k] = f_ext[i, k] - damp * v[i, k]
 
 
 @njit(**NUMBA_OPTS)
@@ -157,14 +158,36 @@ def kinetic_energy(m, s):
     return k
 
 
+# The per-node kernels take arrays, not the model and state tuples: with parallel=True, Numba
+# (0.68 here) drops writes to a named tuple's array under a branch in a prange loop, silently
+# (numba/numba#5872; seen here as a wrong drift of the held nodes).
+@njit(**PARALLEL_OPTS)
+def kick_nodes(held, mass, force, v, half_dt):
+    """v += half_dt F / m on every free node."""
+    for i in prange(v.shape[0]):
+        if not held[i]:
+            step = half_dt / mass[i]
+            v[i, 0] += force[i, 0] * step
+            v[i, 1] += force[i, 1] * step
+            v[i, 2] += force[i, 2] * step
+
+
+@njit(**PARALLEL_OPTS)
+def drift_nodes(held, v_prescribed, v, x, dt):
+    """x += dt v, a held node moving at its prescribed velocity."""
+    for i in prange(v.shape[0]):
+        if held[i]:
+            v[i, 0] = v_prescribed[i, 0]
+            v[i, 1] = v_prescribed[i, 1]
+            v[i, 2] = v_prescribed[i, 2]
+        x[i, 0] += dt * v[i, 0]
+        x[i, 1] += dt * v[i, 1]
+        x[i, 2] += dt * v[i, 2]
+
+
 @njit(**NUMBA_OPTS)
 def half_kick(m, s, w, half_dt, twist):
-    for i in range(s.x.shape[0]):
-        if not m.held[i]:
-            inv_m = half_dt / m.mass[i]
-            s.v[i, 0] += w.force[i, 0] * inv_m
-            s.v[i, 1] += w.force[i, 1] * inv_m
-            s.v[i, 2] += w.force[i, 2] * inv_m
+    kick_nodes(m.held, m.mass, w.force, s.v, half_dt)
     if twist:
         for j in range(s.theta.shape[0]):
             if not m.theta_held[j]:
@@ -173,12 +196,7 @@ def half_kick(m, s, w, half_dt, twist):
 
 @njit(**NUMBA_OPTS)
 def _drift(m, s, dt, twist):
-    for i in range(s.x.shape[0]):
-        if m.held[i]:
-            for c in range(3):
-                s.v[i, c] = m.v_prescribed[i, c]
-        for c in range(3):
-            s.x[i, c] += dt * s.v[i, c]
+    drift_nodes(m.held, m.v_prescribed, s.v, s.x, dt)
     if twist:
         for j in range(s.theta.shape[0]):
             if m.theta_held[j]:

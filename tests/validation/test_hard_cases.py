@@ -91,7 +91,7 @@ def undamped_weave_energy(safety: float, counting: str = "union") -> np.ndarray:
 
 @pytest.mark.xfail(strict=True, reason=(
     "known defect of the default counting: the contact is counted once per local minimum of the "
-    "distance between two chains of capsules (owns_contact). Where a crossing sits at a kink node of both "
+    "distance between two chains of capsules (counted_overlaps). Where a crossing sits at a kink node of both "
     "yarns, each of the four chord pairs around it has its own minimum (here 64 counted pairs for 16 crossings "
     "at t = 0); they merge into one pair and split again as the crossing moves, and a split at finite overlap "
     "adds three penalties at once. Undamped, this weave gains 3 x its energy in 0.4 ms at any dt. The "
