@@ -57,27 +57,45 @@ def periodicities(course_positions: list[np.ndarray], column_x: np.ndarray, l_x_
     return l_x, l_y
 
 
+def _extreme_near(x: np.ndarray, y: np.ndarray, targets: np.ndarray, w: float, largest: bool) -> np.ndarray:
+    """For each of the sorted ``targets``, the max (``largest``) or min of y over the points with
+    |x - target| < w; NaN where there is none. Targets at least w apart, so a point is near at
+    most the two targets either side of it."""
+    n = targets.shape[0]
+    out = np.full(n, -np.inf if largest else np.inf)
+    after = np.searchsorted(targets, x)
+    for k in (after - 1, after):
+        inside = (k >= 0) & (k < n)
+        near = inside.copy()
+        near[inside] = np.abs(x[inside] - targets[k[inside]]) < w
+        (np.maximum if largest else np.minimum).at(out, k[near], y[near])
+    out[np.isinf(out)] = np.nan
+    return out
+
+
 def cell_overlap(course_positions: list[np.ndarray], column_x: np.ndarray, l_x: float) -> np.ndarray:
     """Overlap (n_courses - 1, n_columns) of the head of course r over the sinkers of course r+1 [length].
 
     ``course_positions`` run bottom to top and include the held edge course on
     top, so every free course has a course above it. Positive: the cell holds.
+    The head of column i is the highest point of course r within l_x/4 of the column's x;
+    its sinkers are the lowest points of course r+1 within l_x/4 of x -+ l_x/2.
     """
     n_rows = len(course_positions) - 1
     n_cols = column_x.shape[0]
-    out = np.full((n_rows, n_cols), np.nan)
     w = 0.25 * l_x
+    out = np.full((n_rows, n_cols), np.nan)
     for r in range(n_rows):
         below = course_positions[r]
         above = course_positions[r + 1]
-        for i, xc in enumerate(column_x):
-            head = below[np.abs(below[:, 0] - xc) < w, 1]
-            left = above[np.abs(above[:, 0] - (xc - 0.5 * l_x)) < w, 1]
-            right = above[np.abs(above[:, 0] - (xc + 0.5 * l_x)) < w, 1]
-            # the outer side of an edge column is the course's tail, not a sinker
-            sides = [side.min() for side, inner in ((left, i > 0), (right, i < n_cols - 1)) if side.size and inner]
-            if head.size and sides:
-                out[r, i] = head.max() - max(sides)
+        head = _extreme_near(below[:, 0], below[:, 1], column_x, w, largest=True)
+        left = _extreme_near(above[:, 0], above[:, 1], column_x - 0.5 * l_x, w, largest=False)
+        right = _extreme_near(above[:, 0], above[:, 1], column_x + 0.5 * l_x, w, largest=False)
+        # the outer side of an edge column is the course's tail, not a sinker
+        left[0] = np.nan
+        right[-1] = np.nan
+        sinker = np.fmax(left, right)  # the higher sinker, or the one there is
+        out[r] = head - sinker
     return out
 
 

