@@ -65,9 +65,7 @@ def _extreme_near(x: np.ndarray, y: np.ndarray, targets: np.ndarray, w: float, l
     out = np.full(n, -np.inf if largest else np.inf)
     after = np.searchsorted(targets, x)
     for k in (after - 1, after):
-        inside = (k >= 0) & (k < n)
-        near = inside.copy()
-        near[inside] = np.abs(x[inside] - targets[k[inside]]) < w
+        near = (k >= 0) & (k < n) & (np.abs(x - targets[np.clip(k, 0, n - 1)]) < w)
         (np.maximum if largest else np.minimum).at(out, k[near], y[near])
     out[np.isinf(out)] = np.nan
     return out

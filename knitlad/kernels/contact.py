@@ -120,7 +120,7 @@ def segment_distance(x, edge_a, edge_b, edge_shift, i, j):
 @njit(**NUMBA_OPTS)
 def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out):
     """Narrow phase of the pairs p in [lo, hi): overlap, s, t into ``out[p, OVERLAP]``, ``out[p, S_PAIR]``,
-    ``out[p, T_PAIR]``. The overlap is <= 0 when apart or, with ``union`` counting, when the contact
+    ``out[p, T_PAIR]``. The overlap is 0 when apart or, with ``union`` counting, when the contact
     belongs to a neighbouring edge (else every touching pair counts: ``all_pairs``).
 
     The union rule: at an interior node the capsules of edges i and i' (its neighbour) overlap.
@@ -152,7 +152,7 @@ def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge
                     owned = t_next <= 0.0
             if not owned:
                 overlap = 0.0
-        out[p, OVERLAP] = overlap
+        out[p, OVERLAP] = max(overlap, 0.0)
         out[p, S_PAIR] = s
         out[p, T_PAIR] = t
 
@@ -365,7 +365,6 @@ def pair_contact_forces(
             slip[p, 0] = 0.0
             slip[p, 1] = 0.0
             slip[p, 2] = 0.0
-            out[p, OVERLAP] = 0.0
             continue
         s = out[p, S_PAIR]
         t = out[p, T_PAIR]
