@@ -66,7 +66,8 @@ class CutConfig(_WithPreset):
     ADDED_LATER: ClassVar[tuple[str, ...]] = (
         "drag_per_s", "twist", "d_over_l0", "contact_force_f0", "overlap_fraction", "contact_counting", "edge",
         "contact_damping_ratio", "stretch_damping_ratio", "stretch_increment", "steps_per_increment",
-        "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor")
+        "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor",
+        "twist_inertia_factor", "framed_twist")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -86,7 +87,7 @@ class CutConfig(_WithPreset):
         "42 x 42 runs to the paper's two DER velocities (docs/accuracy.md); 3e4 stops the ladder"))
     twist: bool = Field(False, description=(
         "the yarns carry twist during the laddering, so friction also turns them (the friction couple) [-]; "
-        "about 1.7 x the laddering's cost (42 x 42 at f_x 13.6, 2026-12-02)"))
+        "about 1.45 x the laddering's cost (42 x 42 at f_x 13.6, 2026-12-02)"))
     # --- the model's choices
     d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description="yarn diameter over stitch length d/l0 [-] (the paper: 1/70)")
     contact_force_f0: float = Field(20.0, gt=0, description=(
@@ -117,6 +118,18 @@ class CutConfig(_WithPreset):
         "stretching stiffness of the laddering dynamics over the yarn's EA [-]; below 1 the axial waves "
         "slow down and the step grows as 1/sqrt(factor), every edge keeping its tension at the cut. 0.25 moved "
         "v_lad by +8 % (f_x 4) and +18 % (13.6), f_x^fin by +14 % and +18 % (16 x 16, docs/accuracy.md)"))
+
+    twist_inertia_factor: float = Field(1.0, ge=1, le=1000, description=(
+        "with twist: the yarn's inertia about its axis in the laddering dynamics over rho_L d^2/8 per length [-]; "
+        "above 1 the friction couple's spin mode allows a longer step: 4 takes 11 % fewer steps and moved v_lad "
+        "by +1 to +3 %, n_lad/n_y by -3 to +5 % (16 x 16); 16 and 64 slowed the ladder by 8 % and 16-30 % at "
+        "f_x 4: the yarns roll at the contacts (docs/accuracy.md)"))
+
+    framed_twist: bool = Field(False, description=(
+        "with twist and no natural curvature: bend and twist through material frames (framed DER, the "
+        "averaged material curvature) instead of the frame-free isotropic path (|kb|^2 and the reference "
+        "twist by holonomy), whose bent hinges are a little softer in twist (by B |kb|^2 / 4GJ, 4 % in the median "
+        "hinge); about 1.3 x the laddering's cost: for comparisons [-]"))
 
     @model_validator(mode="before")
     @classmethod
@@ -174,7 +187,9 @@ class CutConfig(_WithPreset):
             mu=self.mu, contact_counting=Counting(self.contact_counting),
             contact_damping_ratio=self.contact_damping_ratio, stretch_damping_ratio=self.stretch_damping_ratio,
             dt_safety=self.dt_safety, drag_per_s=self.drag_per_s, twist=self.twist,
-            axial_stiffness_factor=self.axial_stiffness_factor, observe_every_s=self.observe_every_us * 1e-6, arrest_s=self.arrest_ms * 1e-3,
+            axial_stiffness_factor=self.axial_stiffness_factor, twist_inertia_factor=self.twist_inertia_factor,
+            framed_twist=self.framed_twist,
+            observe_every_s=self.observe_every_us * 1e-6, arrest_s=self.arrest_ms * 1e-3,
             max_time_s=self.max_time_ms * 1e-3,
             frame_every_s=None if self.frame_every_us is None else self.frame_every_us * 1e-6,
         )

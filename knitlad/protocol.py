@@ -127,6 +127,8 @@ class DynamicsSettings:
     drag_per_s: float  # global drag on every node [1/s]; 0 is the physics
     twist: bool  # the yarns carry twist: friction also turns them (the friction couple)
     axial_stiffness_factor: float  # EA of the dynamics over the yarn's, every edge keeping its tension at the cut
+    twist_inertia_factor: float  # the yarn's inertia about its axis in the dynamics over rho_L d^2/8 per length
+    framed_twist: bool  # twist through material frames even for yarns straight at rest (for comparisons)
     observe_every_s: float
     arrest_s: float
     max_time_s: float
@@ -472,6 +474,10 @@ def cut(knit: StretchedKnit, dynamics: DynamicsSettings) -> Laddering:
         rods = with_axial_stiffness(rods, dynamics.axial_stiffness_factor)
     if dynamics.twist and not rods.twist:  # a yarn with natural curvature carries twist from the stretch
         rods = with_twist(rods, m.twisting_stiffness / m.bending_stiffness)
+    if rods.twist and dynamics.twist_inertia_factor != 1.0:
+        # a heavier spin lets the friction couple's spin mode take a longer step; it is not free: the yarns
+        # roll at the contacts, so the spin inertia enters the ladder (docs/accuracy.md, default 1)
+        rods = rods.replace_model(twist_inertia=rods.model.twist_inertia * dynamics.twist_inertia_factor)
     contact = stretch_contact(s, damping_ratio=dynamics.contact_damping_ratio,
                               tangential_damping_ratio=dynamics.contact_damping_ratio,
                               counting=dynamics.contact_counting)
@@ -480,7 +486,7 @@ def cut(knit: StretchedKnit, dynamics: DynamicsSettings) -> Laddering:
     limit_s = limit.combined * units.TIME
     stretch_step = knit.dt_s / math.sqrt(dynamics.axial_stiffness_factor)
     sim = Simulation(rods, contact=contact, dt_s=min(stretch_step, dynamics.dt_safety * limit_s),
-                     drag_per_s=dynamics.drag_per_s)
+                     drag_per_s=dynamics.drag_per_s, framed_twist=dynamics.framed_twist)
     sim.set_friction(dynamics.mu)
     return Laddering(knit, dynamics, sim, edge, row, column, baseline, time.perf_counter() - t0)
 

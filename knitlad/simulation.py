@@ -17,6 +17,9 @@ from knitlad import units
 from knitlad.contact import ContactModel, Contacts, ContactStats, contact_time_step, make_contacts
 from knitlad.kernels.contact import PAIRS_NEEDED, PEAK_OVERLAP, refresh_contacts, touching_pairs_among
 from knitlad.kernels.integrate import (
+    TWIST_FRAMED,
+    TWIST_OFF,
+    TWIST_STRAIGHT,
     compute_forces,
     fire_relax,
     first_bad_node,
@@ -64,14 +67,16 @@ class Simulation:
     drag_per_s: global viscous drag rate [1/s] (0 for true dynamics).
     guard_every: steps between blow-up checks.
     contact: yarn-yarn contact (:class:`knitlad.contact.ContactModel`), or None.
+    framed_twist: with twist, bend and twist through material frames even without natural curvature.
     """
 
     def __init__(self, rods: Rods, dt_s: float | None = None, safety: float = DEFAULT_SAFETY, drag_per_s: float = 0.0,
-                 guard_every: int = 500, contact: ContactModel | None = None) -> None:
+                 guard_every: int = 500, contact: ContactModel | None = None, framed_twist: bool = False) -> None:
         if not 0.0 < safety <= 1.0:
             raise ValueError(f"safety must lie in (0, 1], got {safety}")
         self.rods = rods
         self.twist = rods.twist
+        self.framed_twist = bool(framed_twist)
         self.work = Workspace.for_model(self.model)
         self.contact_model = contact
         self.contacts: Contacts = make_contacts(rods, contact)
@@ -93,7 +98,7 @@ class Simulation:
 
     def compute_forces(self) -> None:
         """Forces and torques of the current state into ``self.work`` (growing the contact buffer if needed)."""
-        while not compute_forces(self.model, self.state, self.work, self.contacts, self.twist, self.has_contact,
+        while not compute_forces(self.model, self.state, self.work, self.contacts, self.twist_mode, self.has_contact,
                                  self.drag, self.dt):
             self._grow_contacts()
 
@@ -188,6 +193,12 @@ class Simulation:
         return self.dt * units.TIME
 
     @property
+    def twist_mode(self) -> int:
+        """The kernels' twist mode: framed DER for natural curvature (or ``framed_twist``), else the frame-free path."""
+        framed = self.framed_twist or np.any(self.model.kappa_bar)
+        return TWIST_OFF if not self.twist else TWIST_FRAMED if framed else TWIST_STRAIGHT
+
+    @property
     def time_s(self) -> float:
         return self.time * units.TIME
 
@@ -196,12 +207,12 @@ class Simulation:
         left = int(n_steps)
         while left > 0:
             chunk = min(left, self.guard_every)
-            done = verlet_steps(self.model, self.state, self.work, self.contacts, self.dt, chunk, self.twist,
+            done = verlet_steps(self.model, self.state, self.work, self.contacts, self.dt, chunk, self.twist_mode,
                                 self.has_contact, self.drag)
             if done < chunk:
                 # the contact buffer overflowed inside step `done`: grow it and close that step
                 self.compute_forces()
-                half_kick(self.model, self.state, self.work, 0.5 * self.dt, self.twist)
+                half_kick(self.model, self.state, self.work, 0.5 * self.dt, self.twist_mode)
                 done += 1
             self.steps += done
             self.time += done * self.dt
@@ -248,7 +259,7 @@ class Simulation:
         while True:
             steps, fmax, tmax = fire_relax(
                 self.model, self.state, self.work, self.contacts, 0.5 * self.dt, self.dt, int(max_steps), ftol, ttol,
-                self.twist, self.has_contact,
+                self.twist_mode, self.has_contact,
             )
             if steps >= 0:
                 break
@@ -280,24 +291,25 @@ class Simulation:
         r[~self.model.held] = 0.0
         return r
 
-    def energy_history(self, samples: int, every_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """Step the run ``samples`` times by ``every_s`` (whole steps, at least one); the total and
-        kinetic energy [J] at the start and after each interval, as two arrays of samples + 1."""
-        n = max(1, int(round(every_s / self.dt_s)))
-        total, kinetic = [], []
-        for k in range(samples + 1):
-            if k:
-                self.step(n)
-            e = self.energies_J()
-            total.append(e["total"])
-            kinetic.append(e["kinetic"])
-        return np.array(total), np.array(kinetic)
-
     def energies_J(self) -> dict[str, float]:
         """Kinetic, stretching, bending, twisting, contact (stored), external-potential and total energy [J]."""
-        es, eb, et, ec, ext = potential_energy(self.model, self.state, self.work, self.contacts, self.twist,
+        es, eb, et, ec, ext = potential_energy(self.model, self.state, self.work, self.contacts, self.twist_mode,
                                                self.has_contact)
         ek = kinetic_energy(self.model, self.state)
         e = {"kinetic": ek, "stretching": es, "bending": eb, "twisting": et, "contact": ec, "external": ext}
         e["total"] = sum(e.values())
         return {k: float(v) * units.ENERGY for k, v in e.items()}
+
+
+def energy_history(sim: Simulation, samples: int, every_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Step ``sim`` ``samples`` times by ``every_s`` (whole steps, at least one); the total and
+    kinetic energy [J] at the start and after each interval, as two arrays of samples + 1."""
+    n = max(1, int(round(every_s / sim.dt_s)))
+    total, kinetic = [], []
+    for k in range(samples + 1):
+        if k:
+            sim.step(n)
+        e = sim.energies_J()
+        total.append(e["total"])
+        kinetic.append(e["kinetic"])
+    return np.array(total), np.array(kinetic)

@@ -2,6 +2,7 @@
 
     python scripts/bitwise_check.py --save runs/bitwise.npz      # before a change
     python scripts/bitwise_check.py --compare runs/bitwise.npz   # after it: identical, or where it differs
+    python scripts/bitwise_check.py --twist --save runs/bitwise_twist.npz   # the yarns carrying twist
 
 The knit is stretched to f_x^ini = 8 by force control (24 nodes per stitch), cut, and
 stepped 3,000 times. A change that only moves code must leave every position and
@@ -19,13 +20,13 @@ from knitlad.config import CutConfig
 from knitlad.protocol import cut, stretch
 
 
-def ladder_after_3000_steps() -> dict:
-    cfg = CutConfig(n_x=16, n_y=16, fx=8.0)
+def ladder_after_3000_steps(twist: bool) -> dict:
+    cfg = CutConfig(n_x=16, n_y=16, fx=8.0, twist=twist)
     knit = stretch(cfg.stretch_settings())
     run = cut(knit, cfg.dynamics_settings())
     run.sim.step(3000)
     return {"stretched": knit.knit.rods.state.x, "x": run.sim.state.x, "v": run.sim.state.v,
-            "fx": knit.fx_ini, "dt": run.sim.dt}
+            "theta": run.sim.state.theta, "fx": knit.fx_ini, "dt": run.sim.dt}
 
 
 def main() -> None:
@@ -33,15 +34,16 @@ def main() -> None:
     group = p.add_mutually_exclusive_group(required=True)
     group.add_argument("--save", help="write the reference (.npz)")
     group.add_argument("--compare", help="compare with a reference (.npz)")
+    p.add_argument("--twist", action="store_true", help="the yarns carry twist (framed DER)")
     args = p.parse_args()
     t = time.perf_counter()
-    now = ladder_after_3000_steps()
+    now = ladder_after_3000_steps(args.twist)
     if args.save:
         np.savez(args.save, **now)
         print(f"saved {args.save} ({time.perf_counter() - t:.0f} s)")
         return
     ref = np.load(args.compare)
-    for key in ("stretched", "x", "v"):
+    for key in ("stretched", "x", "v", "theta"):
         same = np.array_equal(now[key], ref[key])
         print(f"{key:10s} identical: {same}" + ("" if same else f"  (max |diff| {np.abs(now[key] - ref[key]).max():.3e})"))
     print(f"f_x^ini {now['fx']} (reference {float(ref['fx'])}), dt {now['dt']} (reference {float(ref['dt'])}); "

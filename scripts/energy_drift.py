@@ -32,6 +32,7 @@ from knitlad.contact import COUNTING, ContactModel  # noqa: E402
 from knitlad.config import CutConfig  # noqa: E402
 from knitlad.protocol import cut, stretch  # noqa: E402
 from knitlad.scenes.weave import plain_weave  # noqa: E402
+from knitlad.simulation import energy_history  # noqa: E402
 
 
 def undamped_contact(counting: str, material=kl.NYLON) -> ContactModel:
@@ -56,7 +57,7 @@ def weave_energy(safety: float, counting: str, samples: int = 8, every_s: float 
 
 def sample(sim: kl.Simulation, samples: int, every_s: float) -> dict:
     t0 = time.perf_counter()
-    total, kinetic = sim.energy_history(samples, every_s)
+    total, kinetic = energy_history(sim, samples, every_s)
     e0 = total[0]
     return {
         "dt_s": sim.dt_s,

@@ -1,6 +1,7 @@
 """The paper's DER points: `knitlad cut` at f_x^ini = 1.58, 4, 8, 13.6, 15.67 (l_y/l0 = 0.25).
 
     python scripts/ladder_tensions.py [--stitches 42] [--resolution 24] [--fx 1.58 4 8 13.6 15.67]
+                                      [--twist] [--cut-args="--twist-inertia-factor 4"]
 
 Prints a table beside the paper's values (DER, 42 x 42, mu = 0.4: v_lad/c_b =
 0.176 at f_x^ini = 1.58 and 1.05 at 15.67; the points between are read off
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import subprocess
 import sys
 import tempfile
@@ -23,14 +25,17 @@ def main() -> None:
     p.add_argument("--stitches", default="42")
     p.add_argument("--resolution", type=int, default=24)
     p.add_argument("--fx", type=float, nargs="+", default=[1.58, 4.0, 8.0, 13.6, 15.67])
+    p.add_argument("--twist", action="store_true", help="the yarns carry twist (knitlad cut --twist)")
+    p.add_argument("--cut-args", default="", help="further options of `knitlad cut`, as one string")
     args = p.parse_args()
+    extra = (["--twist"] if args.twist else []) + shlex.split(args.cut_args)
     print(f"{'fx target':>9s} {'fx_ini':>7s} {'fx_fin':>7s} {'n_lad/n_y':>9s} {'v_lad/c_b':>9s} {'paper v':>8s} "
           f"{'l_x/l0':>7s} {'l_y/l0':>7s} {'wall s':>7s}  stop")
     for fx in args.fx:
         with tempfile.TemporaryDirectory() as out:
             proc = subprocess.run(
                 [sys.executable, "-m", "knitlad.cli", "cut", "--fx", str(fx), "--stitches", args.stitches,
-                 "--resolution", str(args.resolution), "--out", out, "--json"],
+                 "--resolution", str(args.resolution), "--out", out, "--json", *extra],
                 capture_output=True, text=True,
             )
         if proc.returncode != 0:

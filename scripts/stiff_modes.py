@@ -10,7 +10,10 @@ the steps and the wall time of the dynamics.
 
     python scripts/stiff_modes.py [--size 16] [--tensions 4 13.6] [--members 3]
         [--variants axial_stiffness_factor=0.25 axial_stiffness_factor=0.25,overlap_fraction=0.2 ...]
-        [--out runs/stiff_modes]
+        [--base twist=true] [--out runs/stiff_modes]
+
+``--base``: settings of every run, the reference's too (``twist=true`` compares the variants
+of the twisting yarn, e.g. ``twist_inertia_factor=16``).
 
 Writes ``<out>/stiff_modes.csv`` (resumable) and prints a markdown table.
 """
@@ -45,7 +48,9 @@ def main() -> None:
     ensemble_arguments(p, tensions=[4.0, 13.6], members=3, out="runs/stiff_modes")
     p.add_argument("--variants", nargs="*", default=DEFAULT_VARIANTS, help="comma-separated name=value settings")
     p.add_argument("--resolution", type=int, default=24, help="nodes per stitch")
+    p.add_argument("--base", nargs="*", default=[], help="name=value settings of every run, the reference's too")
     args = p.parse_args()
+    base = parse_settings(args.base)
     variants = [REFERENCE] + [v for v in args.variants if v != REFERENCE]
     csv, rows = resumed_rows(args.out, "stiff_modes")
     done = {(r["variant"], r["fx_nominal"], r["member"]) for r in rows}
@@ -55,7 +60,7 @@ def main() -> None:
             for variant in variants:
                 if (variant, fx, k) in done:
                     continue
-                settings = {} if variant == REFERENCE else parse_settings(variant.split(","))
+                settings = base | ({} if variant == REFERENCE else parse_settings(variant.split(",")))
                 cfg = CutConfig(n_x=args.size, n_y=args.size, fx=fx * (1 + offset), resolution=args.resolution,
                                 **settings)
                 key = cfg.stretch_settings()

@@ -1,11 +1,18 @@
-"""Reference frames (knitlad.kernels.frames): the signed angle that advances the reference twist."""
+"""Reference frames (knitlad.kernels.frames): the signed angle that advances the reference twist, and the
+reference twist by the holonomy of the tangents."""
 
 import math
 
 import numpy as np
 import pytest
 
-from knitlad.kernels.frames import _signed_angle
+from knitlad.kernels.frames import (
+    _signed_angle,
+    parallel_transport,
+    reference_twist_by_holonomy,
+    transport_reference_frames,
+    update_reference_twist,
+)
 
 
 @pytest.mark.parametrize("angle", [0.0, 1e-12, -3e-9, 2e-6, -7e-5, 9.99e-4, 1.0e-3, 0.3, -2.0, 3.1])
@@ -24,3 +31,48 @@ def test_signed_angle_is_atan2_to_round_off(angle):
     # numpy's), and so does the angle; dropping the z^3/3 term would miss by 3e-10 at z = 1e-3
     assert abs(got - exact) <= 4e-16 * (1.0 + abs(exact))
     assert abs(got - angle) <= 1e-15 * (1.0 + abs(angle))
+
+
+def wavy_helix(n: int, rng) -> np.ndarray:
+    s = np.linspace(0.0, 4.0 * np.pi, n)
+    return np.column_stack([np.cos(s), np.sin(s), 0.3 * s]) + rng.normal(scale=0.05, size=(n, 3))
+
+
+@pytest.mark.parametrize("step, n_steps", [(1e-4, 400), (1e-2, 60)])
+def test_the_reference_twist_by_holonomy_is_that_of_the_transported_frames(step, n_steps):
+    """reference_twist_by_holonomy advances the reference twist as transport_reference_frames +
+    update_reference_twist do (Gauss-Bonnet: the holonomy of the tangents' quadrilateral), over
+    many steps of a wobbling helix: small steps like a run's, and large ones (0.03 of an edge)."""
+    # the helix's edges are 0.33 long: the walk stays well short of folding a hinge back
+    rng = np.random.default_rng(11)
+    x = wavy_helix(40, rng)
+    n_edges = x.shape[0] - 1
+    h0 = np.arange(n_edges - 1)
+    h1 = h0 + 1
+
+    def edges(x):
+        e = np.ascontiguousarray(x[1:] - x[:-1])
+        return e, np.linalg.norm(e, axis=1)
+
+    e, elen = edges(x)
+    tangent = e / elen[:, None]
+    ref_u = np.zeros_like(tangent)
+    first = np.cross(tangent[0], [0.0, 0.0, 1.0])
+    ref_u[0] = first / np.linalg.norm(first)
+    for k in range(1, n_edges):  # Bishop: ref_twist starts at zero
+        u = np.array(parallel_transport(*ref_u[k - 1], *tangent[k - 1], *tangent[k]))
+        ref_u[k] = u / np.linalg.norm(u)
+    framed = np.zeros(n_edges - 1)
+    update_reference_twist(tangent, ref_u, h0, h1, framed)
+    assert np.abs(framed).max() < 1e-12
+    holonomy = framed.copy()
+    tangent_h = tangent.copy()
+    for _ in range(n_steps):
+        x = x + rng.normal(scale=step, size=x.shape)
+        e, elen = edges(x)
+        transport_reference_frames(e, elen, tangent, ref_u)
+        update_reference_twist(tangent, ref_u, h0, h1, framed)
+        reference_twist_by_holonomy(tangent_h, e, elen, h0, h1, holonomy)
+        tangent_h[:] = e / elen[:, None]
+    assert np.abs(framed).max() > 20 * step  # the frames have turned
+    np.testing.assert_allclose(holonomy, framed, rtol=0, atol=1e-13)

@@ -197,6 +197,19 @@ def test_with_twist_the_laddering_yarns_spin_and_the_time_step_allows_for_it():
     assert np.isfinite(twisted.sim.state.x).all()
 
 
+def test_a_heavier_spin_softens_only_the_friction_couples_share_of_the_contact_limit():
+    """twist_inertia_factor K: I -> K I on every edge, so the spin term of the contact limit,
+    omega^2 = 2 z (k_n + k_t)/m + 2 z k_t r^2/I, falls as 1/K and the rest is unchanged."""
+    base = dict(n_x=4, n_y=4, resolution=16, lx=0.34)
+    knit = stretch(config(**base).stretch_settings())
+    plain, spin1, spin4 = (cut(knit, config(**base, **kw).dynamics_settings())
+                           for kw in ({}, {"twist": True}, {"twist": True, "twist_inertia_factor": 4.0}))
+    np.testing.assert_allclose(spin4.sim.model.twist_inertia, 4.0 * spin1.sim.model.twist_inertia, rtol=1e-15)
+    omega2 = [dt ** -2.0 for dt in (plain.sim.limits.contact, spin1.sim.limits.contact, spin4.sim.limits.contact)]
+    assert omega2[1] > omega2[0] * 1.1  # the couple's share is not negligible
+    assert omega2[2] == pytest.approx(omega2[0] + (omega2[1] - omega2[0]) / 4.0, rel=1e-12)
+
+
 def test_cut_edge_cuts_every_array_along_its_axis():
     """cut_edge removes one entry of every edge array and the hinges of that edge, whatever the
     fields: each field of the model and the state declares its axis once (MODEL_AXES, STATE_AXES)."""

@@ -94,3 +94,21 @@ def _free_rod():
     pts[:, 0] = np.linspace(0, 0.02, 11)
     scene.add_yarn(pts)
     return scene.build()
+
+
+def test_the_twist_path_is_framed_only_where_the_yarn_has_natural_curvature():
+    """Twist through material frames for natural curvature (or when asked), else the frame-free path."""
+    from knitlad.kernels.integrate import TWIST_FRAMED, TWIST_OFF, TWIST_STRAIGHT
+
+    s = np.linspace(0.0, 3e-3, 13)
+    arc = np.column_stack([s, 0.2 * s**2 / 3e-3, 0 * s])
+
+    def sim(twist, natural_curvature="straight", **kw):
+        scene = kl.Scene()
+        scene.add_yarn(arc, natural_curvature=natural_curvature)
+        return kl.Simulation(scene.build(twist=twist), **kw)
+
+    assert sim(False).twist_mode == TWIST_OFF
+    assert sim(True).twist_mode == TWIST_STRAIGHT
+    assert sim(True, framed_twist=True).twist_mode == TWIST_FRAMED
+    assert sim(True, natural_curvature="rest").twist_mode == TWIST_FRAMED

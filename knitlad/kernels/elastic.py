@@ -87,6 +87,27 @@ def stretching_energy(elen, rest_length, EA):
     return total
 
 
+@njit(inline="always", **NUMBA_OPTS)
+def _isotropic_bending_gradient(ax, ay, az, bx, by, bz, la, lb, s):
+    """kb and (dE/da, dE/db) of E = s |kb|^2 / 2 at the hinge of edges a, b (see :func:`bending_forces`)."""
+    inv_D = 1.0 / (la * lb + dot(ax, ay, az, bx, by, bz))
+    cx, cy, cz = cross(ax, ay, az, bx, by, bz)
+    kbx, kby, kbz = 2.0 * cx * inv_D, 2.0 * cy * inv_D, 2.0 * cz * inv_D
+    rx, ry, rz = s * kbx, s * kby, s * kbz
+    kr = dot(kbx, kby, kbz, rx, ry, rz)
+    brx, bry, brz = cross(bx, by, bz, rx, ry, rz)
+    arx, ary, arz = cross(ax, ay, az, rx, ry, rz)
+    fa = lb / la
+    fb = la / lb
+    gax = (2.0 * brx - kr * (fa * ax + bx)) * inv_D
+    gay = (2.0 * bry - kr * (fa * ay + by)) * inv_D
+    gaz = (2.0 * brz - kr * (fa * az + bz)) * inv_D
+    gbx = (-2.0 * arx - kr * (fb * bx + ax)) * inv_D
+    gby = (-2.0 * ary - kr * (fb * by + ay)) * inv_D
+    gbz = (-2.0 * arz - kr * (fb * bz + az)) * inv_D
+    return kbx, kby, kbz, gax, gay, gaz, gbx, gby, gbz
+
+
 @njit(**NUMBA_OPTS)
 def bending_forces(e, elen, edge_a, edge_b, hinge_e0, hinge_e1, B_over_l, F, first=0, last=-1):
     """Isotropic DER bending of a rod straight at rest (no material frame).
@@ -103,27 +124,40 @@ def bending_forces(e, elen, edge_a, edge_b, hinge_e0, hinge_e1, B_over_l, F, fir
     for h in range(first, last):
         k0 = hinge_e0[h]
         k1 = hinge_e1[h]
-        ax, ay, az = e[k0, 0], e[k0, 1], e[k0, 2]
-        bx, by, bz = e[k1, 0], e[k1, 1], e[k1, 2]
+        _, _, _, gax, gay, gaz, gbx, gby, gbz = _isotropic_bending_gradient(
+            e[k0, 0], e[k0, 1], e[k0, 2], e[k1, 0], e[k1, 1], e[k1, 2], elen[k0], elen[k1], B_over_l[h])
+        _add_hinge_forces(F, edge_a[k0], edge_b[k0], edge_b[k1], gax, gay, gaz, gbx, gby, gbz)
+
+
+@njit(**NUMBA_OPTS)
+def straight_bending_twisting_forces(
+    e, elen, edge_a, edge_b, hinge_e0, hinge_e1, B_over_l, GJ_over_l, ref_twist, twist_bar, theta, F, torque,
+    first=0, last=-1,
+):
+    """Isotropic bending and twisting of a rod straight at rest, without material frames.
+
+    E = sum_h B |kb_h|^2 / (2 l_h) + GJ (m_h - m_bar_h)^2 / (2 l_h), m_h = theta^h - theta^{h-1} + ref_twist_h
+    (DER08 sec. 4.2: an isotropic rod straight at rest bends as |kb|^2, whatever its twist). The
+    bending gradient is :func:`bending_forces`'; the twist's is d m/d e^{h-1} = kb/(2|e^{h-1}|),
+    d m/d e^h = kb/(2|e^h|), d m/d theta^h = -d m/d theta^{h-1} = 1 (DER08 sec. 7). Forces go to
+    F (n, 3), torques about the edge tangents to ``torque`` (ne,). Hinges [first, last).
+    """
+    if last < 0:
+        last = hinge_e0.shape[0]
+    for h in range(first, last):
+        k0 = hinge_e0[h]
+        k1 = hinge_e1[h]
         la = elen[k0]
         lb = elen[k1]
-        inv_D = 1.0 / (la * lb + dot(ax, ay, az, bx, by, bz))
-        cx, cy, cz = cross(ax, ay, az, bx, by, bz)
-        kbx, kby, kbz = 2.0 * cx * inv_D, 2.0 * cy * inv_D, 2.0 * cz * inv_D
-        s = B_over_l[h]
-        rx, ry, rz = s * kbx, s * kby, s * kbz
-        kr = dot(kbx, kby, kbz, rx, ry, rz)
-        brx, bry, brz = cross(bx, by, bz, rx, ry, rz)
-        arx, ary, arz = cross(ax, ay, az, rx, ry, rz)
-        fa = lb / la
-        fb = la / lb
-        gax = (2.0 * brx - kr * (fa * ax + bx)) * inv_D
-        gay = (2.0 * bry - kr * (fa * ay + by)) * inv_D
-        gaz = (2.0 * brz - kr * (fa * az + bz)) * inv_D
-        gbx = (-2.0 * arx - kr * (fb * bx + ax)) * inv_D
-        gby = (-2.0 * ary - kr * (fb * by + ay)) * inv_D
-        gbz = (-2.0 * arz - kr * (fb * bz + az)) * inv_D
-        _add_hinge_forces(F, edge_a[k0], edge_b[k0], edge_b[k1], gax, gay, gaz, gbx, gby, gbz)
+        kbx, kby, kbz, gax, gay, gaz, gbx, gby, gbz = _isotropic_bending_gradient(
+            e[k0, 0], e[k0, 1], e[k0, 2], e[k1, 0], e[k1, 1], e[k1, 2], la, lb, B_over_l[h])
+        gm = GJ_over_l[h] * (theta[k1] - theta[k0] + ref_twist[h] - twist_bar[h])
+        ga = 0.5 * gm / la
+        gb = 0.5 * gm / lb
+        _add_hinge_forces(F, edge_a[k0], edge_b[k0], edge_b[k1], gax + ga * kbx, gay + ga * kby, gaz + ga * kbz,
+                          gbx + gb * kbx, gby + gb * kby, gbz + gb * kbz)
+        torque[k0] += gm
+        torque[k1] -= gm
 
 
 @njit(**NUMBA_OPTS)
@@ -137,6 +171,16 @@ def bending_energy(e, elen, hinge_e0, hinge_e1, B_over_l):
         cx, cy, cz = cross(e[k0, 0], e[k0, 1], e[k0, 2], e[k1, 0], e[k1, 1], e[k1, 2])
         kb2 = 4.0 * (cx * cx + cy * cy + cz * cz) / (D * D)
         total += 0.5 * B_over_l[h] * kb2
+    return total
+
+
+@njit(**NUMBA_OPTS)
+def twisting_energy(hinge_e0, hinge_e1, GJ_over_l, ref_twist, twist_bar, theta):
+    """E_t = sum_h GJ (m_h - m_bar_h)^2 / (2 l_h), m_h = theta^h - theta^{h-1} + ref_twist_h."""
+    total = 0.0
+    for h in range(hinge_e0.shape[0]):
+        m = theta[hinge_e1[h]] - theta[hinge_e0[h]] + ref_twist[h] - twist_bar[h]
+        total += 0.5 * GJ_over_l[h] * m * m
     return total
 
 

@@ -13,7 +13,7 @@ import math
 from numba import njit
 
 from knitlad.kernels.options import NUMBA_OPTS
-from knitlad.kernels.vec import cross, dot
+from knitlad.kernels.vec import cross, dot, sincos
 
 
 
@@ -92,12 +92,65 @@ def update_reference_twist(tangent, ref_u, hinge_e0, hinge_e1, ref_twist, first=
             tangent[k1, 0], tangent[k1, 1], tangent[k1, 2],
         )
         # rotate the transported director by the previous twist, then add the residual angle
-        c = math.cos(ref_twist[h])
-        s = math.sin(ref_twist[h])
+        s, c = sincos(ref_twist[h])
         tx, ty, tz = tangent[k1, 0], tangent[k1, 1], tangent[k1, 2]
         wx, wy, wz = cross(tx, ty, tz, px, py, pz)
         qx, qy, qz = c * px + s * wx, c * py + s * wy, c * pz + s * wz
         ref_twist[h] += _signed_angle(qx, qy, qz, ref_u[k1, 0], ref_u[k1, 1], ref_u[k1, 2], tx, ty, tz)
+
+
+@njit(**NUMBA_OPTS)
+def _signed_solid_angle(ax, ay, az, bx, by, bz, cx, cy, cz, triple):
+    """Signed solid angle of the geodesic triangle a -> b -> c on the unit sphere (Van Oosterom and
+    Strackee 1983): tan(Omega/2) = a.(b x c) / (1 + a.b + b.c + c.a), ``triple`` = a.(b x c) given
+    (computed from the small differences by the caller, for precision); below |z| < 1e-3 the
+    series of atan, as in :func:`_signed_angle`."""
+    y = triple
+    x = 1.0 + dot(ax, ay, az, bx, by, bz) + dot(bx, by, bz, cx, cy, cz) + dot(cx, cy, cz, ax, ay, az)
+    if x > 0.0 and abs(y) < 1e-3 * x:
+        z = y / x
+        z2 = z * z
+        return 2.0 * z * (1.0 - z2 * (1.0 / 3.0 - 0.2 * z2))
+    return 2.0 * math.atan2(y, x)
+
+
+@njit(**NUMBA_OPTS)
+def reference_twist_by_holonomy(tangent, e, elen, hinge_e0, hinge_e1, ref_twist, first=0, last=-1):
+    """Advance the reference twist of every hinge in [first, last) from the old tangents
+    (``tangent``, not changed) to the new ones (e / |e|), without the reference frames.
+
+    Time-parallel transport along both edges and space-parallel transport between them are
+    rotations of least angle, i.e. parallel transport along great circles of the unit sphere, and
+    a rotation about t^h commutes with them. So the change of the reference twist that
+    :func:`transport_reference_frames` and :func:`update_reference_twist` give is the holonomy of
+    the geodesic quadrilateral t0 -> t0' -> t1' -> t1 (old and new tangents of edges h-1 and h):
+    minus its signed area, the sum of the triangles (t0, t0', t1') and (t0, t1', t1) (Gauss-Bonnet
+    on the sphere). Same values to round-off, at a third of the cost and without sine or cosine;
+    only the isotropic bending of rods straight at rest, whose energy needs no material frame,
+    can use it (the frames are still transported, so the state stays complete).
+    """
+    if last < 0:
+        last = hinge_e0.shape[0]
+    for h in range(first, last):
+        k0 = hinge_e0[h]
+        k1 = hinge_e1[h]
+        a0x, a0y, a0z = tangent[k0, 0], tangent[k0, 1], tangent[k0, 2]
+        a1x, a1y, a1z = tangent[k1, 0], tangent[k1, 1], tangent[k1, 2]
+        i0 = 1.0 / elen[k0]
+        i1 = 1.0 / elen[k1]
+        b0x, b0y, b0z = e[k0, 0] * i0, e[k0, 1] * i0, e[k0, 2] * i0
+        b1x, b1y, b1z = e[k1, 0] * i1, e[k1, 1] * i1, e[k1, 2] * i1
+        # t0.(t0' x t1') = (t0' - t0).(t1' x t0) and t0.(t1' x t1) = (t1' - t1).(t1 x t0): the steps
+        # are small, so the triple products are taken from the tangents' changes
+        px, py, pz = cross(b1x, b1y, b1z, a0x, a0y, a0z)
+        qx, qy, qz = cross(a1x, a1y, a1z, a0x, a0y, a0z)
+        first_triple = dot(b0x - a0x, b0y - a0y, b0z - a0z, px, py, pz)
+        second_triple = dot(b1x - a1x, b1y - a1y, b1z - a1z, qx, qy, qz)
+        area = (_signed_solid_angle(a0x, a0y, a0z, b0x, b0y, b0z, b1x, b1y, b1z, first_triple)
+                + _signed_solid_angle(a0x, a0y, a0z, b1x, b1y, b1z, a1x, a1y, a1z, second_triple))
+        if abs(area) > math.pi:  # as update_reference_twist, the turn of least angle (each is exact mod 2 pi)
+            area -= 2.0 * math.pi * round(area / (2.0 * math.pi))
+        ref_twist[h] -= area
 
 
 @njit(**NUMBA_OPTS)
@@ -109,8 +162,7 @@ def material_frames(tangent, ref_u, theta, d1, d2, first=0, last=-1):
         tx, ty, tz = tangent[k, 0], tangent[k, 1], tangent[k, 2]
         ux, uy, uz = ref_u[k, 0], ref_u[k, 1], ref_u[k, 2]
         vx, vy, vz = cross(tx, ty, tz, ux, uy, uz)
-        c = math.cos(theta[k])
-        s = math.sin(theta[k])
+        s, c = sincos(theta[k])
         d1[k, 0] = c * ux + s * vx
         d1[k, 1] = c * uy + s * vy
         d1[k, 2] = c * uz + s * vz

@@ -5,8 +5,14 @@ step. ``m`` is a :class:`knitlad.state.RodModel` (read only), ``s`` a
 :class:`knitlad.state.RodState` (advanced in place), ``w`` a
 :class:`knitlad.state.Workspace`, ``c`` the contact buffers
 (:class:`knitlad.contact.Contacts`). The modes are arguments, never read off the
-arrays: ``twist`` (framed DER with twist, else isotropic bending of rods straight at
-rest) and ``contact`` (yarn-yarn contact on).
+arrays: ``twist`` and ``contact`` (yarn-yarn contact on). ``twist`` is one of
+TWIST_OFF (0: isotropic bending of rods straight at rest, no twist), TWIST_FRAMED
+(1, or True: framed DER, material frames, natural curvature) and TWIST_STRAIGHT (2:
+rods straight at rest that twist: isotropic bending and the twist energy, the
+reference twist by the holonomy of the tangents, no material frame: DER08 sec. 4.2; at
+zero natural curvature TWIST_FRAMED's bending energy is B |kb|^2 cos^2(m/2) / 2l, a
+coupling of bending and twist that this one, as the continuum, has not: docs/accuracy.md).
+``if twist:`` reads "the yarns carry twist".
 """
 
 import math
@@ -21,14 +27,21 @@ from knitlad.kernels.elastic import (
     edge_vectors,
     framed_bending_twisting_energy,
     framed_bending_twisting_forces,
+    straight_bending_twisting_forces,
     stretching_energy,
     stretching_forces,
+    twisting_energy,
 )
 from knitlad.kernels.frames import (
     material_frames,
+    reference_twist_by_holonomy,
     transport_reference_frames,
     update_reference_twist,
 )
+
+TWIST_OFF = 0
+TWIST_FRAMED = 1
+TWIST_STRAIGHT = 2
 
 
 
@@ -66,6 +79,24 @@ def framed_forces_by_yarn(m, s, w):
         )
 
 
+@njit(**PARALLEL_OPTS)
+def straight_twisting_forces_by_yarn(m, s, w):
+    """Stretching, and isotropic bending and twisting of yarns straight at rest (TWIST_STRAIGHT), yarn by
+    yarn in parallel: the reference twist by holonomy from the stored tangents, then the frames
+    transported (kept for any later use of the state), then the forces and torques."""
+    for y in prange(w.yarn_edges.shape[0] - 1):
+        e0, e1 = w.yarn_edges[y], w.yarn_edges[y + 1]
+        h0, h1 = w.yarn_hinges[y], w.yarn_hinges[y + 1]
+        edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen, e0, e1)
+        stretching_forces(w.e, w.elen, s.v, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force, e0, e1)
+        reference_twist_by_holonomy(s.tangent, w.e, w.elen, m.hinge_e0, m.hinge_e1, s.ref_twist, h0, h1)
+        transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u, e0, e1)
+        straight_bending_twisting_forces(
+            w.e, w.elen, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1,
+            m.B_over_l, m.GJ_over_l, s.ref_twist, m.twist_bar, s.theta, w.force, w.torque, h0, h1,
+        )
+
+
 @njit(**NUMBA_OPTS)
 def compute_forces(m, s, w, c, twist, contact, drag, dt):
     """Total force on every node (``w.force``) and torque on every edge (``w.torque``).
@@ -77,8 +108,10 @@ def compute_forces(m, s, w, c, twist, contact, drag, dt):
     follow_images(s.x, s.v, m.image_node, m.image_master, m.image_shift)
     external_forces(m.f_ext, m.held, m.mass, s.v, drag, w.force)
     w.torque[:] = 0.0
-    if twist:
+    if twist == TWIST_FRAMED:
         framed_forces_by_yarn(m, s, w)
+    elif twist:
+        straight_twisting_forces_by_yarn(m, s, w)
     else:
         elastic_forces_by_yarn(m, s, w)
     if contact:
@@ -126,7 +159,12 @@ def potential_energy(m, s, w, c, twist, contact):
     follow_images(s.x, s.v, m.image_node, m.image_master, m.image_shift)
     edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen)
     es = stretching_energy(w.elen, m.rest_length, m.EA)
-    if twist:
+    if twist == TWIST_STRAIGHT:
+        reference_twist_by_holonomy(s.tangent, w.e, w.elen, m.hinge_e0, m.hinge_e1, s.ref_twist)
+        transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u)
+        eb = bending_energy(w.e, w.elen, m.hinge_e0, m.hinge_e1, m.B_over_l)
+        et = twisting_energy(m.hinge_e0, m.hinge_e1, m.GJ_over_l, s.ref_twist, m.twist_bar, s.theta)
+    elif twist:
         transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u)
         update_reference_twist(s.tangent, s.ref_u, m.hinge_e0, m.hinge_e1, s.ref_twist)
         material_frames(s.tangent, s.ref_u, s.theta, w.d1, w.d2)
@@ -185,23 +223,35 @@ def drift_nodes(held, v_prescribed, v, x, dt):
         x[i, 2] += dt * v[i, 2]
 
 
+@njit(**PARALLEL_OPTS)
+def kick_edges(theta_held, twist_inertia, torque, omega, half_dt):
+    """omega += half_dt torque / I on every edge free to twist."""
+    for j in prange(omega.shape[0]):
+        if not theta_held[j]:
+            omega[j] += half_dt * torque[j] / twist_inertia[j]
+
+
+@njit(**PARALLEL_OPTS)
+def drift_edges(theta_held, omega, theta, dt):
+    """theta += dt omega, a clamped edge held at zero spin."""
+    for j in prange(omega.shape[0]):
+        if theta_held[j]:
+            omega[j] = 0.0
+        theta[j] += dt * omega[j]
+
+
 @njit(**NUMBA_OPTS)
 def half_kick(m, s, w, half_dt, twist):
     kick_nodes(m.held, m.mass, w.force, s.v, half_dt)
     if twist:
-        for j in range(s.theta.shape[0]):
-            if not m.theta_held[j]:
-                s.omega[j] += half_dt * w.torque[j] / m.twist_inertia[j]
+        kick_edges(m.theta_held, m.twist_inertia, w.torque, s.omega, half_dt)
 
 
 @njit(**NUMBA_OPTS)
 def _drift(m, s, dt, twist):
     drift_nodes(m.held, m.v_prescribed, s.v, s.x, dt)
     if twist:
-        for j in range(s.theta.shape[0]):
-            if m.theta_held[j]:
-                s.omega[j] = 0.0
-            s.theta[j] += dt * s.omega[j]
+        drift_edges(m.theta_held, s.omega, s.theta, dt)
 
 
 @njit(**NUMBA_OPTS)

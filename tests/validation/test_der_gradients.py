@@ -7,7 +7,7 @@ import pytest
 
 import knitlad as kl
 from knitlad.contact import make_contacts
-from knitlad.kernels.integrate import compute_forces, potential_energy
+from knitlad.kernels.integrate import TWIST_FRAMED, TWIST_OFF, TWIST_STRAIGHT, compute_forces, potential_energy
 from knitlad.state import Workspace
 
 
@@ -20,20 +20,20 @@ def wiggly_rod(n: int = 9, seed: int = 0) -> np.ndarray:
     return pts
 
 
-def energy(rods: kl.Rods, twist: bool) -> float:
+def energy(rods: kl.Rods, twist: int) -> float:
     r = rods.copy()
     return float(sum(potential_energy(r.model, r.state, Workspace.for_model(r.model), make_contacts(r, None), twist,
                                       False)))
 
 
-def forces(rods: kl.Rods, twist: bool) -> Workspace:
+def forces(rods: kl.Rods, twist: int) -> Workspace:
     """Forces and torques of ``rods`` (no contact) into a new workspace."""
     w = Workspace.for_model(rods.model)
     compute_forces(rods.model, rods.state, w, make_contacts(rods, None), twist, False, 0.0, 1.0)
     return w
 
 
-def check_gradient(rods: kl.Rods, twist: bool, rel_tol: float) -> None:
+def check_gradient(rods: kl.Rods, twist: int, rel_tol: float) -> None:
     w = forces(rods.copy(), twist)
     eps = 1e-7  # mm
     fd = np.zeros_like(rods.state.x)
@@ -62,7 +62,7 @@ def test_isotropic_bending_and_stretching_forces_are_minus_the_energy_gradient()
     scene.add_yarn(pts)
     rods = scene.build(twist=False, stretch_damping_ratio=0.0)
     rods.state.x[:] *= 1.003  # some stretch too
-    check_gradient(rods, twist=False, rel_tol=1e-5)
+    check_gradient(rods, twist=TWIST_OFF, rel_tol=1e-5)
 
 
 @pytest.mark.parametrize("closed", [False, True])
@@ -75,5 +75,23 @@ def test_framed_bending_with_natural_curvature_and_twist_are_minus_the_energy_gr
     rods.state.x[:] += rng.normal(scale=0.05e-3 / kl.units.LENGTH, size=rods.state.x.shape)
     rods.state.theta[:] = rng.normal(scale=0.3, size=rods.state.theta.shape)
     # bring the frames to the perturbed shape first: the FD energies transport from here
-    forces(rods, True)
-    check_gradient(rods, twist=True, rel_tol=1e-5)
+    forces(rods, TWIST_FRAMED)
+    check_gradient(rods, twist=TWIST_FRAMED, rel_tol=1e-5)
+
+
+@pytest.mark.parametrize("closed", [False, True])
+def test_isotropic_bending_and_twisting_without_frames_are_minus_the_energy_gradient(closed):
+    """TWIST_STRAIGHT: the reference twist by holonomy, so its gradient is that of the frames' (DER08 sec. 7)."""
+    pts = wiggly_rod(seed=3)
+    scene = kl.Scene()
+    scene.add_yarn(pts, closed=closed)
+    rods = scene.build(twist=True, stretch_damping_ratio=0.0)
+    rng = np.random.default_rng(4)
+    rods.state.x[:] += rng.normal(scale=0.05e-3 / kl.units.LENGTH, size=rods.state.x.shape)
+    rods.state.theta[:] = rng.normal(scale=1.0, size=rods.state.theta.shape)
+    forces(rods, TWIST_STRAIGHT)
+    r = rods.copy()
+    _, bending, twisting, _, _ = potential_energy(r.model, r.state, Workspace.for_model(r.model), make_contacts(r, None),
+                                                  TWIST_STRAIGHT, False)
+    assert twisting > 0.05 * bending  # the twist is loaded, not a bystander
+    check_gradient(rods, twist=TWIST_STRAIGHT, rel_tol=1e-5)

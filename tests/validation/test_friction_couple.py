@@ -72,9 +72,12 @@ def test_a_yarn_rolling_on_another_feels_no_friction_one_skidding_does(direction
         assert sliding >= 1 and spin_change > 1e-3
 
 
-def test_switching_twist_on_leaves_every_force_unchanged():
+@pytest.mark.parametrize("mode", ["framed", "straight"])
+def test_switching_twist_on_leaves_every_force_unchanged(mode):
+    """Either twist path (framed DER; the frame-free path of yarns straight at rest) gives the
+    twist-free forces at the cut, where the reference frames are Bishop's and theta = 0."""
     from knitlad.contact import make_contacts
-    from knitlad.kernels.integrate import compute_forces, potential_energy
+    from knitlad.kernels.integrate import TWIST_FRAMED, TWIST_OFF, TWIST_STRAIGHT, compute_forces, potential_energy
     from knitlad.scenes.jersey import Jersey, build_jersey
     from knitlad.state import Workspace
 
@@ -85,14 +88,14 @@ def test_switching_twist_on_leaves_every_force_unchanged():
     twisted = with_twist(plain, kl.NYLON.twisting_stiffness / kl.NYLON.bending_stiffness)
     contact = ContactModel(stiffness=1e3)
     forces = []
-    for rods, twist in ((plain, False), (twisted, True)):
+    for rods, twist in ((plain, TWIST_OFF), (twisted, TWIST_FRAMED if mode == "framed" else TWIST_STRAIGHT)):
         w = Workspace.for_model(rods.model)
         c = make_contacts(rods, contact)
         assert compute_forces(rods.model, rods.state, w, c, twist, True, 0.0, 1e-3)
         forces.append(w.force.copy())
         if twist:
             assert np.abs(w.torque).max() < 1e-9 * np.abs(w.force).max()
-            stretching, bending, twisting = potential_energy(rods.model, rods.state, w, c, True, True)[:3]
+            stretching, bending, twisting = potential_energy(rods.model, rods.state, w, c, twist, True)[:3]
             assert abs(twisting) < 1e-12 * (stretching + bending)
     np.testing.assert_allclose(forces[1], forces[0], rtol=0, atol=1e-9 * np.abs(forces[0]).max())
     with pytest.raises(ValueError, match="already carries twist"):

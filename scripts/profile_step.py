@@ -1,0 +1,189 @@
+"""Profile: where one laddering step's time goes, part by part.
+
+    python scripts/profile_step.py [--fx 13.6] [--stitches 42] [--preset default]
+                                   [--twist on] [--threads 2] [--warm-steps 2000]
+
+Stretches the knit, cuts it and runs ``--warm-steps`` steps (so the ladder runs and the
+cut ends whip), then times each part of a step on that state, as the median of repeated
+calls: the whole step, the yarns' elastic forces (twist-free or framed), the parts of the
+framed path, the contact pair forces, the per-node kicks and drifts, and a contact-list
+rebuild. The reference frames are transported between two states one step apart, so
+every call rotates them as a real step does.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+from numba import njit, prange
+
+from knitlad.config import CutConfig
+from knitlad.kernels.contact import contact_forces, refresh_contacts, STALE
+from knitlad.kernels.elastic import (
+    edge_vectors,
+    framed_bending_twisting_forces,
+    straight_bending_twisting_forces,
+    stretching_forces,
+)
+from knitlad.kernels.frames import (
+    material_frames,
+    reference_twist_by_holonomy,
+    transport_reference_frames,
+    update_reference_twist,
+)
+from knitlad.kernels.integrate import (
+    _drift,
+    elastic_forces_by_yarn,
+    framed_forces_by_yarn,
+    half_kick,
+    straight_twisting_forces_by_yarn,
+    verlet_steps,
+)
+from knitlad.kernels.options import PARALLEL_OPTS
+from knitlad.protocol import cut, stretch
+from knitlad.simulation import numba_threads
+
+
+@njit(**PARALLEL_OPTS)
+def stretch_by_yarn(m, s, w):
+    for y in prange(w.yarn_edges.shape[0] - 1):
+        e0, e1 = w.yarn_edges[y], w.yarn_edges[y + 1]
+        edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen, e0, e1)
+        stretching_forces(w.e, w.elen, s.v, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force, e0, e1)
+
+
+@njit(**PARALLEL_OPTS)
+def transport_by_yarn(m, s, w, x):
+    for y in prange(w.yarn_edges.shape[0] - 1):
+        e0, e1 = w.yarn_edges[y], w.yarn_edges[y + 1]
+        edge_vectors(x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen, e0, e1)
+        transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u, e0, e1)
+
+
+@njit(**PARALLEL_OPTS)
+def edges_by_yarn(m, w, x):
+    for y in prange(w.yarn_edges.shape[0] - 1):
+        e0, e1 = w.yarn_edges[y], w.yarn_edges[y + 1]
+        edge_vectors(x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen, e0, e1)
+
+
+@njit(**PARALLEL_OPTS)
+def twist_by_yarn(m, s, w):
+    for y in prange(w.yarn_edges.shape[0] - 1):
+        update_reference_twist(s.tangent, s.ref_u, m.hinge_e0, m.hinge_e1, s.ref_twist, w.yarn_hinges[y],
+                               w.yarn_hinges[y + 1])
+
+
+@njit(**PARALLEL_OPTS)
+def holonomy_by_yarn(m, s, w, x):
+    """The reference twist by holonomy, from the stored tangents to those of ``x`` (tangents not stored)."""
+    for y in prange(w.yarn_edges.shape[0] - 1):
+        edge_vectors(x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen, w.yarn_edges[y], w.yarn_edges[y + 1])
+        reference_twist_by_holonomy(s.tangent, w.e, w.elen, m.hinge_e0, m.hinge_e1, s.ref_twist, w.yarn_hinges[y],
+                                    w.yarn_hinges[y + 1])
+
+
+@njit(**PARALLEL_OPTS)
+def straight_bending_by_yarn(m, s, w):
+    for y in prange(w.yarn_edges.shape[0] - 1):
+        straight_bending_twisting_forces(
+            w.e, w.elen, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1, m.B_over_l, m.GJ_over_l, s.ref_twist,
+            m.twist_bar, s.theta, w.force, w.torque, w.yarn_hinges[y], w.yarn_hinges[y + 1])
+
+
+@njit(**PARALLEL_OPTS)
+def frames_by_yarn(s, w):
+    for y in prange(w.yarn_edges.shape[0] - 1):
+        material_frames(s.tangent, s.ref_u, s.theta, w.d1, w.d2, w.yarn_edges[y], w.yarn_edges[y + 1])
+
+
+@njit(**PARALLEL_OPTS)
+def framed_bending_by_yarn(m, s, w):
+    for y in prange(w.yarn_edges.shape[0] - 1):
+        framed_bending_twisting_forces(
+            w.e, w.elen, w.d1, w.d2, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1,
+            m.B_over_l, m.GJ_over_l, m.kappa_bar, s.ref_twist, m.twist_bar, s.theta, w.force, w.torque,
+            w.yarn_hinges[y], w.yarn_hinges[y + 1],
+        )
+
+
+def median_ms(fn, repeats: int = 30) -> float:
+    fn()
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return 1e3 * statistics.median(times)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--fx", type=float, default=13.6)
+    p.add_argument("--stitches", type=int, default=42)
+    p.add_argument("--preset", default="default", choices=["fast", "default", "accurate"])
+    p.add_argument("--twist", default="on", choices=["off", "on"])
+    p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--warm-steps", type=int, default=2000)
+    args = p.parse_args()
+    cfg = CutConfig(n_x=args.stitches, n_y=args.stitches, fx=args.fx, preset=args.preset, twist=args.twist == "on")
+    settings = cfg.settings()
+    with numba_threads(args.threads):
+        run = cut(stretch(settings.stretch), settings.dynamics)
+        sim = run.sim
+        sim.step(args.warm_steps)
+        m, s, w, c, dt, tw = sim.model, sim.state, sim.work, sim.contacts, sim.dt, sim.twist_mode
+        print(f"{m.n_nodes} nodes, {m.edge_a.shape[0]} edges, twist mode {tw}, {c.n_pairs[0]} candidate pairs, "
+              f"dt {sim.dt_s:.3e} s, {args.threads} threads")
+        rows = []
+
+        def steps(n=20):
+            sim.compute_forces()
+            verlet_steps(m, s, w, c, dt, n, tw, True, sim.drag)
+
+        rows.append(("step (20 steps, per step)", median_ms(steps, 10) / 20))
+        x_a = s.x.copy()
+        steps(1)
+        x_b = s.x.copy()
+        flip = [x_a, x_b]
+
+        def transport():
+            flip.reverse()
+            transport_by_yarn(m, s, w, flip[0])
+
+        rows.append(("edge vectors", median_ms(lambda: edges_by_yarn(m, w, s.x))))
+        rows.append(("edge vectors + stretching", median_ms(lambda: stretch_by_yarn(m, s, w))))
+        rows.append(("twist-free elastic (stretch + bend)", median_ms(lambda: elastic_forces_by_yarn(m, s, w))))
+        if tw:
+            rows.append(("straight twisting path (frame-free)", median_ms(
+                lambda: straight_twisting_forces_by_yarn(m, s, w))))
+            rows.append(("  edge vectors + reference twist by holonomy", median_ms(
+                lambda: holonomy_by_yarn(m, s, w, flip[0]))))
+            rows.append(("  isotropic bending and twisting", median_ms(lambda: straight_bending_by_yarn(m, s, w))))
+            rows.append(("framed elastic (all of the framed path)", median_ms(lambda: framed_forces_by_yarn(m, s, w))))
+            rows.append(("  edge vectors + transport of the frames", median_ms(transport)))
+            rows.append(("  reference twist", median_ms(lambda: twist_by_yarn(m, s, w))))
+            rows.append(("  material frames", median_ms(lambda: frames_by_yarn(s, w))))
+            rows.append(("  framed bending and twisting", median_ms(lambda: framed_bending_by_yarn(m, s, w))))
+        rows.append(("contact pair forces", median_ms(
+            lambda: contact_forces(s.x, s.v, s.omega, tw, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt, w.force,
+                                   w.torque))))
+        rows.append(("half kick", median_ms(lambda: half_kick(m, s, w, 0.0, tw))))
+        rows.append(("drift", median_ms(lambda: _drift(m, s, 0.0, tw))))
+
+        def rebuild():
+            c.status[STALE] = 1
+            refresh_contacts(s.x, m.edge_a, m.edge_b, m.edge_shift, c)
+
+        rows.append(("contact-list rebuild (one)", median_ms(rebuild, 10)))
+        rows.append(("displacement check (no rebuild)", median_ms(
+            lambda: refresh_contacts(s.x, m.edge_a, m.edge_b, m.edge_shift, c))))
+    width = max(len(r[0]) for r in rows)
+    for name, ms in rows:
+        print(f"{name:<{width}}  {ms:7.3f} ms")
+
+
+if __name__ == "__main__":
+    main()
