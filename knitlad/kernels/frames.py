@@ -38,21 +38,23 @@ def parallel_transport(ux, uy, uz, ax, ay, az, bx, by, bz):
 
 
 @njit(**NUMBA_OPTS)
-def _signed_angle(ux, uy, uz, wx, wy, wz, nx, ny, nz):
-    """Angle from u to w about axis n: atan2((u x w).n, u.w).
-
-    The angle of one step is small, so below |z| = |(u x w).n / u.w| < 1e-3 it is
-    atan z = z - z^3/3 + z^5/5, whose next term (z^7/7 < 1.5e-22) is below round-off:
-    the reference-twist update then costs half as much as with atan2 (measured 2026-12-02).
-    """
-    cx, cy, cz = cross(ux, uy, uz, wx, wy, wz)
-    y = dot(cx, cy, cz, nx, ny, nz)
-    x = dot(ux, uy, uz, wx, wy, wz)
+def _small_atan2(y, x):
+    """atan2(y, x), by its series where the angle is small: below |z| = |y / x| < 1e-3 (x > 0) it is
+    atan z = z - z^3/3 + z^5/5, whose next term (z^7/7 < 1.5e-22) is below round-off. The angles of
+    one step are small: the reference-twist update then costs half as much as with atan2 (measured
+    2026-12-02)."""
     if x > 0.0 and abs(y) < 1e-3 * x:
         z = y / x
         z2 = z * z
         return z * (1.0 - z2 * (1.0 / 3.0 - 0.2 * z2))
     return math.atan2(y, x)
+
+
+@njit(**NUMBA_OPTS)
+def _signed_angle(ux, uy, uz, wx, wy, wz, nx, ny, nz):
+    """Angle from u to w about axis n: atan2((u x w).n, u.w)."""
+    cx, cy, cz = cross(ux, uy, uz, wx, wy, wz)
+    return _small_atan2(dot(cx, cy, cz, nx, ny, nz), dot(ux, uy, uz, wx, wy, wz))
 
 
 @njit(**NUMBA_OPTS)
@@ -103,15 +105,9 @@ def update_reference_twist(tangent, ref_u, hinge_e0, hinge_e1, ref_twist, first=
 def _signed_solid_angle(ax, ay, az, bx, by, bz, cx, cy, cz, triple):
     """Signed solid angle of the geodesic triangle a -> b -> c on the unit sphere (Van Oosterom and
     Strackee 1983): tan(Omega/2) = a.(b x c) / (1 + a.b + b.c + c.a), ``triple`` = a.(b x c) given
-    (computed from the small differences by the caller, for precision); below |z| < 1e-3 the
-    series of atan, as in :func:`_signed_angle`."""
-    y = triple
+    (computed from the small differences by the caller, for precision)."""
     x = 1.0 + dot(ax, ay, az, bx, by, bz) + dot(bx, by, bz, cx, cy, cz) + dot(cx, cy, cz, ax, ay, az)
-    if x > 0.0 and abs(y) < 1e-3 * x:
-        z = y / x
-        z2 = z * z
-        return 2.0 * z * (1.0 - z2 * (1.0 / 3.0 - 0.2 * z2))
-    return 2.0 * math.atan2(y, x)
+    return 2.0 * _small_atan2(triple, x)
 
 
 @njit(**NUMBA_OPTS)
