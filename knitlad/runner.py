@@ -24,6 +24,7 @@ import time
 import traceback
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from multiprocessing import get_context
 from pathlib import Path
@@ -361,7 +362,8 @@ def _run_pool(todo: list[Job], jobs_dir: Path, workers: int | None, scheduler, r
                 while source and len(running) < (1 if alone else workers):
                     job = source.pop()
                     try:
-                        running[pool.submit(runner, job, str(jobs_dir), 1, token)] = job
+                        with _interrupts_deferred():
+                            running[pool.submit(runner, job, str(jobs_dir), 1, token)] = job
                     except BrokenProcessPool:  # a worker died since the last wait: this job never started
                         source.append(job)
                         break
@@ -386,6 +388,34 @@ def _run_pool(todo: list[Job], jobs_dir: Path, workers: int | None, scheduler, r
             _stop_pool(pool)
             raise
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+@contextmanager
+def _interrupts_deferred():
+    """Hold Ctrl-C and SIGTERM until the block ends, then hand the first one to its usual handler.
+
+    A submit may spawn a worker, writing its start-up data down a pipe: an interrupt in the
+    middle left the new interpreter reading a truncated pickle, and its EOFError traceback
+    on the user's terminal (seen when SIGTERM came as the first worker started). Python runs
+    signal handlers in the main thread, so they are swapped there (a thread's signal mask would
+    not do: the kernel hands a process's signal to any thread that does not block it)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pending: list[int] = []
+    held = (signal.SIGINT, signal.SIGTERM)
+    previous = {s: signal.signal(s, lambda signum, frame: pending.append(signum)) for s in held}
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+        if pending:
+            handler = previous[pending[0]]
+            if callable(handler):
+                handler(pending[0], None)
+            elif handler == signal.SIG_DFL:
+                os.kill(os.getpid(), pending[0])
 
 
 def _stop_pool(pool: ProcessPoolExecutor) -> None:

@@ -254,3 +254,25 @@ def test_sigterm_ends_a_sweep_with_exit_code_143(tmp_path):
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 143 and "terminated" in err and "Traceback" not in err
+
+
+
+def test_a_sigterm_during_a_submit_arrives_after_it():
+    """The pool's submit runs with Ctrl-C and SIGTERM held, and the signal comes after the block."""
+    from knitlad.runner import _interrupts_deferred
+
+    seen = []
+
+    def note(signum, frame):
+        seen.append(time.monotonic())
+
+    previous = signal.signal(signal.SIGTERM, note)
+    try:
+        with _interrupts_deferred():
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.05)
+            held_until = time.monotonic()
+            assert not seen
+        assert signal.getsignal(signal.SIGTERM) is note and len(seen) == 1 and seen[0] >= held_until
+    finally:
+        signal.signal(signal.SIGTERM, previous)
