@@ -272,19 +272,14 @@ def framed_bending_twisting_forces(
 def framed_bending_twisting_energy(
     e, elen, d1, d2, hinge_e0, hinge_e1, B_over_l, GJ_over_l, kappa_bar, ref_twist, twist_bar, theta
 ):
-    """(E_b, E_t) of :func:`framed_bending_twisting_forces`."""
+    """(E_b, E_t) of :func:`framed_bending_twisting_forces` (E_t: :func:`twisting_energy`)."""
     eb = 0.0
-    et = 0.0
     for h in range(hinge_e0.shape[0]):
-        k0 = hinge_e0[h]
-        k1 = hinge_e1[h]
-        kap1, kap2 = _hinge_material_curvature(e, elen, d1, d2, k0, k1)
+        kap1, kap2 = _hinge_material_curvature(e, elen, d1, d2, hinge_e0[h], hinge_e1[h])
         dk1 = kap1 - kappa_bar[h, 0]
         dk2 = kap2 - kappa_bar[h, 1]
         eb += 0.5 * B_over_l[h] * (dk1 * dk1 + dk2 * dk2)
-        m = theta[k1] - theta[k0] + ref_twist[h] - twist_bar[h]
-        et += 0.5 * GJ_over_l[h] * m * m
-    return eb, et
+    return eb, twisting_energy(hinge_e0, hinge_e1, GJ_over_l, ref_twist, twist_bar, theta)
 
 
 @njit(**NUMBA_OPTS)

@@ -121,7 +121,7 @@ def reference_twist_by_holonomy(tangent, e, elen, hinge_e0, hinge_e1, ref_twist,
     :func:`transport_reference_frames` and :func:`update_reference_twist` give is the holonomy of
     the geodesic quadrilateral t0 -> t0' -> t1' -> t1 (old and new tangents of edges h-1 and h):
     minus its signed area, the sum of the triangles (t0, t0', t1') and (t0, t1', t1) (Gauss-Bonnet
-    on the sphere). Same values to round-off, at a third of the cost and without sine or cosine;
+    on the sphere). Same values to round-off, without sine or cosine and without the frames;
     only the isotropic bending of rods straight at rest, whose energy needs no material frame,
     can use it (the frames are still transported, so the state stays complete).
     """
