@@ -27,6 +27,7 @@ from knitlad.kernels.contact import (
     ContactParams,
 )
 from knitlad.state import RodModel, Rods
+from knitlad.timestep import damped_limit_factor
 
 
 class Counting(str, Enum):
@@ -293,12 +294,13 @@ class ContactStats(NamedTuple):
                             float(st[NORMAL_FORCE_SUM] * units.FORCE), int(st[SLIDING_PAIRS]), int(contacts.n_pairs[0]))
 
 
-def contact_time_step(m: RodModel, model: ContactModel | None, spin: bool = False) -> float:
+def contact_time_step(m: RodModel, model: ContactModel | None, spin: bool = False, predicted: bool = False) -> float:
     """Critical time step [ms] of the contact springs: 2/omega with omega^2 = 2 z (k_n + k_t) / m_min.
 
     ``spin``: the yarns carry twist, so the tangential spring also turns each edge about
     its axis: omega^2 gains 2 z k_t max(r^2 / I) over edges free to twist (for a solid
-    cylinder r^2 / I = 2 / m_edge: k_t then counts about three times).
+    cylinder r^2 / I = 2 / m_edge: k_t then counts about three times). ``predicted``: the dashpots act
+    on predicted velocities (:func:`knitlad.timestep.damped_limit_factor`).
     """
     if model is None:
         return math.inf
@@ -317,4 +319,4 @@ def contact_time_step(m: RodModel, model: ContactModel | None, spin: bool = Fals
     if omega2 == 0.0:
         return math.inf
     zeta = max(model.damping_ratio, model.tangential_damping_ratio)
-    return 2.0 / math.sqrt(omega2) * (math.sqrt(1 + zeta * zeta) - zeta)
+    return 2.0 / math.sqrt(omega2) * damped_limit_factor(zeta, predicted)

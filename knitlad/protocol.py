@@ -129,6 +129,8 @@ class DynamicsSettings:
     axial_stiffness_factor: float  # EA of the dynamics over the yarn's, every edge keeping its tension at the cut
     twist_inertia_factor: float  # the yarn's inertia about its axis in the dynamics over rho_L d^2/8 per length
     framed_twist: bool  # twist through material frames even for yarns straight at rest (for comparisons)
+    implicit_axial: bool  # the axial springs at the end of each kick: the step set by contact and bending
+    predicted_dashpots: bool  # the dashpots act on the velocities predicted at the end of each step
     observe_every_s: float
     arrest_s: float
     max_time_s: float
@@ -482,11 +484,15 @@ def cut(knit: StretchedKnit, dynamics: DynamicsSettings) -> Laddering:
                               tangential_damping_ratio=dynamics.contact_damping_ratio,
                               counting=dynamics.contact_counting)
     # the cut frees two end nodes: keep the smaller of the stretch's step (of a yarn as soft) and the new stable step
-    limit = critical_time_steps(rods.model, rods.twist, contact_time_step(rods.model, contact, spin=rods.twist))
+    predicted = dynamics.predicted_dashpots
+    limit = critical_time_steps(rods.model, rods.twist,
+                                contact_time_step(rods.model, contact, spin=rods.twist, predicted=predicted),
+                                dynamics.implicit_axial, predicted)
     limit_s = limit.combined * units.TIME
-    stretch_step = knit.dt_s / math.sqrt(dynamics.axial_stiffness_factor)
+    stretch_step = math.inf if dynamics.implicit_axial else knit.dt_s / math.sqrt(dynamics.axial_stiffness_factor)
     sim = Simulation(rods, contact=contact, dt_s=min(stretch_step, dynamics.dt_safety * limit_s),
-                     drag_per_s=dynamics.drag_per_s, framed_twist=dynamics.framed_twist)
+                     drag_per_s=dynamics.drag_per_s, framed_twist=dynamics.framed_twist,
+                     implicit_axial=dynamics.implicit_axial, predicted_dashpots=predicted)
     sim.set_friction(dynamics.mu)
     return Laddering(knit, dynamics, sim, edge, row, column, baseline, time.perf_counter() - t0)
 

@@ -17,6 +17,10 @@ from knitlad import units
 from knitlad.contact import ContactModel, Contacts, ContactStats, contact_time_step, make_contacts
 from knitlad.kernels.contact import PAIRS_NEEDED, PEAK_OVERLAP, refresh_contacts, touching_pairs_among
 from knitlad.kernels.integrate import (
+    AXIAL_EXPLICIT,
+    AXIAL_IMPLICIT,
+    DASHPOTS_HALF_STEP,
+    DASHPOTS_PREDICTED,
     TWIST_FRAMED,
     TWIST_OFF,
     TWIST_STRAIGHT,
@@ -54,6 +58,27 @@ def numba_threads(n: int):
         numba.set_num_threads(before)
 
 
+def axial_wave_speed(m) -> float:
+    """The fastest axial wave, sqrt(EA / rho_L) [mm/ms]: no node of a sound run outruns it."""
+    rho = m.mass.sum() / max(m.rest_length.sum(), 1e-300)
+    c = np.sqrt(m.EA / rho) if m.EA.size else np.array([1.0])
+    return float(np.max(c))
+
+
+def check_open_chains(model, implicit_axial: bool) -> bool:
+    """``implicit_axial``, refused for a model whose axial springs cannot be implicit: a ring (its closing
+    node couples two edges that are not consecutive), a rail or a periodic image (not free masses)."""
+    if not implicit_axial:
+        return False
+    shared = np.intersect1d(model.edge_a, model.edge_b).size
+    chained = int(np.sum(model.edge_b[:-1] == model.edge_a[1:]))
+    if shared != chained:
+        raise ValueError("implicit_axial: the axial springs can be implicit on open yarns only (this scene has a ring)")
+    if model.rail_node.size or model.image_node.size:
+        raise ValueError("implicit_axial: not with rails or periodic images")
+    return True
+
+
 class Simulation:
     """Explicit dynamics and FIRE statics of a rod scene.
 
@@ -68,26 +93,33 @@ class Simulation:
     guard_every: steps between blow-up checks.
     contact: yarn-yarn contact (:class:`knitlad.contact.ContactModel`), or None.
     framed_twist: with twist, bend and twist through material frames even without natural curvature.
+    implicit_axial: the axial springs at the end of each kick (open yarns): the step set by contact and bending.
+    predicted_dashpots: the dashpots act on the velocities predicted at the end of each step (second order in dt).
+    (Both are modes of :mod:`knitlad.kernels.integrate`.)
     """
 
     def __init__(self, rods: Rods, dt_s: float | None = None, safety: float = DEFAULT_SAFETY, drag_per_s: float = 0.0,
-                 guard_every: int = 500, contact: ContactModel | None = None, framed_twist: bool = False) -> None:
+                 guard_every: int = 500, contact: ContactModel | None = None, framed_twist: bool = False,
+                 implicit_axial: bool = False, predicted_dashpots: bool = False) -> None:
         if not 0.0 < safety <= 1.0:
             raise ValueError(f"safety must lie in (0, 1], got {safety}")
         self.rods = rods
         self.twist = rods.twist
         self.framed_twist = bool(framed_twist)
+        self.axial_mode = AXIAL_IMPLICIT if check_open_chains(rods.model, implicit_axial) else AXIAL_EXPLICIT
+        self.dashpot_mode = DASHPOTS_PREDICTED if predicted_dashpots else DASHPOTS_HALF_STEP
         self.work = Workspace.for_model(self.model)
         self.contact_model = contact
         self.contacts: Contacts = make_contacts(rods, contact)
-        contact_limit = contact_time_step(self.model, contact, spin=self.twist)
-        self.limits: TimeStepLimits = critical_time_steps(self.model, self.twist, contact_limit)
+        contact_limit = contact_time_step(self.model, contact, spin=self.twist, predicted=predicted_dashpots)
+        self.limits: TimeStepLimits = critical_time_steps(self.model, self.twist, contact_limit, bool(implicit_axial),
+                                                          bool(predicted_dashpots))
         self.dt = self.limits.time_step(dt_s, safety)
         self.set_drag(drag_per_s)
         self.guard_every = int(guard_every)
         self.steps = 0
         self.time = 0.0  # internal ms
-        self.max_speed = self._axial_wave_speed()
+        self.max_speed = axial_wave_speed(self.model)
         self.compute_forces()
 
     def _grow_contacts(self) -> None:
@@ -96,10 +128,13 @@ class Simulation:
         cap = max(2 * c.pairs.shape[0], int(1.5 * c.status[PAIRS_NEEDED]))
         self.contacts = make_contacts(self.rods, self.contact_model, capacity=cap, previous=c)
 
-    def compute_forces(self) -> None:
-        """Forces and torques of the current state into ``self.work`` (growing the contact buffer if needed)."""
+    def compute_forces(self, predicted: bool = False) -> None:
+        """Forces and torques of the current state into ``self.work`` (growing the contact buffer if needed);
+        the dashpots see the state's velocities, or with ``predicted`` the step's prediction."""
+        if not predicted:
+            self.work.v_damp[:], self.work.omega_damp[:] = self.state.v, self.state.omega
         while not compute_forces(self.model, self.state, self.work, self.contacts, self.twist_mode, self.has_contact,
-                                 self.drag, self.dt):
+                                 self.drag, self.dt, self.axial_mode, self.dashpot_mode):
             self._grow_contacts()
 
     def set_friction(self, mu: float) -> None:
@@ -181,12 +216,6 @@ class Simulation:
         m, c = self.model, self.fresh_contacts()
         return int(touching_pairs_among(self.state.x, m.edge_a, m.edge_b, m.edge_shift, c, in_a, in_b))
 
-    def _axial_wave_speed(self) -> float:
-        m = self.model
-        rho = m.mass.sum() / max(m.rest_length.sum(), 1e-300)
-        c = np.sqrt(m.EA / rho) if m.EA.size else np.array([1.0])
-        return float(np.max(c))
-
     # ------------------------------------------------------------------ dynamics
     @property
     def dt_s(self) -> float:
@@ -208,10 +237,10 @@ class Simulation:
         while left > 0:
             chunk = min(left, self.guard_every)
             done = verlet_steps(self.model, self.state, self.work, self.contacts, self.dt, chunk, self.twist_mode,
-                                self.has_contact, self.drag)
+                                self.has_contact, self.drag, self.axial_mode, self.dashpot_mode)
             if done < chunk:
                 # the contact buffer overflowed inside step `done`: grow it and close that step
-                self.compute_forces()
+                self.compute_forces(predicted=True)
                 half_kick(self.model, self.state, self.work, 0.5 * self.dt, self.twist_mode)
                 done += 1
             self.steps += done

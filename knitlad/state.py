@@ -141,6 +141,9 @@ class Workspace(NamedTuple):
     torque: np.ndarray  # (ne,) torque about each edge tangent
     yarn_edges: np.ndarray  # (n_yarns + 1,) first edge of each yarn (edges are stored yarn by yarn)
     yarn_hinges: np.ndarray  # (n_yarns + 1,) first hinge of each yarn
+    axial_sweep: np.ndarray  # (ne, 2) the tridiagonal solve of implicit axial forces
+    v_damp: np.ndarray  # (n, 3) the velocities the dashpots see with DASHPOTS_PREDICTED ...
+    omega_damp: np.ndarray  # (ne,) ... and the spins
 
     @staticmethod
     def for_model(model: RodModel) -> "Workspace":
@@ -152,6 +155,7 @@ class Workspace(NamedTuple):
         return Workspace(
             np.zeros((ne, 3)), np.zeros(ne), np.zeros((ne, 3)), np.zeros((ne, 3)), np.zeros((n, 3)), np.zeros(ne),
             np.searchsorted(edge_yarn, yarns).astype(np.int64), np.searchsorted(hinge_yarn, yarns).astype(np.int64),
+            np.zeros((ne, 2)), np.zeros((n, 3)), np.zeros(ne),
         )
 
 

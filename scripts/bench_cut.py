@@ -1,7 +1,7 @@
 """Benchmark: `knitlad cut` on a full knit, per preset and with twist off and on.
 
     python scripts/bench_cut.py [--fx 13.6] [--stitches 42] [--presets default accurate]
-                                [--twist off on] [--threads 2]
+                                [--twist off on] [--axial explicit implicit] [--threads 2]
 
 For each run: wall time per stage (stretch, cut + propagate), steps, node-steps/s of
 the dynamics, and that rate over the rate of a lean stretch + bend kernel (one
@@ -37,6 +37,8 @@ def main() -> None:
     p.add_argument("--stitches", type=int, default=42)
     p.add_argument("--presets", nargs="+", default=["default", "accurate"], choices=["fast", "default", "accurate"])
     p.add_argument("--twist", nargs="+", default=["off", "on"], choices=["off", "on"])
+    p.add_argument("--axial", nargs="+", default=["explicit"], choices=["explicit", "implicit"],
+                   help="the axial springs of the dynamics (implicit_axial)")
     p.add_argument("--threads", type=int, default=2)
     args = p.parse_args()
     t = time.perf_counter()
@@ -46,19 +48,21 @@ def main() -> None:
     print(f"warm-up (compilation on a fresh clone): {time.perf_counter() - t:.1f} s")
     lean = lean_rate()
     print(f"lean stretch + bend kernel, 1 thread: {lean:.3e} node-steps/s\n")
-    print(f"| {args.stitches} x {args.stitches}, f_x {args.fx:g} | twist | nodes | stretch [s] | cut + propagate [s] "
+    print(f"| {args.stitches} x {args.stitches}, f_x {args.fx:g} | twist | axial | nodes | stretch [s] | cut + propagate [s] "
           "| total [s] | steps | node-steps/s | / lean | f_x^ini | v_lad/c_b | n_lad/n_y | f_x^fin |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for preset in args.presets:
         for twist in args.twist:
-            cfg = CutConfig(n_x=args.stitches, n_y=args.stitches, fx=args.fx, preset=preset, twist=twist == "on")
-            with numba_threads(args.threads):
-                r = run_ladder(cfg.settings())
-            stretch_s, propagate_s = r.wall_s["stretch"], r.wall_s["propagate"]
-            rate = r.nodes * r.steps / propagate_s
-            print(f"| {preset} ({cfg.resolution}) | {twist} | {r.nodes} | {stretch_s:.1f} | {propagate_s:.1f} | "
-                  f"{stretch_s + propagate_s:.1f} | {r.steps} | {rate:.3e} | {rate / lean:.2f} | {r.fx_ini:.2f} | "
-                  f"{r.v_lad_over_cb:.3f} | {r.n_lad_over_ny:.2f} | {r.fx_fin:.2f} |", flush=True)
+            for axial in args.axial:
+                cfg = CutConfig(n_x=args.stitches, n_y=args.stitches, fx=args.fx, preset=preset, twist=twist == "on",
+                                implicit_axial=axial == "implicit")
+                with numba_threads(args.threads):
+                    r = run_ladder(cfg.settings())
+                stretch_s, propagate_s = r.wall_s["stretch"], r.wall_s["propagate"]
+                rate = r.nodes * r.steps / propagate_s
+                print(f"| {preset} ({cfg.resolution}) | {twist} | {axial} | {r.nodes} | {stretch_s:.1f} | "
+                      f"{propagate_s:.1f} | {stretch_s + propagate_s:.1f} | {r.steps} | {rate:.3e} | {rate / lean:.2f} | "
+                      f"{r.fx_ini:.2f} | {r.v_lad_over_cb:.3f} | {r.n_lad_over_ny:.2f} | {r.fx_fin:.2f} |", flush=True)
 
 
 if __name__ == "__main__":

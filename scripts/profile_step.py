@@ -2,6 +2,7 @@
 
     python scripts/profile_step.py [--fx 13.6] [--stitches 42] [--preset default]
                                    [--twist on] [--threads 2] [--warm-steps 2000]
+                                   [--implicit-axial]
 
 Stretches the knit, cuts it and runs ``--warm-steps`` steps (so the ladder runs and the
 cut ends whip), then times each part of a step on that state, as the median of repeated
@@ -38,6 +39,7 @@ from knitlad.kernels.integrate import (
     elastic_forces_by_yarn,
     framed_forces_by_yarn,
     half_kick,
+    implicit_stretching_by_yarn,
     straight_twisting_forces_by_yarn,
     verlet_steps,
 )
@@ -127,8 +129,10 @@ def main() -> None:
     p.add_argument("--twist", default="on", choices=["off", "on"])
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--warm-steps", type=int, default=2000)
+    p.add_argument("--implicit-axial", action="store_true", help="the axial springs implicit (implicit_axial)")
     args = p.parse_args()
-    cfg = CutConfig(n_x=args.stitches, n_y=args.stitches, fx=args.fx, preset=args.preset, twist=args.twist == "on")
+    cfg = CutConfig(n_x=args.stitches, n_y=args.stitches, fx=args.fx, preset=args.preset, twist=args.twist == "on",
+                    implicit_axial=args.implicit_axial)
     settings = cfg.settings()
     with numba_threads(args.threads):
         run = cut(stretch(settings.stretch), settings.dynamics)
@@ -141,7 +145,7 @@ def main() -> None:
 
         def steps(n=20):
             sim.compute_forces()
-            verlet_steps(m, s, w, c, dt, n, tw, True, sim.drag)
+            verlet_steps(m, s, w, c, dt, n, tw, True, sim.drag, sim.axial_mode)
 
         rows.append(("step (20 steps, per step)", median_ms(steps, 10) / 20))
         x_a = s.x.copy()
@@ -155,21 +159,23 @@ def main() -> None:
 
         rows.append(("edge vectors", median_ms(lambda: edges_by_yarn(m, w, s.x))))
         rows.append(("edge vectors + stretching", median_ms(lambda: stretch_by_yarn(m, s, w))))
-        rows.append(("twist-free elastic (stretch + bend)", median_ms(lambda: elastic_forces_by_yarn(m, s, w))))
+        rows.append(("implicit axial springs (a tridiagonal solve per yarn)", median_ms(
+            lambda: implicit_stretching_by_yarn(m, s, w, dt))))
+        rows.append(("twist-free elastic (stretch + bend)", median_ms(lambda: elastic_forces_by_yarn(m, s, w, True, s.v))))
         if tw:
             rows.append(("straight twisting path (frame-free)", median_ms(
-                lambda: straight_twisting_forces_by_yarn(m, s, w))))
+                lambda: straight_twisting_forces_by_yarn(m, s, w, True, s.v))))
             rows.append(("  edge vectors + reference twist by holonomy", median_ms(
                 lambda: holonomy_by_yarn(m, s, w, flip[0]))))
             rows.append(("  isotropic bending and twisting", median_ms(lambda: straight_bending_by_yarn(m, s, w))))
-            rows.append(("framed elastic (all of the framed path)", median_ms(lambda: framed_forces_by_yarn(m, s, w))))
+            rows.append(("framed elastic (all of the framed path)", median_ms(lambda: framed_forces_by_yarn(m, s, w, True, s.v))))
             rows.append(("  edge vectors + transport of the frames", median_ms(transport)))
             rows.append(("  reference twist", median_ms(lambda: twist_by_yarn(m, s, w))))
             rows.append(("  material frames", median_ms(lambda: frames_by_yarn(s, w))))
             rows.append(("  framed bending and twisting", median_ms(lambda: framed_bending_by_yarn(m, s, w))))
         rows.append(("contact pair forces", median_ms(
             lambda: contact_forces(s.x, s.v, s.omega, tw, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt, w.force,
-                                   w.torque))))
+                                   w.torque, s.v, s.omega, False))))
         rows.append(("half kick", median_ms(lambda: half_kick(m, s, w, 0.0, tw))))
         rows.append(("drift", median_ms(lambda: _drift(m, s, 0.0, tw))))
 

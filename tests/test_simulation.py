@@ -112,3 +112,31 @@ def test_the_twist_path_is_framed_only_where_the_yarn_has_natural_curvature():
     assert sim(True).twist_mode == TWIST_STRAIGHT
     assert sim(True, framed_twist=True).twist_mode == TWIST_FRAMED
     assert sim(True, natural_curvature="rest").twist_mode == TWIST_FRAMED
+
+
+@pytest.mark.parametrize("predicted", [False, True])
+def test_the_damped_limit_factor_is_the_integrators_stability_limit(predicted):
+    """A mass on a spring and dashpot (zeta 0.3), stepped by the kernels at 2 % below and above
+    2 f(zeta) / omega (:func:`knitlad.timestep.damped_limit_factor`): bounded below, growing above."""
+    from knitlad.kernels.integrate import DASHPOTS_HALF_STEP, DASHPOTS_PREDICTED, compute_forces, verlet_steps
+    from knitlad.timestep import damped_limit_factor
+
+    mode = DASHPOTS_PREDICTED if predicted else DASHPOTS_HALF_STEP
+    amplitudes = []
+    for factor in (0.98, 1.02):
+        scene = kl.Scene()
+        y = scene.add_yarn(np.array([[0.0, 0.0, 0.0], [1e-3, 0.0, 0.0]]))
+        scene.hold(y, [0])
+        rods = scene.build(stretch_damping_ratio=0.3)
+        m, s = rods.model, rods.state
+        k, c, mass = m.EA[0] / m.rest_length[0], m.stretch_damping[0], m.mass[1]
+        zeta = c / (2 * math.sqrt(k * mass))
+        dt = factor * 2 * damped_limit_factor(zeta, predicted) / math.sqrt(k / mass)
+        x0 = s.x[1, 0]
+        s.x[1, 0] += 1e-6
+        sim = kl.Simulation(rods)  # its workspace and buffers; the steps below bypass its limit
+        sim.work.v_damp[:] = s.v
+        compute_forces(m, s, sim.work, sim.contacts, 0, False, 0.0, dt, 0, mode)
+        verlet_steps(m, s, sim.work, sim.contacts, dt, 3000, 0, False, 0.0, 0, mode)
+        amplitudes.append(abs(s.x[1, 0] - x0) / 1e-6)
+    assert amplitudes[0] < 1.0 and amplitudes[1] > 1e3, amplitudes

@@ -337,8 +337,8 @@ MIN_PAIRS_PER_THREAD = 1000
 
 @njit(**NUMBA_OPTS)
 def pair_contact_forces(
-    lo, hi, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs,
-    slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
+    lo, hi, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
+    edge_prev, edge_next, union, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
 ):
     """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``.
 
@@ -355,6 +355,10 @@ def pair_contact_forces(
     its yarn's spin: v_C,i = v_P + omega_i t_i x (-r_i n). The friction force, applied
     there, twists each edge about its axis (TORQUE_I, TORQUE_J): the friction couple.
     Its moment about the other two axes (lever r << edge length) is dropped.
+
+    ``predicted``: the dashpots act on ``v_damp``, ``omega_damp`` (the velocities predicted at the end
+    of the step, :func:`knitlad.kernels.integrate.predict_velocities`), the slip on the half-step
+    ``v``, ``omega``; else both on ``v``, ``omega``.
     """
     counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out)
     for p in range(lo, hi):
@@ -393,6 +397,10 @@ def pair_contact_forces(
         vrx = (1 - s) * v[a0, 0] + s * v[a1, 0] - (1 - t) * v[b0, 0] - t * v[b1, 0]
         vry = (1 - s) * v[a0, 1] + s * v[a1, 1] - (1 - t) * v[b0, 1] - t * v[b1, 1]
         vrz = (1 - s) * v[a0, 2] + s * v[a1, 2] - (1 - t) * v[b0, 2] - t * v[b1, 2]
+        if predicted:
+            dvx = (1 - s) * v_damp[a0, 0] + s * v_damp[a1, 0] - (1 - t) * v_damp[b0, 0] - t * v_damp[b1, 0]
+            dvy = (1 - s) * v_damp[a0, 1] + s * v_damp[a1, 1] - (1 - t) * v_damp[b0, 1] - t * v_damp[b1, 1]
+            dvz = (1 - s) * v_damp[a0, 2] + s * v_damp[a1, 2] - (1 - t) * v_damp[b0, 2] - t * v_damp[b1, 2]
         li = 1.0
         lj = 1.0
         if spin:
@@ -406,7 +414,15 @@ def pair_contact_forces(
             vrx -= wi * cix + wj * cjx
             vry -= wi * ciy + wj * cjy
             vrz -= wi * ciz + wj * cjz
-        vn = dot(vrx, vry, vrz, nx, ny, nz)  # > 0: separating
+            if predicted:
+                wi = edge_radius[i] * omega_damp[i] / li
+                wj = edge_radius[j] * omega_damp[j] / lj
+                dvx -= wi * cix + wj * cjx
+                dvy -= wi * ciy + wj * cjy
+                dvz -= wi * ciz + wj * cjz
+        if not predicted:
+            dvx, dvy, dvz = vrx, vry, vrz
+        vn = dot(dvx, dvy, dvz, nx, ny, nz)  # > 0: separating
         m_a = (1 - s) * mass[a0] + s * mass[a1]
         m_b = (1 - t) * mass[b0] + t * mass[b1]
         m_eff = m_a * m_b / (m_a + m_b)
@@ -426,12 +442,18 @@ def pair_contact_forces(
             ux *= u_len / u_new
             uy *= u_len / u_new
             uz *= u_len / u_new
-        vtx = vrx - vn * nx
-        vty = vry - vn * ny
-        vtz = vrz - vn * nz
-        ux += vtx * dt
-        uy += vty * dt
-        uz += vtz * dt
+        vtx = dvx - vn * nx  # of the dashpot
+        vty = dvy - vn * ny
+        vtz = dvz - vn * nz
+        if predicted:  # the slip grows with the half-step velocity (midpoint rule)
+            vn_slip = dot(vrx, vry, vrz, nx, ny, nz)
+            ux += (vrx - vn_slip * nx) * dt
+            uy += (vry - vn_slip * ny) * dt
+            uz += (vrz - vn_slip * nz) * dt
+        else:
+            ux += vtx * dt
+            uy += vty * dt
+            uz += vtz * dt
         gamma_t = 2.0 * damping_t * math.sqrt(k_t * m_eff)
         ftx = -k_t * ux - gamma_t * vtx
         fty = -k_t * uy - gamma_t * vty
@@ -466,21 +488,23 @@ def pair_contact_forces(
 
 @njit(**PARALLEL_OPTS)
 def _pair_contact_forces_in_blocks(
-    n_blocks, n_pairs, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union,
-    pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
+    n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
+    edge_prev, edge_next, union, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
 ):
     for blk in prange(n_blocks):
         pair_contact_forces(
-            blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, omega, spin, mass, edge_a, edge_b,
-            edge_shift, edge_radius, edge_prev, edge_next, union, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt,
-            out,
+            blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, omega, v_damp, omega_damp, predicted,
+            spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, slip, k_n,
+            damping_n, k_t, damping_t, mu, dt, out,
         )
 
 
 @njit(**NUMBA_OPTS)
-def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F, torque):
+def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F, torque, v_damp, omega_damp,
+                   predicted):
     """Add the contact forces of the candidate pairs of ``c`` (:class:`knitlad.contact.Contacts`) to F
-    (and, with ``spin``, the friction couples to ``torque``); advance the slip history.
+    (and, with ``spin``, the friction couples to ``torque``); advance the slip history. ``predicted``:
+    the dashpots act on ``v_damp``, ``omega_damp`` (:func:`pair_contact_forces`).
 
     The damping parameters are damping ratios of the contact springs (gamma =
     2 zeta sqrt(k m_eff)). ``c.stats`` receives, at slots TOUCHING, MAX_OVERLAP,
@@ -495,13 +519,15 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
     p = c.params
     if n_blocks > 1:
         _pair_contact_forces_in_blocks(
-            n_blocks, n_pairs, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev,
-            c.edge_next, c.union, c.pairs, c.slip, p.k_n, p.damping_n, p.k_t, p.damping_t, p.mu, dt, c.pair_results,
+            n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
+            c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, p.k_n, p.damping_n, p.k_t, p.damping_t,
+            p.mu, dt, c.pair_results,
         )
     else:
         pair_contact_forces(
-            0, n_pairs, x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next,
-            c.union, c.pairs, c.slip, p.k_n, p.damping_n, p.k_t, p.damping_t, p.mu, dt, c.pair_results,
+            0, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
+            c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, p.k_n, p.damping_n, p.k_t, p.damping_t,
+            p.mu, dt, c.pair_results,
         )
     pairs, pair_results, stats = c.pairs, c.pair_results, c.stats
     n_touch = 0

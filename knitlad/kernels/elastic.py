@@ -78,6 +78,79 @@ def stretching_forces(e, elen, v, edge_a, edge_b, rest_length, EA, damping, F, f
 
 
 @njit(**NUMBA_OPTS)
+def implicit_stretching_forces(e, elen, v, held, mass, edge_a, edge_b, rest_length, EA, damping, dt, F, sweep,
+                               first, last):
+    """Axial springs and dashpots of edges [first, last) at the end of the step (linearly implicit).
+
+    The tension of :func:`stretching_forces`, T = g/eps + c dg/dt with g = |e| - |e_bar| and the
+    compliance eps = |e_bar|/EA, is taken at the end of the kick v+ = v + dt M^-1 (F + G^T T)
+    that follows, with g linearised along the current tangents, g+ = g + dt t.(v+_b - v+_a):
+    the backward-Euler step of a compliant constraint (Servin, Lacoursiere and Melin 2006,
+    "Interactive simulation of elastic deformable materials"; the SPOOK stepper of
+    Lacoursiere 2007 with its regularisation set by the material). With beta = dt (dt/eps + c):
+
+        (G M^-1 G^T + 1/beta) T = g/(eps beta) + G v/dt + G M^-1 F
+
+    where G v = t.(v_b - v_a) is the stretch rate and F the other forces. G M^-1 G^T is
+    tridiagonal along a chain of edges (diagonal 1/m_a + 1/m_b, t_k.t_k+1/m at the shared node,
+    1/m = 0 on held nodes), solved by the Thomas algorithm in ``sweep`` (ne, 2). A static state
+    keeps the explicit tension T = g/eps exactly; the axial waves, which the laddering does not
+    need, lose their stability limit and are damped (per step by 1/sqrt(1 + (omega dt)^2)).
+    Consecutive edges couple where they share a node (edge_b[k] == edge_a[k + 1]); a ring's
+    closing node is not coupled, so the caller keeps rings explicit. Adds T t to F[a], -T t to F[b].
+    """
+    if last <= first:
+        return
+    inv_dt = 1.0 / dt
+    couple = 0.0  # G_k-1 M^-1 G_k^T, the coupling of edge k to the edge before it
+    previous_c = 0.0  # the forward sweep's last coefficients
+    previous_d = 0.0
+    inv_a = 0.0 if held[edge_a[first]] else 1.0 / mass[edge_a[first]]
+    inv_l = 1.0 / elen[first]
+    for k in range(first, last):
+        a = edge_a[k]
+        b = edge_b[k]
+        if k > first and a != edge_b[k - 1]:  # a new chain: its first node's inverse mass
+            inv_a = 0.0 if held[a] else 1.0 / mass[a]
+        inv_b = 0.0 if held[b] else 1.0 / mass[b]
+        tx, ty, tz = e[k, 0] * inv_l, e[k, 1] * inv_l, e[k, 2] * inv_l
+        # 1/beta = rest r and 1/(eps beta) = EA r, r = 1 / (dt (dt EA + c rest)): one division
+        r = 1.0 / (dt * (dt * EA[k] + damping[k] * rest_length[k]))
+        inv_beta = rest_length[k] * r
+        rate = (v[b, 0] - v[a, 0]) * tx + (v[b, 1] - v[a, 1]) * ty + (v[b, 2] - v[a, 2]) * tz
+        accel = ((inv_b * F[b, 0] - inv_a * F[a, 0]) * tx + (inv_b * F[b, 1] - inv_a * F[a, 1]) * ty
+                 + (inv_b * F[b, 2] - inv_a * F[a, 2]) * tz)
+        rhs = (elen[k] - rest_length[k]) * EA[k] * r + rate * inv_dt + accel
+        inv_denom = 1.0 / (inv_a + inv_b + inv_beta - couple * previous_c)
+        # the coupling to the next edge, through node b
+        nxt = 0.0
+        inv_l_next = 0.0
+        if k + 1 < last:
+            inv_l_next = 1.0 / elen[k + 1]
+            if edge_a[k + 1] == b:
+                nxt = -inv_b * (tx * e[k + 1, 0] + ty * e[k + 1, 1] + tz * e[k + 1, 2]) * inv_l_next
+        previous_c = nxt * inv_denom  # kept in registers: the recurrence is the kernel's critical path
+        previous_d = (rhs - couple * previous_d) * inv_denom
+        sweep[k, 0] = previous_c
+        sweep[k, 1] = previous_d
+        couple = nxt
+        inv_a = inv_b
+        inv_l = inv_l_next
+    tension = 0.0
+    for k in range(last - 1, first - 1, -1):
+        tension = sweep[k, 1] - sweep[k, 0] * tension  # sweep[k, 0] is 0 at a chain's last edge
+        a = edge_a[k]
+        b = edge_b[k]
+        scale = tension / elen[k]
+        F[a, 0] += scale * e[k, 0]
+        F[a, 1] += scale * e[k, 1]
+        F[a, 2] += scale * e[k, 2]
+        F[b, 0] -= scale * e[k, 0]
+        F[b, 1] -= scale * e[k, 1]
+        F[b, 2] -= scale * e[k, 2]
+
+
+@njit(**NUMBA_OPTS)
 def stretching_energy(elen, rest_length, EA):
     """E_s = sum_k EA (|e| - |e_bar|)^2 / (2 |e_bar|)."""
     total = 0.0

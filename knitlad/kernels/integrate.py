@@ -5,7 +5,7 @@ step. ``m`` is a :class:`knitlad.state.RodModel` (read only), ``s`` a
 :class:`knitlad.state.RodState` (advanced in place), ``w`` a
 :class:`knitlad.state.Workspace`, ``c`` the contact buffers
 (:class:`knitlad.contact.Contacts`). The modes are arguments, never read off the
-arrays: ``twist`` and ``contact`` (yarn-yarn contact on). ``twist`` is one of
+arrays: ``twist``, ``contact`` (yarn-yarn contact on) and ``axial`` (below). ``twist`` is one of
 TWIST_OFF (0: isotropic bending of rods straight at rest, no twist), TWIST_FRAMED
 (1, or True: framed DER, material frames, natural curvature) and TWIST_STRAIGHT (2:
 rods straight at rest that twist: isotropic bending and the twist energy, the
@@ -27,6 +27,7 @@ from knitlad.kernels.elastic import (
     edge_vectors,
     framed_bending_twisting_energy,
     framed_bending_twisting_forces,
+    implicit_stretching_forces,
     straight_bending_twisting_forces,
     stretching_energy,
     stretching_forces,
@@ -42,11 +43,21 @@ from knitlad.kernels.frames import (
 TWIST_OFF = 0
 TWIST_FRAMED = 1
 TWIST_STRAIGHT = 2
+# the axial springs: AXIAL_EXPLICIT, forces of the current state (velocity Verlet, the step bound by
+# the axial waves), or AXIAL_IMPLICIT, tensions at the end of the kick (elastic.implicit_stretching_forces,
+# open yarns only, no rail or image): the step is then set by the contact springs and bending
+AXIAL_EXPLICIT = 0
+AXIAL_IMPLICIT = 1
+# the dashpots (axial, contact, drag): DASHPOTS_HALF_STEP, on the half-step velocity that the force
+# evaluation sees (first order in dt), or DASHPOTS_PREDICTED, on the velocity at the end of the step
+# predicted from the last forces (predict_velocities, second order; the slip keeps the half-step one)
+DASHPOTS_HALF_STEP = 0
+DASHPOTS_PREDICTED = 1
 
 
 
 @njit(**PARALLEL_OPTS)
-def elastic_forces_by_yarn(m, s, w):
+def elastic_forces_by_yarn(m, s, w, explicit_stretch, v_damp):
     """Stretching and isotropic bending, yarn by yarn in parallel.
 
     A yarn's edges and hinges only touch its own nodes, so threads never write
@@ -55,13 +66,15 @@ def elastic_forces_by_yarn(m, s, w):
     for y in prange(w.yarn_edges.shape[0] - 1):
         e0, e1 = w.yarn_edges[y], w.yarn_edges[y + 1]
         edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen, e0, e1)
-        stretching_forces(w.e, w.elen, s.v, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force, e0, e1)
+        if explicit_stretch:
+            stretching_forces(w.e, w.elen, v_damp, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force,
+                              e0, e1)
         bending_forces(w.e, w.elen, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1, m.B_over_l, w.force,
                        w.yarn_hinges[y], w.yarn_hinges[y + 1])
 
 
 @njit(**PARALLEL_OPTS)
-def framed_forces_by_yarn(m, s, w):
+def framed_forces_by_yarn(m, s, w, explicit_stretch, v_damp):
     """Stretching, and bending and twisting with material frames (framed DER), yarn by yarn in
     parallel: the frames of a yarn's edges and its hinges' forces and torques touch only its own
     nodes and edges (as :func:`elastic_forces_by_yarn`)."""
@@ -69,7 +82,9 @@ def framed_forces_by_yarn(m, s, w):
         e0, e1 = w.yarn_edges[y], w.yarn_edges[y + 1]
         h0, h1 = w.yarn_hinges[y], w.yarn_hinges[y + 1]
         edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen, e0, e1)
-        stretching_forces(w.e, w.elen, s.v, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force, e0, e1)
+        if explicit_stretch:
+            stretching_forces(w.e, w.elen, v_damp, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force,
+                              e0, e1)
         transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u, e0, e1)
         update_reference_twist(s.tangent, s.ref_u, m.hinge_e0, m.hinge_e1, s.ref_twist, h0, h1)
         material_frames(s.tangent, s.ref_u, s.theta, w.d1, w.d2, e0, e1)
@@ -80,7 +95,7 @@ def framed_forces_by_yarn(m, s, w):
 
 
 @njit(**PARALLEL_OPTS)
-def straight_twisting_forces_by_yarn(m, s, w):
+def straight_twisting_forces_by_yarn(m, s, w, explicit_stretch, v_damp):
     """Stretching, and isotropic bending and twisting of yarns straight at rest (TWIST_STRAIGHT), yarn by
     yarn in parallel: the reference twist by holonomy from the stored tangents, then the frames
     transported (kept for any later use of the state), then the forces and torques."""
@@ -88,7 +103,9 @@ def straight_twisting_forces_by_yarn(m, s, w):
         e0, e1 = w.yarn_edges[y], w.yarn_edges[y + 1]
         h0, h1 = w.yarn_hinges[y], w.yarn_hinges[y + 1]
         edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen, e0, e1)
-        stretching_forces(w.e, w.elen, s.v, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force, e0, e1)
+        if explicit_stretch:
+            stretching_forces(w.e, w.elen, v_damp, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force,
+                              e0, e1)
         reference_twist_by_holonomy(s.tangent, w.e, w.elen, m.hinge_e0, m.hinge_e1, s.ref_twist, h0, h1)
         transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u, e0, e1)
         straight_bending_twisting_forces(
@@ -98,28 +115,45 @@ def straight_twisting_forces_by_yarn(m, s, w):
 
 
 @njit(**NUMBA_OPTS)
-def compute_forces(m, s, w, c, twist, contact, drag, dt):
+def compute_forces(m, s, w, c, twist, contact, drag, dt, axial=AXIAL_EXPLICIT, dashpots=DASHPOTS_HALF_STEP):
     """Total force on every node (``w.force``) and torque on every edge (``w.torque``).
 
-    ``twist``, ``contact``: the modes (module docstring). ``drag`` [1/ms]: a global viscous drag -drag m v, used
-    only while relaxing. ``dt``: the step over which contact slip accumulates.
+    ``twist``, ``contact``, ``axial``, ``dashpots``: the modes (module docstring; with DASHPOTS_PREDICTED the
+    dashpots act on ``w.v_damp``, ``w.omega_damp``, which the caller fills). ``drag`` [1/ms]: a global viscous drag
+    -drag m v, used only while relaxing. ``dt``: the step over which contact slip accumulates, and
+    with AXIAL_IMPLICIT the kick that follows (a full step: :func:`verlet_steps` fuses the half-kicks).
     Returns False if the contact buffer overflowed (forces incomplete).
     """
     follow_images(s.x, s.v, m.image_node, m.image_master, m.image_shift)
-    external_forces(m.f_ext, m.held, m.mass, s.v, drag, w.force)
+    predicted = dashpots == DASHPOTS_PREDICTED
+    v_damp = w.v_damp if predicted else s.v
+    external_forces(m.f_ext, m.held, m.mass, v_damp, drag, w.force)
     w.torque[:] = 0.0
+    explicit = axial == AXIAL_EXPLICIT
     if twist == TWIST_FRAMED:
-        framed_forces_by_yarn(m, s, w)
+        framed_forces_by_yarn(m, s, w, explicit, v_damp)
     elif twist:
-        straight_twisting_forces_by_yarn(m, s, w)
+        straight_twisting_forces_by_yarn(m, s, w, explicit, v_damp)
     else:
-        elastic_forces_by_yarn(m, s, w)
+        elastic_forces_by_yarn(m, s, w, explicit, v_damp)
     if contact:
         if not refresh_contacts(s.x, m.edge_a, m.edge_b, m.edge_shift, c):
             return False
-        contact_forces(s.x, s.v, s.omega, twist, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt, w.force, w.torque)
+        contact_forces(s.x, s.v, s.omega, twist, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt, w.force, w.torque,
+                       v_damp, w.omega_damp if predicted else s.omega, predicted)
     rail_forces(m.rail_node, m.rail_axis, w.force)
+    if not explicit:
+        implicit_stretching_by_yarn(m, s, w, dt)  # last: its tensions balance every other force
     return True
+
+
+@njit(**PARALLEL_OPTS)
+def implicit_stretching_by_yarn(m, s, w, dt):
+    """The axial forces at the end of the coming kick (AXIAL_IMPLICIT), yarn by yarn in parallel:
+    a yarn's tridiagonal system couples only its own edges and nodes."""
+    for y in prange(w.yarn_edges.shape[0] - 1):
+        implicit_stretching_forces(w.e, w.elen, s.v, m.held, m.mass, m.edge_a, m.edge_b, m.rest_length, m.EA,
+                                   m.stretch_damping, dt, w.force, w.axial_sweep, w.yarn_edges[y], w.yarn_edges[y + 1])
 
 
 @njit(**PARALLEL_OPTS)
@@ -240,6 +274,23 @@ def drift_edges(theta_held, omega, theta, dt):
         theta[j] += dt * omega[j]
 
 
+@njit(**PARALLEL_OPTS)
+def predict_velocities(held, mass, force, v, half_dt, v_damp):
+    """v_damp = v + (dt/2) F / m: the velocity at the end of a step from the half-step one and the
+    last forces, O(dt^2) (their own change over the step is the error); a held node keeps its own."""
+    for i in prange(v.shape[0]):
+        rate = 0.0 if held[i] else half_dt / mass[i]
+        for k in range(3):
+            v_damp[i, k] = v[i, k] + rate * force[i, k]
+
+
+@njit(**PARALLEL_OPTS)
+def predict_spins(theta_held, twist_inertia, torque, omega, half_dt, omega_damp):
+    """omega_damp = omega + (dt/2) torque / I, as :func:`predict_velocities`."""
+    for j in prange(omega.shape[0]):
+        omega_damp[j] = 0.0 if theta_held[j] else omega[j] + half_dt * torque[j] / twist_inertia[j]
+
+
 @njit(**NUMBA_OPTS)
 def half_kick(m, s, w, half_dt, twist):
     kick_nodes(m.held, m.mass, w.force, s.v, half_dt)
@@ -255,7 +306,7 @@ def _drift(m, s, dt, twist):
 
 
 @njit(**NUMBA_OPTS)
-def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, drag):
+def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, drag, axial=AXIAL_EXPLICIT, dashpots=DASHPOTS_HALF_STEP):
     """Advance ``n_steps`` of velocity Verlet (kick-drift-kick); return the steps completed.
 
     Expects ``w.force``/``w.torque`` to hold the forces of the current state
@@ -263,13 +314,20 @@ def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, drag):
     with their prescribed velocity; the force left on them in ``w.force`` is
     minus the reaction of the support. If the contact buffer overflows in step
     k, returns k with that step drifted but not closed: grow the buffer, call
-    :func:`compute_forces` and ``half_kick(dt/2)`` to finish it.
+    :func:`compute_forces` and ``half_kick(dt/2)`` to finish it. With ``axial`` AXIAL_IMPLICIT the
+    forces of each evaluation hold the tensions for a kick of dt from the half-step velocity it saw,
+    which the fused half-kicks give (two halves of dt around a call boundary add up to it). With
+    ``dashpots`` DASHPOTS_PREDICTED each step predicts ``w.v_damp``, ``w.omega_damp`` before its forces.
     """
     # the closing half-kick of one step and the opening one of the next are fused
     half_kick(m, s, w, 0.5 * dt, twist)
     for step in range(n_steps):
         _drift(m, s, dt, twist)
-        if not compute_forces(m, s, w, c, twist, contact, drag, dt):
+        if dashpots == DASHPOTS_PREDICTED:  # w.force still holds the last step's forces
+            predict_velocities(m.held, m.mass, w.force, s.v, 0.5 * dt, w.v_damp)
+            if twist:
+                predict_spins(m.theta_held, m.twist_inertia, w.torque, s.omega, 0.5 * dt, w.omega_damp)
+        if not compute_forces(m, s, w, c, twist, contact, drag, dt, axial, dashpots):
             return step
         half_kick(m, s, w, dt if step < n_steps - 1 else 0.5 * dt, twist)
     return n_steps

@@ -65,12 +65,21 @@ def test_a_contact_too_soft_for_the_tension_stops_with_an_interpenetration_error
         run(small(lx=0.42, contact_force_f0=0.05))
 
 
-def test_a_knit_stepped_at_the_stability_limit_stays_finite():
+@pytest.mark.parametrize("implicit_axial, predicted_dashpots", [(False, False), (True, False), (False, True),
+                                                                (True, True)])
+def test_a_knit_stepped_at_the_stability_limit_stays_finite(implicit_axial, predicted_dashpots):
     """safety = 1: the largest step knitlad accepts (Gershgorin bound over stretching,
-    bending and contact springs); 3000 steps of a relaxed 4 x 4 knit with friction."""
+    bending and contact springs, or contact and bending with implicit axial springs; the
+    dashpots' factor for their velocities); 3000 steps of a relaxed 4 x 4 knit with friction."""
     with numba_threads(1):
         knit = stretch(small(n_x=4, n_y=4, lx=0.36).stretch_settings())
-        sim = kl.Simulation(knit.knit.rods.copy(), contact=stretch_contact(knit.settings), safety=1.0)
+        contact = stretch_contact(knit.settings)
+        sim = kl.Simulation(knit.knit.rods.copy(), contact=contact, safety=1.0, implicit_axial=implicit_axial,
+                            predicted_dashpots=predicted_dashpots)
+        if implicit_axial:
+            explicit = kl.Simulation(knit.knit.rods.copy(), contact=contact, safety=1.0,
+                                     predicted_dashpots=predicted_dashpots)
+            assert sim.dt > 1.2 * explicit.dt  # the axial springs no longer bind
         sim.set_friction(0.4)
         sim.step(3000)  # raises SimulationBlowUp on a non-finite value or a supersonic node
         assert np.isfinite(sim.state.x).all()

@@ -61,13 +61,13 @@ def test_reaction_forces_balance_the_load():
     np.testing.assert_allclose(reaction, [0.0, force, 0.0], atol=force * 1e-6)
 
 
-def oscillate(c: Cantilever, dt_s: float | None, periods: float, damping: float = 0.0):
+def oscillate(c: Cantilever, dt_s: float | None, periods: float, damping: float = 0.0, implicit_axial: bool = False):
     """Release the cantilever from its statically loaded shape; tip y(t) and energies."""
     force = 1e-3 * B / c.length**2
     rods = c.build(tip_force=(0.0, -force, 0.0), stretch_damping_ratio=damping)
     kl.Simulation(rods).relax(force_tol_N=force * 1e-7, max_steps=3_000_000)
     rods = rods.replace_model(f_ext=0.0 * rods.model.f_ext)
-    sim = kl.Simulation(rods, dt_s=dt_s)
+    sim = kl.Simulation(rods, dt_s=dt_s, implicit_axial=implicit_axial)
     period = 2 * math.pi / c.first_frequency()
     times, tips, totals = [], [], []
 
@@ -109,8 +109,9 @@ def test_energy_is_conserved_without_damping_and_the_error_is_second_order_in_dt
     assert 3.0 < ratio < 5.0, f"energy error ratio {ratio:.2f} for dt halved (expect 4)"
 
 
-def axial_energy_history(damping: float, periods: float = 5.0) -> np.ndarray:
-    """A free rod stretched uniformly by 1e-4 and released: total energy per sample."""
+def axial_energy_history(damping: float, periods: float = 5.0, dt_over_limit: float | None = None) -> np.ndarray:
+    """A free rod stretched uniformly by 1e-4 and released: total energy per sample. ``dt_over_limit``:
+    the axial springs implicit, stepped at that multiple of their explicit stability limit."""
     n = 21
     pts = np.zeros((n, 3))
     pts[:, 0] = np.linspace(0.0, 0.01, n)
@@ -118,7 +119,11 @@ def axial_energy_history(damping: float, periods: float = 5.0) -> np.ndarray:
     scene.add_yarn(pts)
     rods = scene.build(stretch_damping_ratio=damping)
     rods.state.x[:, 0] *= 1.0 + 1e-4
-    sim = kl.Simulation(rods)
+    if dt_over_limit is None:
+        sim = kl.Simulation(rods)
+    else:
+        dt = dt_over_limit * kl.Simulation(rods.copy()).limits.stretching * kl.units.TIME
+        sim = kl.Simulation(rods, dt_s=dt, implicit_axial=True)
     period = 2 * 0.01 / kl.NYLON.axial_wave_speed  # fundamental free-free axial mode
     totals = [sim.energies_J()["total"]]
     sim.run(periods * period, observe=lambda s: totals.append(s.energies_J()["total"]), observe_every_s=period / 50)
@@ -140,3 +145,84 @@ def test_axial_dashpot_leaves_bending_vibration_undamped():
     c = Cantilever(length=0.02, n_nodes=21)
     _, _, total, _ = oscillate(c, None, periods=2.0, damping=1.0)
     assert abs(total[-1] / total[0] - 1.0) < 1e-3
+
+
+def test_implicit_axial_springs_keep_the_first_bending_frequency_at_a_step_set_by_bending():
+    """The bending waves, which carry a ladder, are those of the explicit springs: omega_1 within
+    0.5 %, at 0.7 x the bending limit, which is over 5 x the axial springs' explicit limit."""
+    c = Cantilever(length=0.02, n_nodes=41)
+    explicit = kl.Simulation(c.build()).limits
+    t, y, total, sim = oscillate(c, None, periods=3.0, implicit_axial=True)
+    assert sim.dt > 5 * explicit.stretching and math.isinf(sim.limits.stretching)
+    idx = np.where((y[:-1] < 0) & (y[1:] >= 0))[0]
+    crossings = t[idx] - y[idx] * (t[idx + 1] - t[idx]) / (y[idx + 1] - y[idx])
+    omega = 2 * math.pi / np.mean(np.diff(crossings))
+    assert abs(omega / c.first_frequency() - 1.0) < 5e-3
+    assert abs(total[-1] / total[0] - 1.0) < 1e-3  # bending barely feeds the damped axial modes
+
+
+def test_implicit_axial_springs_stretch_a_pulled_yarn_by_FL_over_EA():
+    """Statics are the explicit springs': a yarn held at one end and pulled by F at the other,
+    brought to rest by drag at 0.7 x the bending limit, extends by F L / EA (to 1e-6) and its
+    support carries F (to 1e-9)."""
+    n, length, force = 41, 0.05, 1e-2
+    pts = np.zeros((n, 3))
+    pts[:, 0] = np.linspace(0.0, length, n)
+    scene = kl.Scene()
+    y = scene.add_yarn(pts)
+    scene.hold(y, [0])
+    scene.apply_force(y, -1, (force, 0.0, 0.0))
+    rods = scene.build()
+    explicit = kl.Simulation(rods.copy()).limits
+    sim = kl.Simulation(rods, implicit_axial=True, drag_per_s=2e3)
+    assert sim.dt > 5 * explicit.combined
+    sim.run(0.02)
+    ea = kl.NYLON.young_modulus * math.pi * kl.NYLON.diameter**2 / 4
+    extension = sim.positions_m()[-1, 0] - length
+    assert abs(extension / (force * length / ea) - 1.0) < 1e-6
+    np.testing.assert_allclose(sim.reaction_forces_N().sum(axis=0), [-force, 0.0, 0.0], atol=force * 1e-9)
+
+
+def test_implicit_axial_springs_damp_axial_vibration_and_never_add_energy():
+    """Stepped at 4 x their explicit limit without any dashpot, the released axial vibration
+    decays (backward Euler in the springs) and the energy never rises (to 1e-9)."""
+    totals = axial_energy_history(0.0, dt_over_limit=4.0)
+    assert totals[-1] < 0.1 * totals[0]
+    assert np.all(np.diff(totals) <= 1e-9 * totals[0])
+
+
+def damped_spring_error(dt_over_period: float, predicted: bool, zeta: float = 0.3) -> float:
+    """One free node on a held one, joined by an axial spring and its dashpot, released from 1e-4 of
+    stretch: the largest error of its position over two periods against the damped oscillator."""
+    scene = kl.Scene()
+    y = scene.add_yarn(np.array([[0.0, 0.0, 0.0], [1e-3, 0.0, 0.0]]))
+    scene.hold(y, [0])
+    rods = scene.build(stretch_damping_ratio=zeta)
+    m = rods.model
+    k, c, mass = m.EA[0] / m.rest_length[0], m.stretch_damping[0], m.mass[1]
+    omega, z = math.sqrt(k / mass), c / (2 * math.sqrt(k * mass))
+    omega_d = omega * math.sqrt(1 - z * z)
+    x0 = rods.state.x[1, 0]
+    delta = 1e-4 * m.rest_length[0]
+    rods.state.x[1, 0] += delta
+    period = 2 * math.pi / omega * kl.units.TIME  # s
+    sim = kl.Simulation(rods, dt_s=dt_over_period * period, predicted_dashpots=predicted)
+    errors = []
+
+    def compare(s: kl.Simulation) -> None:
+        t = s.time
+        exact = delta * math.exp(-z * omega * t) * (math.cos(omega_d * t) + z / math.sqrt(1 - z * z) * math.sin(omega_d * t))
+        errors.append(abs(s.state.x[1, 0] - x0 - exact) / delta)
+
+    sim.run(2 * period, observe=compare, observe_every_s=sim.dt_s)
+    return max(errors)
+
+
+def test_dashpots_on_predicted_velocities_are_second_order_in_dt_and_half_step_ones_first():
+    """A damped oscillator (zeta 0.3): halving dt divides the error by ~4 with predicted velocities
+    (DASHPOTS_PREDICTED), by ~2 with the half-step ones, which are also the larger."""
+    half_step = [damped_spring_error(f, predicted=False) for f in (0.02, 0.01)]
+    predicted = [damped_spring_error(f, predicted=True) for f in (0.02, 0.01)]
+    assert 1.6 < half_step[0] / half_step[1] < 2.5, half_step
+    assert 3.5 < predicted[0] / predicted[1] < 4.5, predicted
+    assert predicted[1] < 0.2 * half_step[1]

@@ -1,0 +1,66 @@
+"""The implicit axial springs (kernels/elastic.implicit_stretching_forces): the tensions solve their equation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import knitlad as kl
+from knitlad.kernels.elastic import edge_vectors, implicit_stretching_forces
+from knitlad.state import Workspace
+from knitlad.timestep import critical_time_steps
+
+
+def two_wavy_yarns_one_held_in_the_middle():
+    rng = np.random.default_rng(7)
+    scene = kl.Scene()
+    for k in range(2):
+        pts = np.zeros((12, 3))
+        pts[:, 0] = np.linspace(0.0, 5e-3, 12)
+        pts[:, 1] = 1e-3 * k + 2e-4 * np.sin(np.linspace(0.0, 6.0, 12))
+        scene.add_yarn(pts + rng.normal(scale=3e-5, size=pts.shape))
+    scene.hold(0, [5])
+    rods = scene.build(stretch_damping_ratio=0.2)
+    m, s = rods.model, rods.state
+    s.x[:] += rng.normal(scale=2e-3, size=s.x.shape) * m.rest_length.mean()  # strains of order 1e-3
+    s.v[:] = np.where(m.held[:, None], 0.0, rng.normal(scale=1.0, size=s.v.shape))  # mm/ms
+    other = rng.normal(scale=0.1, size=s.x.shape)  # mN: the forces the tensions must answer
+    return m, s, other
+
+
+@pytest.mark.parametrize("one_range", [True, False])
+def test_the_tensions_are_those_at_the_end_of_the_kick_they_cause(one_range):
+    """T_k = g_k+ / eps_k + c_k dg_k+/dt with g+ = g + dt t.(v+_b - v+_a) and v+ = v + dt M^-1 F, to
+    round-off, at 5 x the explicit stretching limit; a break between yarns is found over one range."""
+    m, s, other = two_wavy_yarns_one_held_in_the_middle()
+    dt = 5.0 * critical_time_steps(m, False).stretching
+    w = Workspace.for_model(m)
+    edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen)
+    F = other.copy()
+    ranges = [(0, m.edge_a.shape[0])] if one_range else [(w.yarn_edges[y], w.yarn_edges[y + 1]) for y in range(2)]
+    for first, last in ranges:
+        implicit_stretching_forces(w.e, w.elen, s.v, m.held, m.mass, m.edge_a, m.edge_b, m.rest_length, m.EA,
+                                   m.stretch_damping, dt, F, w.axial_sweep, first, last)
+    inv_mass = np.where(m.held, 0.0, 1.0 / m.mass)
+    v_end = s.v + dt * inv_mass[:, None] * F
+    t = w.e / w.elen[:, None]
+    rate = np.sum(t * (v_end[m.edge_b] - v_end[m.edge_a]), axis=1)
+    tension = m.EA * (w.elen + dt * rate - m.rest_length) / m.rest_length + m.stretch_damping * rate
+    rebuilt = other.copy()
+    np.add.at(rebuilt, m.edge_a, tension[:, None] * t)
+    np.add.at(rebuilt, m.edge_b, -tension[:, None] * t)
+    assert np.abs(tension).max() > 10 * np.abs(other).max()  # the springs dominate: a real test of the solve
+    np.testing.assert_allclose(F, rebuilt, rtol=0, atol=1e-10 * np.abs(F).max())
+
+
+def test_a_ring_a_rail_or_an_image_refuses_implicit_axial_springs():
+    theta = np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
+    ring = kl.Scene()
+    ring.add_yarn(np.c_[np.cos(theta), np.sin(theta), 0 * theta] * 1e-3, closed=True)
+    with pytest.raises(ValueError, match="open yarns only"):
+        kl.Simulation(ring.build(), implicit_axial=True)
+    railed = kl.Scene()
+    y = railed.add_yarn(np.c_[theta, 0 * theta, 0 * theta] * 1e-3)
+    railed.slide(y, [3], (1, 0, 0))
+    with pytest.raises(ValueError, match="rails"):
+        kl.Simulation(railed.build(), implicit_axial=True)
