@@ -83,11 +83,11 @@ def implicit_stretching_forces(e, elen, v, held, mass, edge_a, edge_b, rest_leng
     """Axial springs and dashpots of edges [first, last) at the end of the step (linearly implicit).
 
     The tension of :func:`stretching_forces`, T = g/eps + c dg/dt with g = |e| - |e_bar| and the
-    compliance eps = |e_bar|/EA, is taken at the end of the kick v+ = v + dt M^-1 (F + G^T T)
-    that follows, with g linearised along the current tangents, g+ = g + dt t.(v+_b - v+_a):
-    the backward-Euler step of a compliant constraint (Servin, Lacoursiere and Melin 2006,
-    "Interactive simulation of elastic deformable materials"; the SPOOK stepper of
-    Lacoursiere 2007 with its regularisation set by the material). With beta = dt (dt/eps + c):
+    compliance eps = |e_bar|/EA, is taken at the end of the kick v+ = v + dt M^-1 (F - G^T T)
+    that follows (G: the rows dg/dx, -t at node a, +t at b), with g linearised along the current
+    tangents, g+ = g + dt t.(v+_b - v+_a): the backward-Euler step of a compliant constraint
+    (Servin, Lacoursiere and Melin 2006, "Interactive simulation of elastic deformable
+    materials", with the regularisation set by the material). With beta = dt (dt/eps + c):
 
         (G M^-1 G^T + 1/beta) T = g/(eps beta) + G v/dt + G M^-1 F
 
@@ -95,7 +95,8 @@ def implicit_stretching_forces(e, elen, v, held, mass, edge_a, edge_b, rest_leng
     tridiagonal along a chain of edges (diagonal 1/m_a + 1/m_b, t_k.t_k+1/m at the shared node,
     1/m = 0 on held nodes), solved by the Thomas algorithm in ``sweep`` (ne, 2). A static state
     keeps the explicit tension T = g/eps exactly; the axial waves, which the laddering does not
-    need, lose their stability limit and are damped (per step by 1/sqrt(1 + (omega dt)^2)).
+    need, lose their stability limit and are damped (without a dashpot, by 1/sqrt(1 + (omega dt)^2)
+    per step).
     Consecutive edges couple where they share a node (edge_b[k] == edge_a[k + 1]); a ring's
     closing node is not coupled, so the caller keeps rings explicit. Adds T t to F[a], -T t to F[b].
     """

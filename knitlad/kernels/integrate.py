@@ -5,7 +5,7 @@ step. ``m`` is a :class:`knitlad.state.RodModel` (read only), ``s`` a
 :class:`knitlad.state.RodState` (advanced in place), ``w`` a
 :class:`knitlad.state.Workspace`, ``c`` the contact buffers
 (:class:`knitlad.contact.Contacts`). The modes are arguments, never read off the
-arrays: ``twist``, ``contact`` (yarn-yarn contact on) and ``axial`` (below). ``twist`` is one of
+arrays: ``twist``, ``contact`` (yarn-yarn contact on), ``axial`` and ``dashpots`` (below). ``twist`` is one of
 TWIST_OFF (0: isotropic bending of rods straight at rest, no twist), TWIST_FRAMED
 (1, or True: framed DER, material frames, natural curvature) and TWIST_STRAIGHT (2:
 rods straight at rest that twist: isotropic bending and the twist energy, the
