@@ -111,7 +111,8 @@ class CutConfig(_WithPreset):
         "how the knit reaches its stretch: tiled with the periodised stitch stretched to the target, "
         "then corrected (clamped ends; tails, and yarns too thick for the stitch, d/l0 = 1/20, affine), or affine increments of the built knit [-]"))
     dt_safety: float = Field(0.35, gt=0, le=1, description=(
-        "time step of the laddering dynamics, fraction of the stability limit [-]; 0.35: from identical "
+        "time step of the laddering dynamics, fraction of the stability limit of the yarns' sliding (rods and "
+        "contact springs; with twist the spin modes are only held stable) [-]; 0.35: from identical "
         "16 x 16 knits at f_x^ini 4, 0.5 and 0.7 moved v_lad by up to 16 %, 0.35 by 3 % from 0.175 (docs/accuracy.md)"))
 
     axial_stiffness_factor: float = Field(1.0, gt=0, le=1, description=(
@@ -121,7 +122,7 @@ class CutConfig(_WithPreset):
 
     twist_inertia_factor: float = Field(1.0, ge=1, le=1000, description=(
         "with twist: the yarn's inertia about its axis in the laddering dynamics over rho_L d^2/8 per length [-]; "
-        "above 1 the friction couple's spin mode allows a longer step: 4 takes 11 % fewer steps and moved v_lad "
+        "a setting for studies (the step does not need it): 4 moved v_lad "
         "by +1 to +3 %, n_lad/n_y by -3 to +5 % (16 x 16); 16 and 64 slowed the ladder by 8 % and 16-30 % at "
         "f_x 4: the yarns roll at the contacts (docs/accuracy.md)"))
 

@@ -53,9 +53,9 @@ from knitlad.observers import (
 from knitlad.scenes.jersey import BUILD_LX, CourseTooWide, Jersey, KnitScene, build_jersey, widest_fitting_width
 from knitlad.simulation import Simulation, numba_threads
 from knitlad.stitch_model import StitchRun, StitchSettings, zero_tension_lx
-from knitlad.state import cut_edge, with_axial_stiffness, with_twist
+from knitlad.state import Rods, cut_edge, with_axial_stiffness, with_twist
 from knitlad.stretching import force_control, relax_to_steady_tension, stretch_to
-from knitlad.timestep import critical_time_steps
+from knitlad.timestep import DEFAULT_SAFETY, critical_time_steps
 from knitlad.units import Material
 
 # The dashpots of the mu = 0 stretch. FIRE ends at a minimum whatever they are, but they shape
@@ -460,6 +460,28 @@ def sinker_edge(knit: StretchedKnit, row: int, column: int) -> int:
     return int(np.flatnonzero(rods.model.edge_a == apex)[0])
 
 
+def laddering_time_step(rods: Rods, contact: ContactModel, dynamics: DynamicsSettings) -> float:
+    """The step [s] of the laddering dynamics: ``dt_safety`` x the stability limit of the yarns' sliding.
+
+    That limit is the rods' and the contact springs' acting on the nodes (:func:`critical_time_steps`
+    without twist). ``dt_safety`` is a factor of accuracy: it sets how well the ladder's stick-slip
+    releases are timed (0.35, ``docs/accuracy.md``). With twist, the friction couple's spin mode
+    (omega^2 gains 2 z k_t r^2 / I) and the twist waves are faster than the sliding, but the
+    ladder needs them only stable: they are held to ``DEFAULT_SAFETY`` of the limit with them. So
+    a twisting yarn ladders at the twist-free step (on 16 x 16, paired against half of it: v_lad,
+    n_lad/n_y and f_x^fin as close as at the step with the spin mode counted, ``docs/accuracy.md``).
+    """
+    predicted = dynamics.predicted_dashpots
+
+    def limit_s(twist: bool) -> float:
+        contact_limit = contact_time_step(rods.model, contact, spin=twist, predicted=predicted)
+        return critical_time_steps(rods.model, twist, contact_limit, dynamics.implicit_axial,
+                                   predicted).combined * units.TIME
+
+    dt = dynamics.dt_safety * limit_s(False)
+    return min(dt, DEFAULT_SAFETY * limit_s(True)) if rods.twist else dt
+
+
 def cut(knit: StretchedKnit, dynamics: DynamicsSettings) -> Laddering:
     """Stage 2: a copy of the knit with the sinker loop of the central course cut at the central
     column, its dashpots, twist and friction those of ``dynamics``, ready to run."""
@@ -477,22 +499,17 @@ def cut(knit: StretchedKnit, dynamics: DynamicsSettings) -> Laddering:
     if dynamics.twist and not rods.twist:  # a yarn with natural curvature carries twist from the stretch
         rods = with_twist(rods, m.twisting_stiffness / m.bending_stiffness)
     if rods.twist and dynamics.twist_inertia_factor != 1.0:
-        # a heavier spin lets the friction couple's spin mode take a longer step; it is not free: the yarns
-        # roll at the contacts, so the spin inertia enters the ladder (docs/accuracy.md, default 1)
+        # a heavier spin, for studies: the yarns roll at the contacts, so the spin inertia enters the ladder
+        # (docs/accuracy.md, default 1); the step does not need it (laddering_time_step)
         rods = rods.replace_model(twist_inertia=rods.model.twist_inertia * dynamics.twist_inertia_factor)
     contact = stretch_contact(s, damping_ratio=dynamics.contact_damping_ratio,
                               tangential_damping_ratio=dynamics.contact_damping_ratio,
                               counting=dynamics.contact_counting)
     # the cut frees two end nodes: keep the smaller of the stretch's step (of a yarn as soft) and the new stable step
-    predicted = dynamics.predicted_dashpots
-    limit = critical_time_steps(rods.model, rods.twist,
-                                contact_time_step(rods.model, contact, spin=rods.twist, predicted=predicted),
-                                dynamics.implicit_axial, predicted)
-    limit_s = limit.combined * units.TIME
     stretch_step = math.inf if dynamics.implicit_axial else knit.dt_s / math.sqrt(dynamics.axial_stiffness_factor)
-    sim = Simulation(rods, contact=contact, dt_s=min(stretch_step, dynamics.dt_safety * limit_s),
+    sim = Simulation(rods, contact=contact, dt_s=min(stretch_step, laddering_time_step(rods, contact, dynamics)),
                      drag_per_s=dynamics.drag_per_s, framed_twist=dynamics.framed_twist,
-                     implicit_axial=dynamics.implicit_axial, predicted_dashpots=predicted)
+                     implicit_axial=dynamics.implicit_axial, predicted_dashpots=dynamics.predicted_dashpots)
     sim.set_friction(dynamics.mu)
     return Laddering(knit, dynamics, sim, edge, row, column, baseline, time.perf_counter() - t0)
 

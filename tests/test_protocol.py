@@ -10,6 +10,7 @@ from knitlad.config import CutConfig
 from knitlad.protocol import KnitBox, analyse, build_width, cut, propagate, stretch
 from knitlad.scenes.jersey import BUILD_LX
 from knitlad.stretching import OutOfReach, stretch_to
+from knitlad.timestep import DEFAULT_SAFETY
 from knitlad.units import NYLON
 
 
@@ -181,8 +182,9 @@ def test_observers_and_stop_rules_are_handed_to_the_run_loop():
     assert len(seen) == len(trace.times_s) == 3 and seen[0][1] == (4, 4)
 
 
-def test_with_twist_the_laddering_yarns_spin_and_the_time_step_allows_for_it():
-    """twist=True: twist switched on at the cut (friction couple on)."""
+def test_with_twist_the_laddering_yarns_spin_at_the_twist_free_step_held_stable():
+    """twist=True: twist switched on at the cut (friction couple on). The step is dt_safety x the
+    sliding's limit, as without twist; the faster spin mode is held to DEFAULT_SAFETY of its limit."""
     base = dict(n_x=4, n_y=4, resolution=16, lx=0.34, max_time_ms=0.1)
     knit = stretch(config(**base).stretch_settings())
     plain = cut(knit, config(**base).dynamics_settings())
@@ -193,8 +195,12 @@ def test_with_twist_the_laddering_yarns_spin_and_the_time_step_allows_for_it():
     spin = np.abs(twisted.sim.state.omega).max() / units.TIME  # rad/s
     assert spin > 1e3  # friction has turned the yarns (surface speeds of 0.1 m/s and more)
     assert twisted.sim.limits.contact < plain.sim.limits.contact  # the turning adds to the contact stiffness
-    assert twisted.sim.dt <= twisted.dynamics.dt_safety * twisted.sim.limits.combined * (1 + 1e-12)
+    assert twisted.sim.dt == pytest.approx(plain.sim.dt, rel=1e-12)
+    assert twisted.sim.dt < DEFAULT_SAFETY * twisted.sim.limits.combined
     assert np.isfinite(twisted.sim.state.x).all()
+    # a step factor that would take the spin mode past DEFAULT_SAFETY of its limit is held there
+    bold = cut(knit, config(**base, twist=True, dt_safety=1.0).dynamics_settings())
+    assert bold.sim.dt == pytest.approx(DEFAULT_SAFETY * bold.sim.limits.combined, rel=1e-12)
 
 
 def test_a_heavier_spin_softens_only_the_friction_couples_share_of_the_contact_limit():
