@@ -468,8 +468,9 @@ def laddering_time_step(rods: Rods, contact: ContactModel, dynamics: DynamicsSet
     releases are timed (0.35, ``docs/accuracy.md``). With twist, the friction couple's spin mode
     (omega^2 gains 2 z k_t r^2 / I) and the twist waves are faster than the sliding, but the
     ladder needs them only stable: they are held to ``DEFAULT_SAFETY`` of the limit with them. So
-    a twisting yarn ladders at the twist-free step (on 16 x 16, paired against half of it: v_lad,
-    n_lad/n_y and f_x^fin as close as at the step with the spin mode counted, ``docs/accuracy.md``).
+    a twisting yarn ladders at the twist-free step (on 16 x 16, paired against half of it: v_lad
+    -3.9 +- 1.6 % at f_x 4 and -1.3 +- 1.1 % at 13.6, the size of the twist-free default's own step
+    error, ``docs/accuracy.md``).
     """
     predicted = dynamics.predicted_dashpots
 
