@@ -144,6 +144,7 @@ class Workspace(NamedTuple):
     axial_sweep: np.ndarray  # (ne, 2) the tridiagonal solve of implicit axial forces
     v_damp: np.ndarray  # (n, 3) the velocities the dashpots see with DASHPOTS_PREDICTED ...
     omega_damp: np.ndarray  # (ne,) ... and the spins
+    frame_anchor: np.ndarray  # (ne,) bool: the edges whose reference frame the frame-free twist carries each step
 
     @staticmethod
     def for_model(model: RodModel) -> "Workspace":
@@ -155,8 +156,31 @@ class Workspace(NamedTuple):
         return Workspace(
             np.zeros((ne, 3)), np.zeros(ne), np.zeros((ne, 3)), np.zeros((ne, 3)), np.zeros((n, 3)), np.zeros(ne),
             np.searchsorted(edge_yarn, yarns).astype(np.int64), np.searchsorted(hinge_yarn, yarns).astype(np.int64),
-            np.zeros((ne, 2)), np.zeros((n, 3)), np.zeros(ne),
+            np.zeros((ne, 2)), np.zeros((n, 3)), np.zeros(ne), frame_anchors(model),
         )
+
+
+def frame_anchors(model: RodModel) -> np.ndarray:
+    """(ne,) bool: the first edge of each yarn and every edge no hinge ends on (a cut's new end).
+
+    The frame-free twist (TWIST_STRAIGHT) time-transports only these edges' reference frames;
+    ``kernels.frames.rebuild_reference_frames`` gives the others from them and the reference
+    twist, hinge by hinge in storage order, which needs each hinge's first edge to be an anchor
+    or the second edge of an earlier hinge: checked here.
+    """
+    ne, nh = model.edge_a.shape[0], model.hinge_e0.shape[0]
+    edge_yarn = model.node_yarn[model.edge_a]
+    anchor = np.ones(ne, dtype=bool)
+    anchor[model.hinge_e1] = False
+    first = np.searchsorted(edge_yarn, np.arange(model.n_yarns + 1))
+    anchor[first[:-1][first[:-1] < first[1:]]] = True
+    ends_at = np.full(ne, nh, dtype=np.int64)  # the hinge whose second edge each edge is
+    ends_at[model.hinge_e1] = np.arange(nh)
+    k0 = model.hinge_e0
+    rebuilt = ~anchor[model.hinge_e1]
+    if np.any(rebuilt & ~anchor[k0] & (ends_at[k0] >= np.arange(nh))):
+        raise ValueError("the hinges are not stored in order along their yarns")
+    return anchor
 
 
 @dataclass

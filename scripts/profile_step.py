@@ -91,7 +91,7 @@ def holonomy_by_yarn(m, s, w, x):
 def straight_bending_by_yarn(m, s, w):
     for y in prange(w.yarn_edges.shape[0] - 1):
         straight_bending_twisting_forces(
-            w.e, w.elen, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1, m.B_over_l, m.GJ_over_l, s.ref_twist,
+            w.e, w.elen, s.tangent, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1, m.B_over_l, m.GJ_over_l, s.ref_twist,
             m.twist_bar, s.theta, w.force, w.torque, w.yarn_hinges[y], w.yarn_hinges[y + 1])
 
 
@@ -167,7 +167,8 @@ def main() -> None:
                 lambda: straight_twisting_forces_by_yarn(m, s, w, True, s.v))))
             rows.append(("  edge vectors + reference twist by holonomy", median_ms(
                 lambda: holonomy_by_yarn(m, s, w, flip[0]))))
-            rows.append(("  isotropic bending and twisting", median_ms(lambda: straight_bending_by_yarn(m, s, w))))
+            rows.append(("  isotropic bending and twisting (the holonomy in the pass)", median_ms(
+                lambda: straight_bending_by_yarn(m, s, w))))
             rows.append(("framed elastic (all of the framed path)", median_ms(lambda: framed_forces_by_yarn(m, s, w, True, s.v))))
             rows.append(("  edge vectors + transport of the frames", median_ms(transport)))
             rows.append(("  reference twist", median_ms(lambda: twist_by_yarn(m, s, w))))

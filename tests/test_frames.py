@@ -1,5 +1,5 @@
-"""Reference frames (knitlad.kernels.frames): the signed angle that advances the reference twist, and the
-reference twist by the holonomy of the tangents."""
+"""Reference frames (knitlad.kernels.frames): the signed angle that advances the reference twist, the
+reference twist by the holonomy of the tangents, and the frames rebuilt from anchors and that twist."""
 
 import math
 
@@ -9,7 +9,9 @@ import pytest
 from knitlad.kernels.frames import (
     _signed_angle,
     parallel_transport,
+    rebuild_reference_frames,
     reference_twist_by_holonomy,
+    store_tangents,
     transport_reference_frames,
     update_reference_twist,
 )
@@ -76,3 +78,52 @@ def test_the_reference_twist_by_holonomy_is_that_of_the_transported_frames(step,
         tangent_h[:] = e / elen[:, None]
     assert np.abs(framed).max() > 20 * step  # the frames have turned
     np.testing.assert_allclose(holonomy, framed, rtol=0, atol=1e-13)
+
+
+def test_frames_rebuilt_from_the_anchors_are_the_transported_ones():
+    """store_tangents (frames carried on the anchors only) + rebuild_reference_frames give every edge the
+    frame that time-parallel transport of all edges gives, to round-off, after 300 steps of a wobbling
+    helix turning its frames by ~0.1 rad: on an open chain cut in two (a second anchor mid-way, no hinge
+    across the cut) and on a closed loop (its seam hinge ends on the anchor, and is skipped)."""
+    rng = np.random.default_rng(5)
+    x = wavy_helix(41, rng)
+    n_edges = x.shape[0] - 1
+
+    def edges(x):
+        e = np.ascontiguousarray(x[1:] - x[:-1])
+        return e, np.linalg.norm(e, axis=1)
+
+    for layout in ("cut chain", "closed loop"):
+        if layout == "cut chain":  # edges 0..19 and 20..39, no hinge (19, 20)
+            h0 = np.array([k for k in range(n_edges - 1) if k != 19])
+            anchor = np.zeros(n_edges, dtype=bool)
+            anchor[[0, 20]] = True
+        else:  # the seam hinge (39, 0) first, as the periodised stitch stores it
+            h0 = np.concatenate([[n_edges - 1], np.arange(n_edges - 1)])
+            anchor = np.zeros(n_edges, dtype=bool)
+            anchor[0] = True
+        h1 = (h0 + 1) % n_edges
+        e, elen = edges(x)
+        tangent = e / elen[:, None]
+        ref_u = np.zeros_like(tangent)
+        for k in range(n_edges):
+            seed = np.cross(tangent[k], [0.0, 0.0, 1.0])
+            ref_u[k] = seed / np.linalg.norm(seed)  # any frames: the reference twist records them
+        ref_twist = np.zeros(h0.shape[0])
+        update_reference_twist(tangent, ref_u, h0, h1, ref_twist)
+        transported, t_transported, twist_framed = ref_u.copy(), tangent.copy(), ref_twist.copy()
+        xs = x.copy()
+        for _ in range(300):
+            xs = xs + rng.normal(scale=2e-3, size=xs.shape)
+            e, elen = edges(xs)
+            transport_reference_frames(e, elen, t_transported, transported)
+            update_reference_twist(t_transported, transported, h0, h1, twist_framed)
+            reference_twist_by_holonomy(tangent, e, elen, h0, h1, ref_twist)
+            store_tangents(e, elen, tangent, ref_u, anchor)
+        assert np.abs(ref_u[~anchor] - transported[~anchor]).max() > 1e-2  # stale before the rebuild
+        rebuild_reference_frames(tangent, ref_u, ref_twist, h0, h1, anchor)
+        turned = np.arccos(np.clip(np.sum(transported * ref_u[:, :], axis=1), -1, 1))
+        assert np.abs(ref_u - transported).max() < 1e-12, (layout, turned.max())
+        np.testing.assert_array_equal(tangent, t_transported)
+        np.testing.assert_allclose(ref_twist, twist_framed, rtol=0, atol=1e-12)
+        assert np.abs(twist_framed).max() > 0.05  # the frames have turned

@@ -140,3 +140,36 @@ def test_the_damped_limit_factor_is_the_integrators_stability_limit(predicted):
         verlet_steps(m, s, sim.work, sim.contacts, dt, 3000, 0, False, 0.0, 0, mode)
         amplitudes.append(abs(s.x[1, 0] - x0) / 1e-6)
     assert amplitudes[0] < 1.0 and amplitudes[1] > 1e3, amplitudes
+
+
+def test_a_twisting_yarn_straight_at_rest_hands_back_complete_frames():
+    """TWIST_STRAIGHT carries only the anchors' reference frames each step and rebuilds the others when
+    a kernel returns: after steps of a springing helix, an open yarn cut in two and a ring, every frame is
+    unit, normal to its tangent, and agrees with the reference twist (update_reference_twist, which
+    adds the angle between the transported frame turned by the twist and the stored one, adds nothing)."""
+    from knitlad.kernels.frames import update_reference_twist
+    from knitlad.kernels.integrate import TWIST_STRAIGHT
+    from knitlad.state import cut_edge
+
+    s = np.linspace(0.0, 4.0 * np.pi, 41)
+    helix = 1e-3 * np.column_stack([np.cos(s), np.sin(s), 0.3 * s])
+    scene = kl.Scene()
+    scene.add_yarn(helix)
+    scene.add_yarn(2e-3 * np.column_stack([np.cos(s[:-1] / 2), np.sin(s[:-1] / 2), 0 * s[:-1]]) + [0, 0, 5e-3],
+                   closed=True)
+    rods = cut_edge(scene.build(twist=True), 19)
+    rods.state.omega[:] = np.random.default_rng(3).normal(scale=1.0, size=rods.state.omega.shape)
+    sim = kl.Simulation(rods)
+    assert sim.twist_mode == TWIST_STRAIGHT
+    tangent0 = sim.state.tangent.copy()
+    sim.step(2000)
+    m, st = sim.model, sim.state
+    e = (st.x[m.edge_b] + m.edge_shift) - st.x[m.edge_a]
+    np.testing.assert_allclose(st.tangent, e / np.linalg.norm(e, axis=1)[:, None], atol=1e-14)
+    assert np.degrees(np.arccos(np.sum(tangent0 * st.tangent, axis=1).min())) > 5  # the yarns have moved
+    np.testing.assert_allclose(np.linalg.norm(st.ref_u, axis=1), 1.0, atol=1e-14)
+    assert np.abs(np.sum(st.ref_u * st.tangent, axis=1)).max() < 1e-14
+    twist = st.ref_twist.copy()
+    update_reference_twist(st.tangent, st.ref_u, m.hinge_e0, m.hinge_e1, twist)
+    assert np.abs(st.ref_twist).max() > 1e-3
+    np.testing.assert_allclose(twist, st.ref_twist, rtol=0, atol=1e-12)

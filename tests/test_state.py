@@ -105,3 +105,18 @@ def test_a_softer_yarn_keeps_its_tensions_and_takes_a_longer_step():
     assert ratio == pytest.approx(2.0, rel=0.01)
     with pytest.raises(ValueError, match="factor"):
         with_axial_stiffness(rods, 1.5)
+
+
+def test_frame_anchors_are_the_yarn_starts_and_the_cut_ends_and_need_hinges_in_order():
+    """The edges whose reference frame the frame-free twist carries: each yarn's first edge and an edge
+    no hinge ends on; the rebuild of the others needs the hinges stored along the yarn (refused if not)."""
+    from knitlad.state import cut_edge, frame_anchors
+
+    scene = kl.Scene()
+    scene.add_yarn(line(9) + np.array([[0, 1e-4 * (i % 2), 0] for i in range(9)]))  # a zigzag
+    scene.add_yarn(np.column_stack([np.cos(np.arange(6)), np.sin(np.arange(6)), np.zeros(6)]) * 1e-3, closed=True)
+    rods = cut_edge(scene.build(twist=True), 3)  # the open yarn's edges 0-2 and 3-6, the ring's 7-12
+    assert np.flatnonzero(frame_anchors(rods.model)).tolist() == [0, 3, 7]
+    m = rods.model
+    with pytest.raises(ValueError, match="not stored in order"):
+        frame_anchors(m._replace(hinge_e0=m.hinge_e0[::-1].copy(), hinge_e1=m.hinge_e1[::-1].copy()))

@@ -13,6 +13,7 @@ import math
 
 from numba import njit
 
+from knitlad.kernels.frames import holonomy_twist_change
 from knitlad.kernels.options import NUMBA_OPTS
 from knitlad.kernels.vec import cross, dot
 
@@ -205,16 +206,19 @@ def bending_forces(e, elen, edge_a, edge_b, hinge_e0, hinge_e1, B_over_l, F, fir
 
 @njit(**NUMBA_OPTS)
 def straight_bending_twisting_forces(
-    e, elen, edge_a, edge_b, hinge_e0, hinge_e1, B_over_l, GJ_over_l, ref_twist, twist_bar, theta, F, torque,
+    e, elen, tangent, edge_a, edge_b, hinge_e0, hinge_e1, B_over_l, GJ_over_l, ref_twist, twist_bar, theta, F, torque,
     first=0, last=-1,
 ):
     """Isotropic bending and twisting of a rod straight at rest, without material frames.
 
     E = sum_h B |kb_h|^2 / (2 l_h) + GJ (m_h - m_bar_h)^2 / (2 l_h), m_h = theta^h - theta^{h-1} + ref_twist_h
-    (DER08 sec. 4.2: an isotropic rod straight at rest bends as |kb|^2, whatever its twist). The
-    bending gradient is :func:`bending_forces`'; the twist's is d m/d e^{h-1} = kb/(2|e^{h-1}|),
-    d m/d e^h = kb/(2|e^h|), d m/d theta^h = -d m/d theta^{h-1} = 1 (DER08 sec. 7). Forces go to
-    F (n, 3), torques about the edge tangents to ``torque`` (ne,). Hinges [first, last).
+    (DER08 sec. 4.2: an isotropic rod straight at rest bends as |kb|^2, whatever its twist). Each hinge's
+    reference twist is first advanced by the holonomy of its tangents' motion from ``tangent`` (the
+    stored ones, not changed here) to e/|e| (:func:`knitlad.kernels.frames.reference_twist_by_holonomy`,
+    in the same pass over the hinges). The bending gradient is :func:`bending_forces`'; the twist's is
+    d m/d e^{h-1} = kb/(2|e^{h-1}|), d m/d e^h = kb/(2|e^h|), d m/d theta^h = -d m/d theta^{h-1} = 1
+    (DER08 sec. 7). Forces go to F (n, 3), torques about the edge tangents to ``torque`` (ne,). Hinges
+    [first, last).
     """
     if last < 0:
         last = hinge_e0.shape[0]
@@ -223,6 +227,11 @@ def straight_bending_twisting_forces(
         k1 = hinge_e1[h]
         la = elen[k0]
         lb = elen[k1]
+        i0 = 1.0 / la
+        i1 = 1.0 / lb
+        ref_twist[h] += holonomy_twist_change(
+            tangent[k0, 0], tangent[k0, 1], tangent[k0, 2], tangent[k1, 0], tangent[k1, 1], tangent[k1, 2],
+            e[k0, 0] * i0, e[k0, 1] * i0, e[k0, 2] * i0, e[k1, 0] * i1, e[k1, 1] * i1, e[k1, 2] * i1)
         kbx, kby, kbz, gax, gay, gaz, gbx, gby, gbz = _isotropic_bending_gradient(
             e[k0, 0], e[k0, 1], e[k0, 2], e[k1, 0], e[k1, 1], e[k1, 2], la, lb, B_over_l[h])
         gm = GJ_over_l[h] * (theta[k1] - theta[k0] + ref_twist[h] - twist_bar[h])

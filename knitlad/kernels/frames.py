@@ -12,7 +12,7 @@ import math
 
 from numba import njit
 
-from knitlad.kernels.options import NUMBA_OPTS
+from knitlad.kernels.options import INLINE_OPTS, NUMBA_OPTS
 from knitlad.kernels.vec import cross, dot, sincos
 
 
@@ -123,30 +123,36 @@ def reference_twist_by_holonomy(tangent, e, elen, hinge_e0, hinge_e1, ref_twist,
     minus its signed area, the sum of the triangles (t0, t0', t1') and (t0, t1', t1) (Gauss-Bonnet
     on the sphere). Same values to round-off, without sine or cosine and without the frames;
     only the isotropic bending of rods straight at rest, whose energy needs no material frame,
-    can use it (the frames are still transported, so the state stays complete).
+    can use it (with :func:`store_tangents`, which carries the anchors' frames, and
+    :func:`rebuild_reference_frames` when the state is read).
     """
     if last < 0:
         last = hinge_e0.shape[0]
     for h in range(first, last):
         k0 = hinge_e0[h]
         k1 = hinge_e1[h]
-        a0x, a0y, a0z = tangent[k0, 0], tangent[k0, 1], tangent[k0, 2]
-        a1x, a1y, a1z = tangent[k1, 0], tangent[k1, 1], tangent[k1, 2]
         i0 = 1.0 / elen[k0]
         i1 = 1.0 / elen[k1]
-        b0x, b0y, b0z = e[k0, 0] * i0, e[k0, 1] * i0, e[k0, 2] * i0
-        b1x, b1y, b1z = e[k1, 0] * i1, e[k1, 1] * i1, e[k1, 2] * i1
-        # t0.(t0' x t1') = (t0' - t0).(t1' x t0) and t0.(t1' x t1) = (t1' - t1).(t1 x t0): the steps
-        # are small, so the triple products are taken from the tangents' changes
-        px, py, pz = cross(b1x, b1y, b1z, a0x, a0y, a0z)
-        qx, qy, qz = cross(a1x, a1y, a1z, a0x, a0y, a0z)
-        first_triple = dot(b0x - a0x, b0y - a0y, b0z - a0z, px, py, pz)
-        second_triple = dot(b1x - a1x, b1y - a1y, b1z - a1z, qx, qy, qz)
-        area = (_signed_solid_angle(a0x, a0y, a0z, b0x, b0y, b0z, b1x, b1y, b1z, first_triple)
-                + _signed_solid_angle(a0x, a0y, a0z, b1x, b1y, b1z, a1x, a1y, a1z, second_triple))
-        if abs(area) > math.pi:  # as update_reference_twist, the turn of least angle (each is exact mod 2 pi)
-            area -= 2.0 * math.pi * round(area / (2.0 * math.pi))
-        ref_twist[h] -= area
+        ref_twist[h] += holonomy_twist_change(
+            tangent[k0, 0], tangent[k0, 1], tangent[k0, 2], tangent[k1, 0], tangent[k1, 1], tangent[k1, 2],
+            e[k0, 0] * i0, e[k0, 1] * i0, e[k0, 2] * i0, e[k1, 0] * i1, e[k1, 1] * i1, e[k1, 2] * i1)
+
+
+@njit(**INLINE_OPTS)
+def holonomy_twist_change(a0x, a0y, a0z, a1x, a1y, a1z, b0x, b0y, b0z, b1x, b1y, b1z):
+    """The change of a hinge's reference twist as its edges' unit tangents go from (a0, a1) to (b0, b1):
+    minus the signed area of the geodesic quadrilateral a0 -> b0 -> b1 -> a1 (:func:`reference_twist_by_holonomy`)."""
+    # t0.(t0' x t1') = (t0' - t0).(t1' x t0) and t0.(t1' x t1) = (t1' - t1).(t1 x t0): the steps
+    # are small, so the triple products are taken from the tangents' changes
+    px, py, pz = cross(b1x, b1y, b1z, a0x, a0y, a0z)
+    qx, qy, qz = cross(a1x, a1y, a1z, a0x, a0y, a0z)
+    first_triple = dot(b0x - a0x, b0y - a0y, b0z - a0z, px, py, pz)
+    second_triple = dot(b1x - a1x, b1y - a1y, b1z - a1z, qx, qy, qz)
+    area = (_signed_solid_angle(a0x, a0y, a0z, b0x, b0y, b0z, b1x, b1y, b1z, first_triple)
+            + _signed_solid_angle(a0x, a0y, a0z, b1x, b1y, b1z, a1x, a1y, a1z, second_triple))
+    if abs(area) > math.pi:  # as update_reference_twist, the turn of least angle (each is exact mod 2 pi)
+        area -= 2.0 * math.pi * round(area / (2.0 * math.pi))
+    return -area
 
 
 @njit(**NUMBA_OPTS)
@@ -165,3 +171,58 @@ def material_frames(tangent, ref_u, theta, d1, d2, first=0, last=-1):
         d2[k, 0] = -s * ux + c * vx
         d2[k, 1] = -s * uy + c * vy
         d2[k, 2] = -s * uz + c * vz
+
+
+@njit(**NUMBA_OPTS)
+def store_tangents(e, elen, tangent, ref_u, frame_anchor, first=0, last=-1):
+    """The tangents of edges [first, last) set to e / |e|, the reference director carried along
+    (time-parallel transport, as :func:`transport_reference_frames`) only on the anchor edges.
+
+    The frame-free path (:func:`reference_twist_by_holonomy`) needs the old tangents and no frame:
+    the other edges' directors follow from the anchors and the reference twist
+    (:func:`rebuild_reference_frames`), so they are rebuilt when the state is read, not each step.
+    """
+    if last < 0:
+        last = e.shape[0]
+    for k in range(first, last):
+        inv = 1.0 / elen[k]
+        bx, by, bz = e[k, 0] * inv, e[k, 1] * inv, e[k, 2] * inv
+        if frame_anchor[k]:
+            ux, uy, uz = parallel_transport(ref_u[k, 0], ref_u[k, 1], ref_u[k, 2],
+                                            tangent[k, 0], tangent[k, 1], tangent[k, 2], bx, by, bz)
+            p = dot(ux, uy, uz, bx, by, bz)
+            ux, uy, uz = ux - p * bx, uy - p * by, uz - p * bz
+            nrm = 1.0 / math.sqrt(ux * ux + uy * uy + uz * uz)
+            ref_u[k, 0], ref_u[k, 1], ref_u[k, 2] = ux * nrm, uy * nrm, uz * nrm
+        tangent[k, 0] = bx
+        tangent[k, 1] = by
+        tangent[k, 2] = bz
+
+
+@njit(**NUMBA_OPTS)
+def rebuild_reference_frames(tangent, ref_u, ref_twist, hinge_e0, hinge_e1, frame_anchor, first=0, last=-1):
+    """The reference directors of the edges that are not anchors, from those of the hinges' first edges:
+    u^h = R(t^h, m_h) P(t^{h-1} -> t^h) u^{h-1}, the definition of the reference twist m_h that
+    :func:`update_reference_twist` keeps (DVT10 sec. 4.1), hinges [first, last) in order along the yarn
+    (``Workspace.frame_anchor`` checks that each hinge's first edge is an anchor or an earlier hinge's second).
+
+    Time-parallel transport of every edge and this rebuild from time-transported anchors give the same
+    frames, to round-off: both leave the reference twist the holonomy of the tangents' motion.
+    """
+    if last < 0:
+        last = hinge_e0.shape[0]
+    for h in range(first, last):
+        k0 = hinge_e0[h]
+        k1 = hinge_e1[h]
+        if frame_anchor[k1]:
+            continue
+        tx, ty, tz = tangent[k1, 0], tangent[k1, 1], tangent[k1, 2]
+        px, py, pz = parallel_transport(ref_u[k0, 0], ref_u[k0, 1], ref_u[k0, 2],
+                                        tangent[k0, 0], tangent[k0, 1], tangent[k0, 2], tx, ty, tz)
+        s, c = sincos(ref_twist[h])
+        wx, wy, wz = cross(tx, ty, tz, px, py, pz)
+        ux, uy, uz = c * px + s * wx, c * py + s * wy, c * pz + s * wz
+        p = dot(ux, uy, uz, tx, ty, tz)
+        ux, uy, uz = ux - p * tx, uy - p * ty, uz - p * tz
+        nrm = 1.0 / math.sqrt(ux * ux + uy * uy + uz * uz)
+        ref_u[k1, 0], ref_u[k1, 1], ref_u[k1, 2] = ux * nrm, uy * nrm, uz * nrm

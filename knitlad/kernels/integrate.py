@@ -12,7 +12,10 @@ rods straight at rest that twist: isotropic bending and the twist energy, the
 reference twist by the holonomy of the tangents, no material frame: DER08 sec. 4.2; at
 zero natural curvature TWIST_FRAMED's bending energy is B |kb|^2 cos^2(m/2) / 2l, a
 coupling of bending and twist that this one, as the continuum, has not: docs/accuracy.md).
-``if twist:`` reads "the yarns carry twist".
+``if twist:`` reads "the yarns carry twist". TWIST_STRAIGHT's force evaluation time-transports
+only the anchors' reference frames (``Workspace.frame_anchor``); the kernels that advance or read
+the state (:func:`verlet_steps`, :func:`fire_relax`, :func:`potential_energy`) rebuild the others
+before they return (:func:`complete_frames`), so the state they hand back is complete.
 """
 
 import math
@@ -35,7 +38,9 @@ from knitlad.kernels.elastic import (
 )
 from knitlad.kernels.frames import (
     material_frames,
+    rebuild_reference_frames,
     reference_twist_by_holonomy,
+    store_tangents,
     transport_reference_frames,
     update_reference_twist,
 )
@@ -97,8 +102,9 @@ def framed_forces_by_yarn(m, s, w, explicit_stretch, v_damp):
 @njit(**PARALLEL_OPTS)
 def straight_twisting_forces_by_yarn(m, s, w, explicit_stretch, v_damp):
     """Stretching, and isotropic bending and twisting of yarns straight at rest (TWIST_STRAIGHT), yarn by
-    yarn in parallel: the reference twist by holonomy from the stored tangents, then the frames
-    transported (kept for any later use of the state), then the forces and torques."""
+    yarn in parallel: the reference twist by holonomy from the stored tangents with the forces and
+    torques, then the new tangents stored (and the frames of the anchor edges carried:
+    :func:`reference_frames_by_yarn` rebuilds the others when the state is read)."""
     for y in prange(w.yarn_edges.shape[0] - 1):
         e0, e1 = w.yarn_edges[y], w.yarn_edges[y + 1]
         h0, h1 = w.yarn_hinges[y], w.yarn_hinges[y + 1]
@@ -106,12 +112,29 @@ def straight_twisting_forces_by_yarn(m, s, w, explicit_stretch, v_damp):
         if explicit_stretch:
             stretching_forces(w.e, w.elen, v_damp, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force,
                               e0, e1)
-        reference_twist_by_holonomy(s.tangent, w.e, w.elen, m.hinge_e0, m.hinge_e1, s.ref_twist, h0, h1)
-        transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u, e0, e1)
         straight_bending_twisting_forces(
-            w.e, w.elen, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1,
+            w.e, w.elen, s.tangent, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1,
             m.B_over_l, m.GJ_over_l, s.ref_twist, m.twist_bar, s.theta, w.force, w.torque, h0, h1,
         )
+        store_tangents(w.e, w.elen, s.tangent, s.ref_u, w.frame_anchor, e0, e1)
+
+
+@njit(**PARALLEL_OPTS)
+def reference_frames_by_yarn(m, s, w):
+    """The reference frames of every edge from the anchors' and the reference twist (TWIST_STRAIGHT
+    carries only the anchors' each step), yarn by yarn in parallel."""
+    for y in prange(w.yarn_edges.shape[0] - 1):
+        rebuild_reference_frames(s.tangent, s.ref_u, s.ref_twist, m.hinge_e0, m.hinge_e1, w.frame_anchor,
+                                 w.yarn_hinges[y], w.yarn_hinges[y + 1])
+
+
+@njit(**NUMBA_OPTS)
+def complete_frames(m, s, w, twist):
+    """Every edge's reference frame up to date: TWIST_STRAIGHT's steps carry only the anchors'
+    (:func:`knitlad.kernels.frames.store_tangents`), so :func:`verlet_steps`, :func:`fire_relax` and
+    :func:`potential_energy` call this before they return; the other modes keep every frame."""
+    if twist == TWIST_STRAIGHT:
+        reference_frames_by_yarn(m, s, w)
 
 
 @njit(**NUMBA_OPTS)
@@ -195,7 +218,8 @@ def potential_energy(m, s, w, c, twist, contact):
     es = stretching_energy(w.elen, m.rest_length, m.EA)
     if twist == TWIST_STRAIGHT:
         reference_twist_by_holonomy(s.tangent, w.e, w.elen, m.hinge_e0, m.hinge_e1, s.ref_twist)
-        transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u)
+        store_tangents(w.e, w.elen, s.tangent, s.ref_u, w.frame_anchor)
+        complete_frames(m, s, w, twist)
         eb = bending_energy(w.e, w.elen, m.hinge_e0, m.hinge_e1, m.B_over_l)
         et = twisting_energy(m.hinge_e0, m.hinge_e1, m.GJ_over_l, s.ref_twist, m.twist_bar, s.theta)
     elif twist:
@@ -328,8 +352,10 @@ def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, drag, axial=AXIAL_EXPL
             if twist:
                 predict_spins(m.theta_held, m.twist_inertia, w.torque, s.omega, 0.5 * dt, w.omega_damp)
         if not compute_forces(m, s, w, c, twist, contact, drag, dt, axial, dashpots):
+            complete_frames(m, s, w, twist)
             return step
         half_kick(m, s, w, dt if step < n_steps - 1 else 0.5 * dt, twist)
+    complete_frames(m, s, w, twist)
     return n_steps
 
 
@@ -439,6 +465,7 @@ def fire_relax(m, s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, t
         for k in range(3):
             s.v[i, k] = 0.0
     s.omega[:] = 0.0
+    complete_frames(m, s, w, twist)
     return step, fmax, tmax
 
 
