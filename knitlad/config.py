@@ -87,7 +87,7 @@ class CutConfig(_WithPreset):
         "42 x 42 runs to the paper's two DER velocities (docs/accuracy.md); 3e4 stops the ladder"))
     twist: bool = Field(False, description=(
         "the yarns carry twist during the laddering, so friction also turns them (the friction couple) [-]; "
-        "about 1.45 x the laddering's cost (42 x 42 at f_x 13.6, 2026-12-02)"))
+        "about 1.27 x the laddering's cost (42 x 42 at f_x 13.6, 2026-12-03)"))
     # --- the model's choices
     d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description="yarn diameter over stitch length d/l0 [-] (the paper: 1/70)")
     contact_force_f0: float = Field(20.0, gt=0, description=(

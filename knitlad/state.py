@@ -16,7 +16,7 @@ import numpy as np
 
 from knitlad import units
 from knitlad.kernels.elastic import edge_vectors, material_curvatures
-from knitlad.kernels.frames import material_frames, parallel_transport, update_reference_twist
+from knitlad.kernels.frames import bishop_reference_directors, material_frames, update_reference_twist
 from knitlad.units import Material
 
 
@@ -459,17 +459,8 @@ def _initial_frames(x: np.ndarray, model: RodModel, twist: bool, curved_yarns: l
 
 def _initial_reference_directors(tangent: np.ndarray, edge_yarn: np.ndarray) -> np.ndarray:
     """Space-parallel reference frame along each yarn (Bishop frame), from a seed normal."""
-    ne = tangent.shape[0]
-    ref_u = np.zeros((ne, 3))
-    for k in range(ne):
-        t = tangent[k]
-        if k > 0 and edge_yarn[k] == edge_yarn[k - 1]:
-            u = np.array(parallel_transport(*ref_u[k - 1], *tangent[k - 1], *t))
-        else:
-            seed = np.array([0.0, 0.0, 1.0]) if abs(t[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-            u = seed - seed.dot(t) * t
-        u -= u.dot(t) * t
-        ref_u[k] = u / np.linalg.norm(u)
+    ref_u = np.zeros_like(tangent)
+    bishop_reference_directors(tangent, edge_yarn, ref_u)
     return ref_u
 
 

@@ -174,9 +174,11 @@ def main() -> None:
             rows.append(("  reference twist", median_ms(lambda: twist_by_yarn(m, s, w))))
             rows.append(("  material frames", median_ms(lambda: frames_by_yarn(s, w))))
             rows.append(("  framed bending and twisting", median_ms(lambda: framed_bending_by_yarn(m, s, w))))
-        rows.append(("contact pair forces", median_ms(
-            lambda: contact_forces(s.x, s.v, s.omega, tw, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt, w.force,
-                                   w.torque, s.v, s.omega, False))))
+        for spin in ([tw, 0] if tw else [0]):
+            name = "contact pair forces" + (" with the friction couple" if spin else "")
+            rows.append((name, median_ms(
+                lambda: contact_forces(s.x, s.v, s.omega, spin, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt,
+                                       w.force, w.torque, s.v, s.omega, False))))
         rows.append(("half kick", median_ms(lambda: half_kick(m, s, w, 0.0, tw))))
         rows.append(("drift", median_ms(lambda: _drift(m, s, 0.0, tw))))
 

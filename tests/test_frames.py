@@ -8,6 +8,7 @@ import pytest
 
 from knitlad.kernels.frames import (
     _signed_angle,
+    bishop_reference_directors,
     parallel_transport,
     rebuild_reference_frames,
     reference_twist_by_holonomy,
@@ -38,6 +39,30 @@ def test_signed_angle_is_atan2_to_round_off(angle):
 def wavy_helix(n: int, rng) -> np.ndarray:
     s = np.linspace(0.0, 4.0 * np.pi, n)
     return np.column_stack([np.cos(s), np.sin(s), 0.3 * s]) + rng.normal(scale=0.05, size=(n, 3))
+
+
+def test_the_bishop_directors_are_unit_normal_and_untwisted_along_each_yarn():
+    """bishop_reference_directors: unit, normal to the tangents, zero reference twist at every hinge
+    inside a yarn, and each yarn's first edge on its seed: z made normal to the tangent, or x where
+    the tangent is within 26 degrees of +-z (the second yarn starts along z)."""
+    rng = np.random.default_rng(3)
+    first = wavy_helix(30, rng)
+    second = np.column_stack([0.1 * np.sin(np.linspace(0, 3, 20)), np.zeros(20), np.linspace(0, 5, 20)])
+    e = np.concatenate([np.diff(first, axis=0), np.diff(second, axis=0)])
+    tangent = e / np.linalg.norm(e, axis=1)[:, None]
+    edge_yarn = np.repeat([0, 1], [29, 19])
+    ref_u = np.zeros_like(tangent)
+    bishop_reference_directors(tangent, edge_yarn, ref_u)
+    np.testing.assert_allclose(np.linalg.norm(ref_u, axis=1), 1.0, rtol=0, atol=1e-14)
+    assert np.abs(np.einsum("ij,ij->i", ref_u, tangent)).max() < 1e-14
+    h0 = np.array([k for k in range(47) if edge_yarn[k] == edge_yarn[k + 1]])
+    ref_twist = np.zeros(h0.shape[0])
+    update_reference_twist(tangent, ref_u, h0, h0 + 1, ref_twist)
+    assert np.abs(ref_twist).max() < 1e-13
+    for k, seed in ((0, [0.0, 0.0, 1.0]), (29, [1.0, 0.0, 0.0])):
+        t = tangent[k]
+        u = np.array(seed) - np.dot(seed, t) * t
+        np.testing.assert_allclose(ref_u[k], u / np.linalg.norm(u), rtol=0, atol=1e-15)
 
 
 @pytest.mark.parametrize("step, n_steps", [(1e-4, 400), (1e-2, 60)])

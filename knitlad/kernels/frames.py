@@ -38,6 +38,27 @@ def parallel_transport(ux, uy, uz, ax, ay, az, bx, by, bz):
 
 
 @njit(**NUMBA_OPTS)
+def bishop_reference_directors(tangent, edge_yarn, ref_u):
+    """Space-parallel reference directors along each yarn (a Bishop frame), into ``ref_u`` (ne, 3):
+    a yarn's first edge takes the seed normal z (x where its tangent is within 26 degrees of +-z) made
+    normal to its tangent, and each next edge of the yarn the parallel transport of its predecessor's."""
+    for k in range(tangent.shape[0]):
+        tx, ty, tz = tangent[k, 0], tangent[k, 1], tangent[k, 2]
+        if k > 0 and edge_yarn[k] == edge_yarn[k - 1]:
+            ux, uy, uz = parallel_transport(ref_u[k - 1, 0], ref_u[k - 1, 1], ref_u[k - 1, 2],
+                                            tangent[k - 1, 0], tangent[k - 1, 1], tangent[k - 1, 2], tx, ty, tz)
+        else:
+            ux, uy, uz = (0.0, 0.0, 1.0) if abs(tz) < 0.9 else (1.0, 0.0, 0.0)
+        # normal to the tangent (a transported one drifts out of the normal plane by round-off)
+        p = dot(ux, uy, uz, tx, ty, tz)
+        ux, uy, uz = ux - p * tx, uy - p * ty, uz - p * tz
+        inv = 1.0 / math.sqrt(ux * ux + uy * uy + uz * uz)
+        ref_u[k, 0] = ux * inv
+        ref_u[k, 1] = uy * inv
+        ref_u[k, 2] = uz * inv
+
+
+@njit(**NUMBA_OPTS)
 def _small_atan2(y, x):
     """atan2(y, x), by its series where the angle is small: below |z| = |y / x| < 1e-3 (x > 0) it is
     atan z = z - z^3/3 + z^5/5, whose next term (z^7/7 < 1.5e-22) is below round-off. The angles of

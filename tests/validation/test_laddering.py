@@ -51,17 +51,15 @@ def test_a_weak_global_drag_slows_the_ladder_at_low_tension_only():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(reason="the knit of the tiled stretch (2026-12-02) ladders twist-free at 0.188 here, not 0.36-0.38: "
-                          "with twist 0.189 (0.193 at the step before 2026-12-03); the five-knit study is to be redone",
-                   strict=False)
-def test_the_friction_couple_slows_the_ladder_at_low_tension():
+def test_the_friction_couple_slows_the_ladder_at_moderate_tension():
     """docs/accuracy.md, "Twist and the friction couple": with twist on, friction also turns
-    the yarns. On 16 x 16 at f_x^ini 1.58, five knits (targets 0.5 % apart; each laddered
-    twist-free and with twist from one stretch, scripts/twist_ensemble.py) gave 0.362-0.384
-    twist-free and 0.205-0.222 with twist: -42 % +- 1 % (standard error). Here one of them:
-    more than 25 % slower, far outside the twist-free runs' spread (6 %)."""
-    free, twisted = laddering_velocity_by_default_and_with(1.58, size=16, twist=True)
-    assert twisted < 0.75 * free
+    the yarns. On 16 x 16 knits of the tiled stretch (five per tension, targets 0.5 % apart, each
+    laddered twist-free and with twist from one stretch, scripts/twist_ensemble.py, 2026-12-03) the
+    paired change of v_lad was -13.5 +- 1.6 % (standard error) at f_x^ini 4, each knit between -9.4
+    and -18.4 %, and -0.8 +- 2.1 % at 1.58, where the five changes scattered from -6.1 to +5.0 %.
+    Here the knit at 4: more than 7 % slower with twist, outside that scatter of a null effect."""
+    free, twisted = laddering_velocity_by_default_and_with(4.0, size=16, twist=True)
+    assert twisted < 0.93 * free
 
 
 def laddering_velocity_by_default_and_with(fx: float, size: int = 24, **dynamics) -> tuple[float, float]:
