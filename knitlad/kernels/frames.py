@@ -37,6 +37,16 @@ def parallel_transport(ux, uy, uz, ax, ay, az, bx, by, bz):
     return rx, ry, rz
 
 
+@njit(**INLINE_OPTS)
+def _unit_normal_part(ux, uy, uz, tx, ty, tz):
+    """u made normal to the unit tangent t and of unit length: a transported director drifts out of
+    the normal plane by round-off, and a seed lies anywhere."""
+    p = dot(ux, uy, uz, tx, ty, tz)
+    ux, uy, uz = ux - p * tx, uy - p * ty, uz - p * tz
+    nrm = 1.0 / math.sqrt(ux * ux + uy * uy + uz * uz)
+    return ux * nrm, uy * nrm, uz * nrm
+
+
 @njit(**NUMBA_OPTS)
 def bishop_reference_directors(tangent, edge_yarn, ref_u):
     """Space-parallel reference directors along each yarn (a Bishop frame), into ``ref_u`` (ne, 3):
@@ -49,13 +59,7 @@ def bishop_reference_directors(tangent, edge_yarn, ref_u):
                                             tangent[k - 1, 0], tangent[k - 1, 1], tangent[k - 1, 2], tx, ty, tz)
         else:
             ux, uy, uz = (0.0, 0.0, 1.0) if abs(tz) < 0.9 else (1.0, 0.0, 0.0)
-        # normal to the tangent (a transported one drifts out of the normal plane by round-off)
-        p = dot(ux, uy, uz, tx, ty, tz)
-        ux, uy, uz = ux - p * tx, uy - p * ty, uz - p * tz
-        inv = 1.0 / math.sqrt(ux * ux + uy * uy + uz * uz)
-        ref_u[k, 0] = ux * inv
-        ref_u[k, 1] = uy * inv
-        ref_u[k, 2] = uz * inv
+        ref_u[k, 0], ref_u[k, 1], ref_u[k, 2] = _unit_normal_part(ux, uy, uz, tx, ty, tz)
 
 
 @njit(**NUMBA_OPTS)
@@ -87,15 +91,7 @@ def transport_reference_frames(e, elen, tangent, ref_u, first=0, last=-1):
         inv = 1.0 / elen[k]
         bx, by, bz = e[k, 0] * inv, e[k, 1] * inv, e[k, 2] * inv
         ux, uy, uz = parallel_transport(ref_u[k, 0], ref_u[k, 1], ref_u[k, 2], tangent[k, 0], tangent[k, 1], tangent[k, 2], bx, by, bz)
-        # remove the round-off drift out of the normal plane, then renormalise
-        p = dot(ux, uy, uz, bx, by, bz)
-        ux -= p * bx
-        uy -= p * by
-        uz -= p * bz
-        nrm = 1.0 / math.sqrt(ux * ux + uy * uy + uz * uz)
-        ref_u[k, 0] = ux * nrm
-        ref_u[k, 1] = uy * nrm
-        ref_u[k, 2] = uz * nrm
+        ref_u[k, 0], ref_u[k, 1], ref_u[k, 2] = _unit_normal_part(ux, uy, uz, bx, by, bz)
         tangent[k, 0] = bx
         tangent[k, 1] = by
         tangent[k, 2] = bz
@@ -211,10 +207,7 @@ def store_tangents(e, elen, tangent, ref_u, frame_anchor, first=0, last=-1):
         if frame_anchor[k]:
             ux, uy, uz = parallel_transport(ref_u[k, 0], ref_u[k, 1], ref_u[k, 2],
                                             tangent[k, 0], tangent[k, 1], tangent[k, 2], bx, by, bz)
-            p = dot(ux, uy, uz, bx, by, bz)
-            ux, uy, uz = ux - p * bx, uy - p * by, uz - p * bz
-            nrm = 1.0 / math.sqrt(ux * ux + uy * uy + uz * uz)
-            ref_u[k, 0], ref_u[k, 1], ref_u[k, 2] = ux * nrm, uy * nrm, uz * nrm
+            ref_u[k, 0], ref_u[k, 1], ref_u[k, 2] = _unit_normal_part(ux, uy, uz, bx, by, bz)
         tangent[k, 0] = bx
         tangent[k, 1] = by
         tangent[k, 2] = bz
@@ -243,7 +236,4 @@ def rebuild_reference_frames(tangent, ref_u, ref_twist, hinge_e0, hinge_e1, fram
         s, c = sincos(ref_twist[h])
         wx, wy, wz = cross(tx, ty, tz, px, py, pz)
         ux, uy, uz = c * px + s * wx, c * py + s * wy, c * pz + s * wz
-        p = dot(ux, uy, uz, tx, ty, tz)
-        ux, uy, uz = ux - p * tx, uy - p * ty, uz - p * tz
-        nrm = 1.0 / math.sqrt(ux * ux + uy * uy + uz * uz)
-        ref_u[k1, 0], ref_u[k1, 1], ref_u[k1, 2] = ux * nrm, uy * nrm, uz * nrm
+        ref_u[k1, 0], ref_u[k1, 1], ref_u[k1, 2] = _unit_normal_part(ux, uy, uz, tx, ty, tz)
