@@ -4,7 +4,7 @@ from knitlad.simulation import Simulation, SimulationBlowUp, UnstableTimeStep
 from knitlad.state import RodModel, Rods, RodState, Scene
 from knitlad.units import NYLON, Material, Scales
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 __all__ = [
     "Material",

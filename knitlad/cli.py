@@ -296,7 +296,9 @@ def stitch(
 def diagram(
     ly: list[float] = typer.Option(None, "--ly", help="l_y/l0 values (repeat the option); default 0.20 to 0.30."),
     d_over_l0: float = typer.Option(1 / 70, "--d-over-l0", help="Yarn diameter over stitch length."),
-    resolution: int = typer.Option(36, "--resolution", help="Nodes per stitch."),
+    preset: str = typer.Option("default", "--preset", help="Accuracy preset (fast, default, accurate): the "
+                               "resolution and the contact's sagitta correction, as for knitlad stitch."),
+    resolution: int = typer.Option(None, "--resolution", help="Nodes per stitch; default: the preset's."),
     out: str = typer.Option("runs/diagram", "--out", help="Folder for fx0_curve.csv and fx0_curve.png."),
 ) -> None:
     """The f_x = 0 curve of the periodised stitch in the (l_x/l0, l_y/l0) plane (paper, configuration diagram)."""
@@ -309,8 +311,8 @@ def diagram(
 
     values = ly or [0.20, 0.22, 0.24, 0.26, 0.28, 0.30]
     for v in values:
-        validated(StitchConfig, dict(ly=v, resolution=resolution, d_over_l0=d_over_l0))
-    material = StitchConfig(d_over_l0=d_over_l0).settings().material
+        cfg = validated(StitchConfig, dict(ly=v, preset=preset, resolution=resolution, d_over_l0=d_over_l0))
+    material = cfg.settings().material
     from knitlad.io.folders import FolderError, writable_folder
 
     try:  # before any compute
@@ -320,7 +322,8 @@ def diagram(
     rows = []
     for v in values:
         try:
-            lx0 = zero_tension_lx(v, nodes_per_stitch=resolution, material=material)
+            lx0 = zero_tension_lx(v, nodes_per_stitch=cfg.resolution, material=material,
+                                  sagitta_radius_d=cfg.sagitta_radius)
         except ValueError as e:
             typer.echo(f"knitlad: {e}", err=True)
             lx0 = float("nan")

@@ -5,41 +5,47 @@ Dimensionless inputs follow the paper: lengths as l/l0, tension as f_x = F_x/(n_
 
 from __future__ import annotations
 
+import math
 import re
-from typing import ClassVar, Literal
+from typing import ClassVar, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-# Accuracy presets: nodes per stitch, read off docs/accuracy.md (scripts/convergence.py).
-# The resolution is the setting that matters: the stitch's f_x at fixed (l_x, l_y) is
-# 40-55 % too high at 24 nodes per stitch, 21-25 % at 36, 7-10 % at 48 (order 3 to 4).
-# The time step and the contact stiffness are the same in every preset: the laddering
-# dynamics run at 0.35 x the stability limit (LadderSettings.dt_safety: from one stretched
-# knit, v_lad changed by 14 % from 0.7 to 0.35 and by 1.4 % from 0.35 to 0.175 at f_x = 3.9),
-# the single loop at 0.7 (1 %); halving the contact overlap moved v_lad by up to 9 %, within
-# the knit's run-to-run scatter.
+# Accuracy presets, chosen from the converged reference (docs/accuracy.md, scripts/reference_*.py):
+# each sets the resolution and the contact's sagitta correction (knitlad.contact.sagitta_corrected_radius),
+# and the laddering's axial springs. `fast` is the model as it stood before the reference
+# (24 nodes per stitch, capsules of the yarn's radius). Each preset's measured error is in its
+# --help text (PRESET_HELP) and in docs/accuracy.md.
 Preset = Literal["fast", "default", "accurate"]
 AUTO_FRAMES = 60  # frames over the expected ladder duration when frame_every_us is not given
-LADDER_RESOLUTION = {"fast": 16, "default": 24, "accurate": 48}
-LOOP_RESOLUTION = {"fast": 24, "default": 36, "accurate": 48}
-STITCH_RESOLUTION = {"fast": 24, "default": 36, "accurate": 64}
+SAGITTA_RADIUS_D = 11.0  # the stitch's contacts' radius of curvature for the sagitta correction, in d
+LADDER_PRESETS = {
+    "fast": {"resolution": 24, "sagitta_radius": 0.0, "implicit_axial": False},
+    "default": {"resolution": 48, "sagitta_radius": SAGITTA_RADIUS_D, "implicit_axial": True},
+    "accurate": {"resolution": 96, "sagitta_radius": SAGITTA_RADIUS_D, "implicit_axial": True},
+}
+STITCH_PRESETS = {name: {k: v for k, v in p.items() if k != "implicit_axial"} for name, p in LADDER_PRESETS.items()}
+LOOP_PRESETS = {"fast": {"resolution": 24}, "default": {"resolution": 36}, "accurate": {"resolution": 48}}
 
 
 class _WithPreset(BaseModel):
-    """A run whose resolution defaults to its accuracy preset's (``RESOLUTIONS``)."""
+    """A run whose resolution (and the settings beside it in ``PRESETS``) default to its accuracy preset's."""
 
     # no NaN or infinity in any number: a bad value is named as such, not as out of range
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-    RESOLUTIONS: ClassVar[dict[str, int]] = LADDER_RESOLUTION
+    PRESETS: ClassVar[dict[str, dict]] = LADDER_PRESETS
 
-    preset: Preset = Field("default", description="accuracy preset (fast, default, accurate): sets the resolution [-]")
+    preset: Preset = Field("default", description=(
+        "accuracy preset: fast, default or accurate; sets the resolution and the settings its error was "
+        "measured with (docs/accuracy.md) [-]"))
 
     @model_validator(mode="before")
     @classmethod
-    def preset_resolution(cls, data):
-        """Fill a missing resolution from the preset, so a resolved config names the number it ran with."""
-        if isinstance(data, dict) and data.get("resolution") is None and data.get("preset", "default") in cls.RESOLUTIONS:
-            data = {**data, "resolution": cls.RESOLUTIONS[data.get("preset", "default")]}
+    def preset_settings(cls, data):
+        """Fill each setting of the preset not given, so a resolved config names what it ran with."""
+        if isinstance(data, dict) and data.get("preset", "default") in cls.PRESETS:
+            chosen = cls.PRESETS[data.get("preset", "default")]
+            data = {**data, **{k: v for k, v in chosen.items() if data.get(k) is None}}
         return data
 
     @model_validator(mode="before")
@@ -49,7 +55,8 @@ class _WithPreset(BaseModel):
         if isinstance(data, dict):
             for name, value in data.items():
                 field = cls.model_fields.get(name)
-                if isinstance(value, bool) and field is not None and field.annotation is not bool:
+                if isinstance(value, bool) and field is not None and bool not in (field.annotation,
+                                                                                  *get_args(field.annotation)):
                     raise ValueError(f"{name}: a number is needed, got {value!r}")
         return data
 
@@ -75,7 +82,7 @@ class CutConfig(_WithPreset):
     mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient during laddering [-]")
     n_x: int = Field(42, ge=4, le=200, description="stitches per course [-]")
     n_y: int = Field(42, ge=4, le=200, description="courses [-]")
-    resolution: int = Field(24, ge=12, le=280, description="nodes per stitch (segment = l0/resolution) [-]; default: the preset's")
+    resolution: int | None = Field(None, ge=12, le=280, description="nodes per stitch (segment = l0/resolution) [-]; default: the preset's")
     max_time_ms: float = Field(30.0, gt=0, description="longest laddering time simulated after the cut [ms]")
     arrest_ms: float = Field(2.0, gt=0, description="the ladder has stopped when no cell changed for this long [ms]")
     observe_every_us: float = Field(20.0, gt=0, description="interval between front/tension samples [us]")
@@ -93,6 +100,10 @@ class CutConfig(_WithPreset):
     contact_force_f0: float = Field(20.0, gt=0, description=(
         "contact stiffness: a contact carrying this force overlaps by overlap_fraction d [f0]"))
     overlap_fraction: float = Field(0.05, gt=0, lt=1, description="overlap at contact_force_f0, over d [-]")
+    sagitta_radius: float | None = Field(None, ge=0, le=1000, description=(
+        "the contact's sagitta correction: each segment's contact radius is r - l^2/(12 R), R this many yarn "
+        "diameters (the stitch's contacts' radius of curvature), l the segment; 0: capsules of the yarn's "
+        "radius [d]; default: the preset's"))
     contact_counting: Literal["union", "all_pairs"] = Field("union", description=(
         "contact counting of the laddering dynamics: union (exact friction) or all_pairs (conserves energy) [-]"))
     edge: Literal["clamped", "tail"] = Field("clamped", description=(
@@ -132,10 +143,11 @@ class CutConfig(_WithPreset):
         "twist by holonomy), whose bent hinges are a little softer in twist (by B |kb|^2 / 4GJ, 4 % in the median "
         "hinge); about 1.3 x the laddering's cost: for comparisons [-]"))
 
-    implicit_axial: bool = Field(False, description=(
+    implicit_axial: bool | None = Field(None, description=(
         "the laddering dynamics take the yarn's axial springs and dashpots at the end of each kick "
         "(linearly implicit, a tridiagonal solve per yarn): the axial waves set no limit and the step, "
-        "dt_safety x the contact and bending limit, grows 1.4 x; the static tensions are unchanged [-]"))
+        "dt_safety x the contact and bending limit, grows 1.4 x; the static tensions are unchanged [-]; "
+        "default: the preset's"))
 
     predicted_dashpots: bool = Field(False, description=(
         "the laddering dynamics' dashpots (axial and contact) act on the velocity at the end of each step, "
@@ -162,6 +174,7 @@ class CutConfig(_WithPreset):
         if self.natural_curvature > 0 and (self.stretch_start, self.edge) != ("tiled", "clamped"):
             raise ValueError("natural_curvature: set in the periodised stitch and tiled over the knit, it needs "
                              "stretch_start tiled and edge clamped")
+        check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
         if self.frame_every_us is not None and self.frame_every_us < self.observe_every_us:
             raise ValueError(f"frame_every_us: {self.frame_every_us:g} is shorter than observe_every_us "
                              f"({self.observe_every_us:g}): frames are taken at observations")
@@ -187,7 +200,7 @@ class CutConfig(_WithPreset):
             overlap_fraction=self.overlap_fraction, edge=self.edge, stretch_increment=self.stretch_increment,
             steps_per_increment=self.steps_per_increment, fx_tolerance=self.fx_tolerance, start=self.stretch_start,
             natural_curvature=self.natural_curvature,
-            material=material_for(self.d_over_l0),
+            material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
         )
 
     def dynamics_settings(self):
@@ -215,7 +228,7 @@ class CutConfig(_WithPreset):
 class LoopConfig(_WithPreset):
     """One single-loop run (``knitlad loop``, paper Fig. 5b,c)."""
 
-    RESOLUTIONS: ClassVar[dict[str, int]] = LOOP_RESOLUTION
+    PRESETS: ClassVar[dict[str, dict]] = LOOP_PRESETS
 
     fx: float = Field(8.0, gt=0, le=40, description="tension per thread pulling the loop's ends, f_x = F/f0 [-]")
     mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient after the release [-]")
@@ -223,7 +236,7 @@ class LoopConfig(_WithPreset):
         "column width l_x/l0 [-] (wider, the loops no longer overlap); geometry tails only: the periodic rows "
         "take theirs from f_x"))
     ly: float = Field(0.25, gt=0.2, lt=0.35, description="row spacing l_y/l0 [-]")
-    resolution: int = Field(36, ge=12, le=280, description="nodes per stitch [-]; default: the preset's")
+    resolution: int | None = Field(None, ge=12, le=280, description="nodes per stitch [-]; default: the preset's")
     max_time_ms: float = Field(1.0, gt=0, le=100, description="longest time simulated after the release [ms]")
     geometry: Literal["tails", "periodic", "periodic-sinkers", "strip"] = Field("tails", description=(
         "tails: three one-stitch rows ending in tails (knitlad.loop_model); periodic: rows periodic along the "
@@ -262,19 +275,44 @@ class LoopConfig(_WithPreset):
 class StitchConfig(_WithPreset):
     """One periodised stitch (``knitlad stitch``): tensions at imposed (l_x, l_y)."""
 
-    RESOLUTIONS: ClassVar[dict[str, int]] = STITCH_RESOLUTION
+    PRESETS: ClassVar[dict[str, dict]] = STITCH_PRESETS
 
     lx: float = Field(0.35, gt=0.2, lt=0.6, description="cell width l_x/l0 [-]")
     ly: float = Field(0.25, gt=0.15, lt=0.4, description="cell height l_y/l0 [-]")
-    resolution: int = Field(36, ge=12, le=280, description="nodes per stitch [-]; default: the preset's")
+    resolution: int | None = Field(None, ge=12, le=280, description="nodes per stitch [-]; default: the preset's")
+    sagitta_radius: float | None = Field(None, ge=0, le=1000, description=(
+        "the contact's sagitta correction (see knitlad cut --help) [d]; 0: none; default: the preset's"))
     d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description="yarn diameter over stitch length d/l0 [-]")
+
+    @model_validator(mode="after")
+    def sagitta_within_reach(self) -> "StitchConfig":
+        check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
+        return self
 
     def settings(self, **model_choices):
         """The run's settings; ``model_choices``: other fields of :class:`knitlad.stitch_model.StitchSettings`."""
         from knitlad.stitch_model import StitchSettings
 
         return StitchSettings(lx_over_l0=self.lx, ly_over_l0=self.ly, nodes_per_stitch=self.resolution,
-                              material=material_for(self.d_over_l0), **model_choices)
+                              material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
+                              **model_choices)
+
+
+# the longest segment, over the correction's radius of curvature R, at which the sagitta correction
+# is taken: it is l^2/(12 R) to leading order in l/R, measured from 24 nodes per stitch up (l = 0.27 R)
+SAGITTA_MAX_SEGMENT = 0.3
+
+
+def check_sagitta(resolution: int, d_over_l0: float, sagitta_radius: float) -> None:
+    """Refuse a sagitta correction on segments too long for it (one line naming the field)."""
+    if sagitta_radius > 0:
+        segment = 1.0 / (d_over_l0 * resolution)  # in yarn diameters
+        if segment > SAGITTA_MAX_SEGMENT * sagitta_radius:
+            raise ValueError(
+                f"sagitta_radius: the correction holds for segments up to {SAGITTA_MAX_SEGMENT:g} R; at {resolution} "
+                f"nodes per stitch a segment is {segment / sagitta_radius:.2f} R: give sagitta_radius 0 (as the fast "
+                f"preset does) or at least {math.ceil(1.0 / (d_over_l0 * SAGITTA_MAX_SEGMENT * sagitta_radius))} "
+                "nodes per stitch")
 
 
 def material_for(d_over_l0: float):

@@ -63,6 +63,9 @@ class ContactModel:
                                 contact at a node shared by two edges counts once; "all_pairs":
                                 every touching edge pair counts (a conservative energy, stiffer
                                 where a crossing sits at a node; see docs/accuracy.md)
+    sagitta_radius  R_s [m]     the capsule chain's sagitta correction: each edge's contact radius
+                                is r - l^2/(12 R_s), l its rest length (:func:`sagitta_corrected_radius`);
+                                None: capsules of the yarn's radius
     """
 
     stiffness: float
@@ -75,6 +78,7 @@ class ContactModel:
     contacts_per_node: int = 2
     capacity_per_edge: int = 4
     counting: Counting = Counting.UNION
+    sagitta_radius: float | None = None
 
     def __post_init__(self) -> None:
         if not (self.stiffness > 0 and math.isfinite(self.stiffness)):
@@ -91,6 +95,8 @@ class ContactModel:
         object.__setattr__(self, "counting", Counting(self.counting))
         if self.skin is not None and not self.skin > 0:
             raise ValueError(f"skin must be > 0 m, got {self.skin!r}")
+        if self.sagitta_radius is not None and not (self.sagitta_radius > 0 and math.isfinite(self.sagitta_radius)):
+            raise ValueError(f"sagitta_radius must be > 0 m or None, got {self.sagitta_radius!r}")
 
     @staticmethod
     def for_force(force_N: float, diameter_m: float, overlap_fraction: float = 0.05, **kwargs) -> "ContactModel":
@@ -100,10 +106,34 @@ class ContactModel:
         return ContactModel(stiffness=force_N / (overlap_fraction * diameter_m), **kwargs)
 
     @staticmethod
-    def for_knit(material, contact_force_f0: float = 20.0, overlap_fraction: float = 0.05, **kwargs) -> "ContactModel":
-        """The knit scenes' contact: a contact carrying ``contact_force_f0`` f0 overlaps by ``overlap_fraction`` d."""
+    def for_knit(material, contact_force_f0: float = 20.0, overlap_fraction: float = 0.05,
+                 sagitta_radius_d: float = 0.0, **kwargs) -> "ContactModel":
+        """The knit scenes' contact: a contact carrying ``contact_force_f0`` f0 overlaps by ``overlap_fraction`` d;
+        ``sagitta_radius_d`` > 0: the sagitta correction for a yarn curved on that many diameters."""
+        sagitta = sagitta_radius_d * material.diameter if sagitta_radius_d > 0 else None
         return ContactModel.for_force(contact_force_f0 * material.f0, material.diameter,
-                                      overlap_fraction=overlap_fraction, **kwargs)
+                                      overlap_fraction=overlap_fraction, sagitta_radius=sagitta, **kwargs)
+
+
+def sagitta_corrected_radius(radius: np.ndarray, rest_length: np.ndarray, curvature_radius: float) -> np.ndarray:
+    """Contact radius r - l^2 / (12 R) of edges of rest length l on a yarn curved on radius R (any one unit).
+
+    A straight capsule stands for an arc of its yarn; on an arc of curvature 1/R the chord lies
+    on the concave side, by l^2 s (1 - s) / (2 R) at s along it, l^2 / (12 R) on average. Where
+    a yarn wraps another (a loop's head round the legs of the next course) the other yarn is on
+    that side, so a chain of capsules of the yarn's radius touches it sooner than the smooth
+    yarn would: the stitch behaves as if the yarn were thicker, and its tension at fixed
+    periodicities is too high (by 50 % at l_x/l0 = 0.37 with 24 nodes per stitch, where l = 2.9 d).
+    Taking the mean sagitta off the radius removes most of that at no cost; R is the typical
+    radius of curvature at the stitch's contacts, measured through the converged stitch
+    (``docs/accuracy.md``). The correction vanishes as l^2 when the yarn is refined.
+    """
+    corrected = radius - rest_length**2 / (12.0 * curvature_radius)
+    if np.any(corrected < 0.5 * radius):
+        raise ValueError(f"edges up to {float(rest_length.max()):.3g} long are too long for the sagitta correction "
+                         f"on a radius of curvature {curvature_radius:.3g}: it would take over half their radius; "
+                         "refine the yarn")
+    return corrected
 
 
 class Contacts(NamedTuple):
@@ -152,7 +182,9 @@ def contact_topology(m: RodModel):
       periodised along its own period P by k P is the same physical yarn k
       periods further along, so its edges carry the master's id and the arc
       index local + k n_edges: the same-yarn exclusion then also works across
-      the seam. Other images (another course, say) are yarns of their own.
+      the seam. Other images (another course, say) are yarns of their own. The
+      pieces of a cut yarn (``RodModel.yarn_parent``) are one physical yarn whose
+      arc index skips the cut edge, so the exclusion also holds across the cut.
     * ``yarn_wraps``: arc indices wrap around (true rings only; a periodised
       yarn continues into its images instead).
     * ``edge_prev``/``edge_next``: the neighbouring edge along the yarn, into
@@ -162,6 +194,7 @@ def contact_topology(m: RodModel):
     """
     edge_yarn, edge_local, yarn_edges, yarn_closed = edge_topology(m)
     n_yarns = m.n_yarns
+    parent = m.yarn_parent
     first_edge = np.concatenate([[0], np.cumsum(yarn_edges)[:-1]]).astype(np.int64)
     last_edge = first_edge + yarn_edges - 1
     period = np.zeros((n_yarns, 3))
@@ -192,6 +225,10 @@ def contact_topology(m: RodModel):
             if abs(k - round(k)) < 1e-9 and np.allclose(shift[y], round(k) * P, atol=1e-9 * np.linalg.norm(P)):
                 physical[y] = m
                 arc_offset[y] = int(round(k)) * yarn_edges[m]
+    for y in range(1, n_yarns):
+        if parent[y] == parent[y - 1] and not is_image[y]:  # the next piece of a cut yarn
+            physical[y] = physical[y - 1]
+            arc_offset[y] = arc_offset[y - 1] + yarn_edges[y - 1] + 1
     e = np.arange(edge_yarn.shape[0])
     out_yarn = physical[edge_yarn].astype(np.int64)
     edge_arc = (edge_local + arc_offset[edge_yarn]).astype(np.int64)
@@ -222,14 +259,17 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
     m = rods.model
     ne = m.edge_a.shape[0]
     edge_yarn, edge_local, yarn_edges, yarn_closed, edge_prev, edge_next, edge_image = contact_topology(m)
-    edge_radius = 0.5 * (m.radius[m.edge_a] + m.radius[m.edge_b])
+    yarn_radius = 0.5 * (m.radius[m.edge_a] + m.radius[m.edge_b])
+    edge_radius = yarn_radius  # what the contact sees; the skin and the exclusion keep the yarn's
+    if model is not None and model.sagitta_radius is not None:
+        edge_radius = sagitta_corrected_radius(yarn_radius, m.rest_length, model.sagitta_radius / units.LENGTH)
     if model is None:
         cap = 0
         params = ContactParams(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         exclusion = np.zeros(m.n_yarns, dtype=np.int64)
     else:
         cap = capacity if capacity is not None else max(16, model.capacity_per_edge * ne)
-        d_min = 2.0 * float(edge_radius.min())
+        d_min = 2.0 * float(yarn_radius.min())
         skin = model.skin / units.LENGTH if model.skin is not None else d_min
         params = ContactParams(
             k_n=model.stiffness * units.LENGTH / units.FORCE,
@@ -243,7 +283,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         # (per state yarn: an image is a copy of its master, whose id it carries as its physical yarn)
         own_yarn = m.node_yarn[m.edge_a]
         seg = np.bincount(own_yarn, weights=m.rest_length, minlength=m.n_yarns) / np.maximum(yarn_edges, 1)
-        d_yarn = 2.0 * np.bincount(own_yarn, weights=edge_radius, minlength=m.n_yarns) / np.maximum(yarn_edges, 1)
+        d_yarn = 2.0 * np.bincount(own_yarn, weights=yarn_radius, minlength=m.n_yarns) / np.maximum(yarn_edges, 1)
         exclusion = np.maximum(1, np.ceil(model.exclusion_diameters * d_yarn / seg)).astype(np.int64)
     contacts = Contacts(
         pairs=np.zeros((cap, 2), dtype=np.int64),

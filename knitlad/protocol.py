@@ -68,7 +68,7 @@ MIN_BUILD_LX = 0.15  # narrowest l_x/l0 tried when a thick yarn does not fit at 
 RELAX_TOL_F0 = 1e-3  # FIRE's force tolerance while stretching, in f0
 
 
-def build_width(ly_over_l0: float, material: Material, nodes_per_stitch: int = 36) -> float:
+def build_width(ly_over_l0: float, material: Material, nodes_per_stitch: int = 36, sagitta_radius_d: float = 0.0) -> float:
     """l_x/l0 at which to build the knit for this l_y: BUILD_LX, or narrower where the
     periodised stitch's f_x = 0 curve lies left of it (l_y/l0 > 0.25), less 0.01.
 
@@ -82,7 +82,8 @@ def build_width(ly_over_l0: float, material: Material, nodes_per_stitch: int = 3
     if ly_over_l0 <= 0.25:
         return BUILD_LX  # the f_x = 0 width is above 0.30 l0 here (0.337 at l_y/l0 = 0.25)
     try:
-        return min(BUILD_LX, zero_tension_lx(ly_over_l0, material=material, nodes_per_stitch=nodes_per_stitch) - 0.01)
+        return min(BUILD_LX, zero_tension_lx(ly_over_l0, material=material, nodes_per_stitch=nodes_per_stitch,
+                                             sagitta_radius_d=sagitta_radius_d) - 0.01)
     except ValueError:
         return BUILD_LX
 
@@ -106,6 +107,7 @@ class StretchSettings:
     start: str  # "tiled" from the periodised stitch (clamped ends), or "affine" from the built knit
     natural_curvature: float  # K = mean (kappa_bar/kappa0)^2 the yarn remembers (0: straight at rest)
     material: Material
+    sagitta_radius_d: float = 0.0  # the contact's sagitta correction, in d (0: none; knitlad.contact)
 
     def __post_init__(self) -> None:
         if (self.lx_over_l0 is None) == (self.fx_target is None):
@@ -213,7 +215,8 @@ class StretchedKnit:
 def stretch_contact(s: StretchSettings, **changes) -> ContactModel:
     """The contact model of the stretch (mu = 0, the stretch's dashpots); ``changes`` for the dynamics'."""
     kw = dict(friction=0.0, damping_ratio=STRETCH_CONTACT_DAMPING, tangential_damping_ratio=STRETCH_CONTACT_DAMPING)
-    return ContactModel.for_knit(s.material, s.contact_force_f0, s.overlap_fraction, **{**kw, **changes})
+    return ContactModel.for_knit(s.material, s.contact_force_f0, s.overlap_fraction,
+                                 sagitta_radius_d=s.sagitta_radius_d, **{**kw, **changes})
 
 
 class KnitBox:
@@ -222,7 +225,7 @@ class KnitBox:
     def __init__(self, s: StretchSettings) -> None:
         self.s = s
         m = s.material
-        self.build_lx = build_width(s.ly_over_l0, m, s.nodes_per_stitch)
+        self.build_lx = build_width(s.ly_over_l0, m, s.nodes_per_stitch, s.sagitta_radius_d)
         self.lx = min(s.lx_over_l0, self.build_lx) if s.lx_over_l0 is not None else self.build_lx
         self.ly = s.ly_over_l0
         lx = widest_fitting_width(self.lx, self.ly, m, s.nodes_per_stitch, lx_min=MIN_BUILD_LX)
@@ -353,7 +356,7 @@ def stitch_of(s: StretchSettings, lx_over_l0: float) -> StitchRun:
     cell = StitchRun(StitchSettings(
         lx_over_l0=lx_over_l0, ly_over_l0=s.ly_over_l0, nodes_per_stitch=s.nodes_per_stitch,
         material=s.material, contact_force_f0=s.contact_force_f0, overlap_fraction=s.overlap_fraction,
-        stretch_increment=s.stretch_increment))
+        sagitta_radius_d=s.sagitta_radius_d, stretch_increment=s.stretch_increment))
     cell.relax()
     return cell
 
@@ -404,15 +407,16 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
 
 
 @functools.lru_cache(maxsize=16)
-def unloaded_width(ly_over_l0: float, nodes_per_stitch: int, material: Material) -> float:
+def unloaded_width(ly_over_l0: float, nodes_per_stitch: int, material: Material, sagitta_radius_d: float = 0.0) -> float:
     """l_x/l0 of the periodised stitch on the f_x = 0 curve at this l_y (cached: a sweep asks it often)."""
-    return zero_tension_lx(ly_over_l0, material=material, nodes_per_stitch=nodes_per_stitch)
+    return zero_tension_lx(ly_over_l0, material=material, nodes_per_stitch=nodes_per_stitch,
+                           sagitta_radius_d=sagitta_radius_d)
 
 
 def remember_unloaded_shape(cell: StitchRun, s: StretchSettings) -> None:
     """The stitch is taken to the f_x = 0 curve (the unloaded fabric), relaxed, and remembers that shape
     with mean (kappa_bar/kappa0)^2 = K (:mod:`knitlad.natural_curvature`); relaxed again, twist on."""
-    stretch_to(cell, unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material), s.ly_over_l0,
+    stretch_to(cell, unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material, s.sagitta_radius_d), s.ly_over_l0,
                s.stretch_increment, min_increments=0)
     cell.settle()
     cell.remember_shape(s.natural_curvature)

@@ -40,6 +40,7 @@ class RodModel(NamedTuple):
     f_ext: np.ndarray  # (n, 3) constant external force
     node_yarn: np.ndarray  # (n,) int64 yarn of each node
     yarn_start: np.ndarray  # (n_yarns + 1,) int64 offsets
+    yarn_parent: np.ndarray  # (n_yarns,) int64 the yarn this one was cut from (itself if never cut)
     rail_node: np.ndarray  # (k,) int64 nodes that may only slide along a line ...
     rail_axis: np.ndarray  # (k, 3) ... the unit direction of that line
     image_node: np.ndarray  # (g,) int64 nodes of periodic images: held copies that follow ...
@@ -93,7 +94,7 @@ class RodState(NamedTuple):
 
 MODEL_AXES = {
     **dict.fromkeys(("mass", "radius", "held", "v_prescribed", "f_ext", "node_yarn"), NODE),
-    "yarn_start": YARN, "rail_node": RAIL, "rail_axis": RAIL,
+    "yarn_start": YARN, "yarn_parent": YARN, "rail_node": RAIL, "rail_axis": RAIL,
     **dict.fromkeys(("image_node", "image_master", "image_shift"), IMAGE),
     **dict.fromkeys(("edge_a", "edge_b", "edge_shift", "rest_length", "EA", "stretch_damping", "twist_inertia",
                      "theta_held"), EDGE),
@@ -357,6 +358,7 @@ class Scene:
                 hinge_e1.append(first_edge + j)
         return dict(
             node_yarn=np.repeat(np.arange(len(counts)), counts).astype(np.int64), yarn_start=yarn_start,
+            yarn_parent=np.arange(len(counts), dtype=np.int64),
             edge_a=np.array(edge_a, dtype=np.int64), edge_b=np.array(edge_b, dtype=np.int64),
             edge_shift=np.array(edge_shift, dtype=float).reshape(-1, 3),
             hinge_e0=np.array(hinge_e0, dtype=np.int64), hinge_e1=np.array(hinge_e1, dtype=np.int64),
@@ -470,6 +472,10 @@ def cut_edge(rods: Rods, edge: int) -> Rods:
     Node arrays are unchanged (same indices); the edge and the bending hinges that
     used it disappear, so the two new ends are free. Every array is cut along the
     axis :data:`MODEL_AXES` / :data:`STATE_AXES` gives it, so a new field cannot be missed.
+    The second piece keeps the first's ``yarn_parent``: for the contact the two stay one
+    yarn with a gap of one edge, so their new ends, closer than a diameter once the
+    segments are shorter than d, are excluded from each other as neighbours along a yarn
+    are (:func:`knitlad.contact.contact_topology`), instead of pushing each other apart.
     """
     m = rods.model
     ne = m.edge_a.shape[0]
@@ -491,6 +497,7 @@ def cut_edge(rods: Rods, edge: int) -> Rods:
     y = int(m.node_yarn[a])
     yarn_start = np.insert(m.yarn_start, y + 1, b).astype(np.int64)
     model["yarn_start"] = yarn_start
+    model["yarn_parent"] = np.insert(m.yarn_parent, y + 1, m.yarn_parent[y]).astype(np.int64)
     model["node_yarn"] = np.repeat(np.arange(yarn_start.shape[0] - 1), np.diff(yarn_start)).astype(np.int64)
     state = RodState(**{name: cut(getattr(rods.state, name), STATE_AXES[name]) for name in RodState._fields})
     return Rods(RodModel(**model), state, rods.twist)

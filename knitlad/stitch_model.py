@@ -53,6 +53,7 @@ class StitchSettings:
     material: Material
     contact_force_f0: float = 20.0
     overlap_fraction: float = 0.05
+    sagitta_radius_d: float = 0.0  # the contact's sagitta correction (knitlad.contact.sagitta_corrected_radius), in d; 0: none
     stretch_increment: float = 0.005
     relax_steps: int = 20_000  # per increment
     force_tol_f0: float = 1e-4  # final relaxation: max |F| on a node, in f0
@@ -64,13 +65,14 @@ class StitchResult:
     fx: float = math.nan
     fy: float = math.nan
     converged: bool = False
+    residual_f0: float = math.nan  # the largest force left on a node by the final relaxation, in f0
     max_overlap_over_d: float = math.nan
     relax_steps: int = 0
     wall_s: float = 0.0
 
     def summary(self) -> dict:
         return {"fx": self.fx, "fy": self.fy, "lx_over_l0": self.settings.lx_over_l0,
-                "ly_over_l0": self.settings.ly_over_l0, "converged": self.converged,
+                "ly_over_l0": self.settings.ly_over_l0, "converged": self.converged, "residual_f0": self.residual_f0,
                 "max_overlap_over_d": self.max_overlap_over_d, "relax_steps": self.relax_steps,
                 "wall_s": self.wall_s}
 
@@ -82,7 +84,8 @@ class StitchRun:
         self.ly = min(settings.ly_over_l0, BUILD_LY)
         self.lx, geometry = self._build_geometry()
         self.cell: PeriodicStitch = build_periodic_stitch(geometry)
-        contact = ContactModel.for_knit(m, settings.contact_force_f0, settings.overlap_fraction, friction=0.0)
+        contact = ContactModel.for_knit(m, settings.contact_force_f0, settings.overlap_fraction,
+                                        sagitta_radius_d=settings.sagitta_radius_d, friction=0.0)
         self.sim = Simulation(self.cell.rods, contact=contact)
         self.result = StitchResult(settings)
 
@@ -130,7 +133,9 @@ class StitchRun:
         s = self.s
         self.relax()
         stretch_to(self, s.lx_over_l0, s.ly_over_l0, s.stretch_increment, min_increments=0)
-        self.result.converged = self.settle()["converged"]
+        info = self.settle()
+        self.result.converged = info["converged"]
+        self.result.residual_f0 = info["max_force_N"] / s.material.f0
 
     def tensions(self) -> tuple[float, float]:
         return cell_tensions(self.sim, self.cell, self.s.material.f0)
@@ -148,13 +153,18 @@ class StitchRun:
 
 
 def stitch_tensions(lx_over_l0: float, ly_over_l0: float, nodes_per_stitch: int | None = None,
-                    material: Material = NYLON) -> StitchResult:
-    """The stitch at (l_x, l_y) [l/l0]; default resolution: :class:`knitlad.config.StitchConfig`'s."""
+                    material: Material = NYLON, sagitta_radius_d: float | None = None) -> StitchResult:
+    """The stitch at (l_x, l_y) [l/l0]; the resolution and the sagitta correction default to the
+    default preset's (:class:`knitlad.config.StitchConfig`)."""
     from knitlad.config import StitchConfig
 
+    preset = StitchConfig(lx=lx_over_l0, ly=ly_over_l0)
     if nodes_per_stitch is None:
-        nodes_per_stitch = StitchConfig.model_fields["resolution"].default
-    return StitchRun(StitchSettings(lx_over_l0, ly_over_l0, nodes_per_stitch, material)).run()
+        nodes_per_stitch = preset.resolution
+    if sagitta_radius_d is None:
+        sagitta_radius_d = preset.sagitta_radius
+    return StitchRun(StitchSettings(lx_over_l0, ly_over_l0, nodes_per_stitch, material,
+                                    sagitta_radius_d=sagitta_radius_d)).run()
 
 
 def zero_tension_lx(ly_over_l0: float, lo: float = 0.22, hi: float = 0.40, tol: float = 1e-3, **kwargs) -> float:

@@ -220,8 +220,10 @@ def expand(cfg: SweepConfig, max_jobs: int = MAX_JOBS) -> list[Job]:
     if n_jobs > max_jobs:
         raise SweepError(f"sweep.axes: {n_jobs:.3g} jobs ({' x '.join(map(str, counts.values()))}), more than "
                          f"{max_jobs}; use fewer values or --max-jobs")
-    if "preset" in cfg.sweep.axes and ("resolution" in cfg.fixed or "resolution" in cfg.sweep.axes):
-        raise SweepError("sweep.axes.preset: has no effect where resolution is given (the preset only sets it)")
+    preset_sets = tuple(next(iter(model.PRESETS.values()))) if hasattr(model, "PRESETS") else ()
+    if "preset" in cfg.sweep.axes and preset_sets and all(k in cfg.fixed or k in cfg.sweep.axes for k in preset_sets):
+        raise SweepError(f"sweep.axes.preset: has no effect where {', '.join(preset_sets)} are given (the preset "
+                         "only sets them)")
     for key in cfg.fixed:
         if key not in fields:
             raise SweepError(f"fixed.{key}: not a field of scene {cfg.scene!r} (fields: {', '.join(sorted(fields))})")

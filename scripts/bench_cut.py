@@ -37,14 +37,15 @@ def main() -> None:
     p.add_argument("--stitches", type=int, default=42)
     p.add_argument("--presets", nargs="+", default=["default", "accurate"], choices=["fast", "default", "accurate"])
     p.add_argument("--twist", nargs="+", default=["off", "on"], choices=["off", "on"])
-    p.add_argument("--axial", nargs="+", default=["explicit"], choices=["explicit", "implicit"],
-                   help="the axial springs of the dynamics (implicit_axial)")
+    p.add_argument("--axial", nargs="+", default=["preset"], choices=["preset", "explicit", "implicit"],
+                   help="the axial springs of the dynamics (implicit_axial; preset: the preset's)")
     p.add_argument("--threads", type=int, default=2)
     args = p.parse_args()
     t = time.perf_counter()
     with numba_threads(args.threads):
-        run_ladder(CutConfig(n_x=6, n_y=6, fx=4.0, twist=True, max_time_ms=0.2).settings())
-        run_ladder(CutConfig(n_x=6, n_y=6, fx=4.0, max_time_ms=0.2).settings())
+        for preset in args.presets:
+            run_ladder(CutConfig(n_x=6, n_y=6, fx=4.0, twist=True, max_time_ms=0.2, preset=preset).settings())
+            run_ladder(CutConfig(n_x=6, n_y=6, fx=4.0, max_time_ms=0.2, preset=preset).settings())
     print(f"warm-up (compilation on a fresh clone): {time.perf_counter() - t:.1f} s")
     lean = lean_rate()
     print(f"lean stretch + bend kernel, 1 thread: {lean:.3e} node-steps/s\n")
@@ -55,12 +56,12 @@ def main() -> None:
         for twist in args.twist:
             for axial in args.axial:
                 cfg = CutConfig(n_x=args.stitches, n_y=args.stitches, fx=args.fx, preset=preset, twist=twist == "on",
-                                implicit_axial=axial == "implicit")
+                                implicit_axial=None if axial == "preset" else axial == "implicit")
                 with numba_threads(args.threads):
                     r = run_ladder(cfg.settings())
                 stretch_s, propagate_s = r.wall_s["stretch"], r.wall_s["propagate"]
                 rate = r.nodes * r.steps / propagate_s
-                print(f"| {preset} ({cfg.resolution}) | {twist} | {axial} | {r.nodes} | {stretch_s:.1f} | "
+                print(f"| {preset} ({cfg.resolution}) | {twist} | {'implicit' if cfg.implicit_axial else 'explicit'} | {r.nodes} | {stretch_s:.1f} | "
                       f"{propagate_s:.1f} | {stretch_s + propagate_s:.1f} | {r.steps} | {rate:.3e} | {rate / lean:.2f} | "
                       f"{r.fx_ini:.2f} | {r.v_lad_over_cb:.3f} | {r.n_lad_over_ny:.2f} | {r.fx_fin:.2f} |", flush=True)
 

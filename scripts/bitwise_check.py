@@ -4,7 +4,7 @@
     python scripts/bitwise_check.py --compare runs/bitwise.npz   # after it: identical, or where it differs
     python scripts/bitwise_check.py --twist --save runs/bitwise_twist.npz   # the yarns carrying twist
 
-The knit is stretched to f_x^ini = 8 by force control (24 nodes per stitch), cut, and
+The knit is stretched to f_x^ini = 8 by force control (preset fast: 24 nodes per stitch), cut, and
 stepped 3,000 times. A change that only moves code must leave every position and
 velocity identical (same machine, same Numba version and threads).
 """
@@ -21,7 +21,7 @@ from knitlad.protocol import cut, stretch
 
 
 def ladder_after_3000_steps(twist: bool) -> dict:
-    cfg = CutConfig(n_x=16, n_y=16, fx=8.0, twist=twist)
+    cfg = CutConfig(n_x=16, n_y=16, fx=8.0, twist=twist, preset="fast")  # 24 nodes per stitch, capsules of r
     knit = stretch(cfg.stretch_settings())
     run = cut(knit, cfg.dynamics_settings())
     run.sim.step(3000)

@@ -75,7 +75,7 @@ def stitch_run(cfg: dict) -> dict:
     from knitlad.stitch_model import StitchRun
 
     t = time.perf_counter()
-    res = StitchRun(StitchConfig(lx=0.35, ly=0.25, resolution=cfg["nodes_per_stitch"]).settings(
+    res = StitchRun(StitchConfig(preset="fast", lx=0.35, ly=0.25, resolution=cfg["nodes_per_stitch"]).settings(
         overlap_fraction=cfg["overlap_fraction"])).run()
     return {"observable": "stitch f_x (0.35, 0.25)", "value": res.fx, "wall_s": time.perf_counter() - t}
 
@@ -99,7 +99,7 @@ def knit_runs(cfg: dict, size: int, tensions: list[float], nominal: float | None
     for fx in tensions:
         label = fx if nominal is None else nominal
         t = time.perf_counter()
-        res = run_ladder(CutConfig(n_x=size, n_y=size, fx=fx, mu=0.4, max_time_ms=30.0,
+        res = run_ladder(CutConfig(preset="fast", n_x=size, n_y=size, fx=fx, mu=0.4, max_time_ms=30.0,
                                    resolution=cfg["nodes_per_stitch"], overlap_fraction=cfg["overlap_fraction"],
                                    dt_safety=cfg["dt_safety"]).settings())
         wall = time.perf_counter() - t
@@ -153,7 +153,7 @@ def model_runs(size: int, tensions: list[float], csv: Path, study: dict[str, lis
         todo = [(key, value) for key, value in cases if (key, str(value), fx) not in done]
         if not todo:
             continue
-        base = CutConfig(n_x=size, n_y=size, fx=fx, mu=0.4)
+        base = CutConfig(preset="fast", n_x=size, n_y=size, fx=fx, mu=0.4)
         knit = stretch(base.stretch_settings())
         for key, value in todo:
             t = time.perf_counter()

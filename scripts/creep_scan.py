@@ -58,7 +58,7 @@ def main() -> None:
     args = p.parse_args()
     if args.rounds < 1:
         p.error("--rounds must be >= 1")
-    cfg = CutConfig(n_x=args.stitches, n_y=args.stitches, lx=args.boxes[-1], edge=args.edge)
+    cfg = CutConfig(preset="fast", n_x=args.stitches, n_y=args.stitches, lx=args.boxes[-1], edge=args.edge)
     box = KnitBox(cfg.stretch_settings())
     f0 = box.s.material.f0
     t0 = time.perf_counter()

@@ -41,7 +41,7 @@ def undamped_contact(counting: str, material=kl.NYLON) -> ContactModel:
 
 
 def ladder_energy(safety: float, counting: str, samples: int = 20, every_s: float = 0.1e-3) -> dict:
-    cfg = CutConfig(n_x=6, n_y=8, resolution=16, fx=13.6, mu=0.0, dt_safety=safety, contact_damping_ratio=0.0,
+    cfg = CutConfig(preset="fast", n_x=6, n_y=8, resolution=16, fx=13.6, mu=0.0, dt_safety=safety, contact_damping_ratio=0.0,
                     stretch_damping_ratio=0.0, contact_counting=counting)
     knit = stretch(cfg.stretch_settings())  # FIRE with its own dashpots; the settings above take effect at the cut
     sim = cut(knit, cfg.dynamics_settings()).sim

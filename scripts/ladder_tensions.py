@@ -1,6 +1,6 @@
 """The paper's DER points: `knitlad cut` at f_x^ini = 1.58, 4, 8, 13.6, 15.67 (l_y/l0 = 0.25).
 
-    python scripts/ladder_tensions.py [--stitches 42] [--resolution 24] [--fx 1.58 4 8 13.6 15.67]
+    python scripts/ladder_tensions.py [--stitches 42] [--preset default] [--fx 1.58 4 8 13.6 15.67]
                                       [--twist] [--cut-args="--twist-inertia-factor 4"]
 
 Prints a table beside the paper's values (DER, 42 x 42, mu = 0.4: v_lad/c_b =
@@ -23,7 +23,8 @@ PAPER_V = {1.58: 0.176, 15.67: 1.05}
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--stitches", default="42")
-    p.add_argument("--resolution", type=int, default=24)
+    p.add_argument("--preset", default="default", choices=["fast", "default", "accurate"])
+    p.add_argument("--resolution", type=int, default=None, help="nodes per stitch (default: the preset's)")
     p.add_argument("--fx", type=float, nargs="+", default=[1.58, 4.0, 8.0, 13.6, 15.67])
     p.add_argument("--twist", action="store_true", help="the yarns carry twist (knitlad cut --twist)")
     p.add_argument("--cut-args", default="", help="further options of `knitlad cut`, as one string")
@@ -35,7 +36,8 @@ def main() -> None:
         with tempfile.TemporaryDirectory() as out:
             proc = subprocess.run(
                 [sys.executable, "-m", "knitlad.cli", "cut", "--fx", str(fx), "--stitches", args.stitches,
-                 "--resolution", str(args.resolution), "--out", out, "--json", *extra],
+                 "--preset", args.preset, *(["--resolution", str(args.resolution)] if args.resolution else []),
+                 "--out", out, "--json", *extra],
                 capture_output=True, text=True,
             )
         if proc.returncode != 0:

@@ -55,7 +55,7 @@ def main() -> None:
             todo = [f for f in args.factors if (label, fx, k, f) not in done]
             if not todo:
                 continue
-            cfg = CutConfig(n_x=args.size, n_y=args.size, fx=fx * (1 + offset), resolution=args.resolution, **settings)
+            cfg = CutConfig(preset="fast", n_x=args.size, n_y=args.size, fx=fx * (1 + offset), resolution=args.resolution, **settings)
             knit = stretch(cfg.stretch_settings())
             for factor in todo:
                 t = time.perf_counter()

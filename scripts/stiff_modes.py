@@ -61,7 +61,7 @@ def main() -> None:
                 if (variant, fx, k) in done:
                     continue
                 settings = base | ({} if variant == REFERENCE else parse_settings(variant.split(",")))
-                cfg = CutConfig(n_x=args.size, n_y=args.size, fx=fx * (1 + offset), resolution=args.resolution,
+                cfg = CutConfig(preset="fast", n_x=args.size, n_y=args.size, fx=fx * (1 + offset), resolution=args.resolution,
                                 **settings)
                 key = cfg.stretch_settings()
                 if key not in knits:

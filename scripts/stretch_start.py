@@ -41,7 +41,7 @@ def main() -> None:
             for start in STARTS:
                 if (args.size, fx, k, start) in done:
                     continue
-                cfg = CutConfig(n_x=args.size, n_y=args.size, fx=fx * (1 + offset), stretch_start=start)
+                cfg = CutConfig(preset="fast", n_x=args.size, n_y=args.size, fx=fx * (1 + offset), stretch_start=start)
                 t = time.perf_counter()
                 knit = stretch(cfg.stretch_settings())
                 wall_stretch = time.perf_counter() - t

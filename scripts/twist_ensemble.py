@@ -40,7 +40,7 @@ def main() -> None:
         for k, offset in enumerate(offsets):
             if (fx, k) in done:
                 continue
-            cfg = CutConfig(n_x=args.size, n_y=args.size, fx=fx * (1 + offset))
+            cfg = CutConfig(preset="fast", n_x=args.size, n_y=args.size, fx=fx * (1 + offset))
             knit = stretch(cfg.stretch_settings())
             row = {"fx_nominal": fx, "member": k, "fx_ini": knit.fx_ini}
             for label, twist in (("free", False), ("twist", True)):

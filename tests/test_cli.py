@@ -90,13 +90,19 @@ def test_loop_prints_the_release_as_json():
     assert s["v_lad_over_cb"] == pytest.approx(0.25 * 9.74e-3 / s["tau_s"] / 30.58, rel=2e-3)  # l_y / tau / c_b
 
 
-def test_presets_set_the_resolution_and_an_explicit_one_wins():
-    from knitlad.config import CutConfig, LoopConfig
+def test_presets_set_their_settings_and_an_explicit_one_wins():
+    from knitlad.config import CutConfig, LoopConfig, StitchConfig
 
-    assert [CutConfig(fx=4, preset=p).resolution for p in ("fast", "default", "accurate")] == [16, 24, 48]
+    assert [CutConfig(fx=4, preset=p).resolution for p in ("fast", "default", "accurate")] == [24, 48, 96]
+    assert [CutConfig(fx=4, preset=p).sagitta_radius for p in ("fast", "default", "accurate")] == [0, 11, 11]
+    assert [CutConfig(fx=4, preset=p).implicit_axial for p in ("fast", "default", "accurate")] == [False, True, True]
+    assert [StitchConfig(preset=p).resolution for p in ("fast", "default", "accurate")] == [24, 48, 96]
     assert [LoopConfig(preset=p).resolution for p in ("fast", "default", "accurate")] == [24, 36, 48]
     assert CutConfig(fx=4, preset="fast", resolution=30).resolution == 30
-    assert CutConfig(fx=4, preset="accurate").stretch_settings().nodes_per_stitch == 48
+    assert CutConfig(fx=4, preset="default", sagitta_radius=0).sagitta_radius == 0
+    assert CutConfig(fx=4, implicit_axial=False).implicit_axial is False
+    settings = CutConfig(fx=4, preset="accurate").stretch_settings()
+    assert (settings.nodes_per_stitch, settings.sagitta_radius_d) == (96, 11)
 
 
 def test_the_drag_of_cut_reaches_the_laddering_settings_and_defaults_to_none():

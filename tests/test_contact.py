@@ -251,3 +251,62 @@ def test_contact_forces_are_bit_for_bit_the_same_on_one_and_two_threads():
             assert sliding > 0
         finals.append(sim.state.x.copy())
     assert np.array_equal(finals[0], finals[1])
+
+
+def test_the_sagitta_correction_is_the_mean_offset_of_an_arc_from_its_chord():
+    """On a circle of radius R, the arc over a chord of length l lies l^2 s (1 - s) / (2 R) from it at s
+    along the chord, l^2 / (12 R) on average (to O(l/R)^2): exactly what the correction takes off."""
+    from knitlad.contact import sagitta_corrected_radius
+
+    R, l, r = 11.0, 2.9, 0.5  # in diameters: the default preset's R, the fast preset's segment
+    x = (np.linspace(0.0, 1.0, 200001) - 0.5) * l
+    offset = np.sqrt(R**2 - x**2) - np.sqrt(R**2 - (l / 2) ** 2)
+    mean_offset = np.trapezoid(offset, x) / l
+    taken = r - sagitta_corrected_radius(np.array([r]), np.array([l]), R)[0]
+    assert taken == pytest.approx(mean_offset, rel=(l / R) ** 2)
+
+
+def straight_yarn(scene, n: int, spacing: float, y: float = 0.0, x0: float = 0.0):
+    points = np.zeros((n, 3))
+    points[:, 0] = x0 + spacing * np.arange(n)
+    points[:, 1] = y
+    return scene.add_yarn(points)
+
+
+def test_contacts_take_the_sagitta_off_each_edge_and_keep_their_skin_and_exclusion():
+    scene = kl.Scene(kl.NYLON)
+    straight_yarn(scene, 30, 0.4 * D)
+    straight_yarn(scene, 30, 0.2 * D, y=0.9 * D)
+    rods = scene.build()
+    R = 11 * D
+    plain = make_contacts(rods, ContactModel(stiffness=1.0))
+    corrected = make_contacts(rods, ContactModel(stiffness=1.0, sagitta_radius=R))
+    rest = rods.model.rest_length
+    expected = plain.edge_radius - rest**2 / (12 * R / kl.units.LENGTH)
+    np.testing.assert_allclose(corrected.edge_radius, expected, rtol=1e-12)
+    assert corrected.params.skin == plain.params.skin
+    np.testing.assert_array_equal(corrected.exclusion, plain.exclusion)
+    with pytest.raises(ValueError, match="too long for the sagitta correction"):
+        make_contacts(rods, ContactModel(stiffness=1.0, sagitta_radius=0.05 * D))
+
+
+def test_the_two_ends_of_a_cut_do_not_push_each_other_apart():
+    """Segments of d/2 (140 nodes per stitch): the capsules on either side of a cut edge overlap by d/2.
+    The pieces stay one yarn for the contact (RodModel.yarn_parent), so the new ends are neighbours
+    along it and do not touch; two yarns built end to end at the same gap do."""
+    from knitlad.simulation import Simulation
+    from knitlad.state import cut_edge
+
+    scene = kl.Scene(kl.NYLON)
+    straight_yarn(scene, 41, 0.5 * D)
+    rods = cut_edge(scene.build(), 20)
+    sim = Simulation(rods, contact=ContactModel.for_knit(kl.NYLON))
+    sim.compute_forces()
+    assert sim.contact_stats().touching == 0
+    assert np.abs(sim.forces_N()).max() == 0.0
+    apart = kl.Scene(kl.NYLON)
+    straight_yarn(apart, 21, 0.5 * D)
+    straight_yarn(apart, 20, 0.5 * D, x0=10.5 * D)
+    sim = Simulation(apart.build(), contact=ContactModel.for_knit(kl.NYLON))
+    sim.compute_forces()
+    assert sim.contact_stats().touching == 1

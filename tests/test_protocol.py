@@ -15,7 +15,8 @@ from knitlad.units import NYLON
 
 
 def config(**kw) -> CutConfig:
-    return CutConfig(**kw)
+    """The coarse model these tests run (the fast preset: capsules of the yarn's radius, explicit axial springs)."""
+    return CutConfig(**{"preset": "fast", **kw})
 
 
 def test_tall_cells_are_built_narrower_so_that_the_loops_interlock():
@@ -230,8 +231,11 @@ def test_cut_edge_cuts_every_array_along_its_axis():
         new = after.model if part is rods.model else after.state
         for name, axis in axes.items():
             drop = {EDGE: 1, HINGE: 2}.get(axis, 0)
-            assert getattr(new, name).shape[0] == getattr(part, name).shape[0] - drop + (name == "yarn_start"), name
+            grows = name in ("yarn_start", "yarn_parent")  # one yarn more
+            assert getattr(new, name).shape[0] == getattr(part, name).shape[0] - drop + grows, name
     assert after.model.n_yarns == rods.model.n_yarns + 1
+    y = int(rods.model.node_yarn[rods.model.edge_a[edge]])
+    assert after.model.yarn_parent[y + 1] == after.model.yarn_parent[y] == rods.model.yarn_parent[y]
 
 
 def test_the_cut_leaves_every_course_and_cell_where_it_was():

@@ -23,7 +23,7 @@ from knitlad.sweep import SweepError, load_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 KNITLAD = [sys.executable, "-m", "knitlad.cli"]
-TINY = {"n_x": 6, "n_y": 8, "resolution": 16, "max_time_ms": 3, "arrest_ms": 1}
+TINY = {"n_x": 6, "n_y": 8, "preset": "fast", "resolution": 16, "max_time_ms": 3, "arrest_ms": 1}
 
 
 def knitlad(*args, **kw):
@@ -126,7 +126,7 @@ def test_a_failing_task_and_a_dead_worker_fail_only_their_jobs_and_a_rerun_says_
 
 
 def test_a_rerun_that_leaves_failed_jobs_exits_1_and_names_them(tmp_path):
-    cfg = config(tmp_path, {"scene": "stitch", "fixed": {"lx": 0.35, "ly": 0.25, "resolution": 16},
+    cfg = config(tmp_path, {"scene": "stitch", "fixed": {"lx": 0.35, "ly": 0.25, "preset": "fast", "resolution": 16},
                             "sweep": {"axes": {"d_over_l0": [0.05]}}})
     for _ in range(2):
         p = knitlad("sweep", str(cfg), "--out", str(tmp_path / "out"), "--workers", "1")
@@ -198,8 +198,8 @@ def test_a_job_that_outlives_its_sweep_writes_nothing(tmp_path):
 
 
 @pytest.mark.parametrize("cfg, where", [
-    ({"fixed": {**TINY, "lx": 0.4, "resolution": 16}, "sweep": {"axes": {"preset": ["fast", "accurate"]}}},
-     "preset"),
+    ({"fixed": {**{k: v for k, v in TINY.items() if k != "preset"}, "lx": 0.4, "resolution": 16, "sagitta_radius": 0,
+                "implicit_axial": False}, "sweep": {"axes": {"preset": ["fast", "accurate"]}}}, "preset"),
     ({"fixed": {**TINY, "lx": 0.4, "observe_every_us": 50}, "sweep": {"axes": {"mu": [0.4]}},
       "output": {"frame_every_us": 20}}, "frame_every_us"),
     ({"fixed": {**TINY, "lx": 0.4, "n_x": True}, "sweep": {"axes": {"mu": [0.4]}}}, "n_x"),

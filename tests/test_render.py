@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def run_folder(tmp_path_factory):
     out = tmp_path_factory.mktemp("run") / "cut"
     p = subprocess.run([sys.executable, "-m", "knitlad.cli", "cut", "--stitches", "6x8", "--lx", "0.40",
-                        "--resolution", "16", "--max-time-ms", "0.3", "--out", str(out)],
+                        "--preset", "fast", "--resolution", "16", "--max-time-ms", "0.3", "--out", str(out)],
                        capture_output=True, text=True, cwd=ROOT)
     assert p.returncode == 0, p.stderr
     return out

@@ -22,7 +22,7 @@ from knitlad.sweep import Job, SweepConfig, SweepError, expand, job_id, load_swe
 
 ROOT = Path(__file__).resolve().parents[1]
 KNITLAD = [sys.executable, "-m", "knitlad.cli"]
-TINY = {"n_x": 6, "n_y": 8, "resolution": 16, "max_time_ms": 3, "arrest_ms": 1}
+TINY = {"n_x": 6, "n_y": 8, "preset": "fast", "resolution": 16, "max_time_ms": 3, "arrest_ms": 1}
 
 
 def knitlad(*args, **kw):
@@ -186,7 +186,7 @@ def test_plot_draws_the_summary_figures_and_the_diagrams(smoke):
 def test_a_failing_job_is_recorded_and_the_others_go_on(tmp_path):
     """No jersey stitch of d/l0 = 1/20 holds l0 at these periodicities: that job fails
     (CourseTooWide, raised by the run, not by the config), the other runs."""
-    cfg = write_config(tmp_path / "f.yaml", {"scene": "stitch", "fixed": {"lx": 0.35, "ly": 0.25, "resolution": 16},
+    cfg = write_config(tmp_path / "f.yaml", {"scene": "stitch", "fixed": {"lx": 0.35, "ly": 0.25, "preset": "fast", "resolution": 16},
                                              "sweep": {"axes": {"d_over_l0": [0.05, 1 / 70]}}})
     p = knitlad("sweep", str(cfg), "--out", str(tmp_path / "out"), "--workers", "1")
     assert p.returncode == 1

@@ -211,9 +211,13 @@ def read_stretched_knit(path: str | Path):
         material = Material(**settings.pop("material"))
         settings.setdefault("start", "affine")  # knits stretched before the tiled start were affine
         settings.setdefault("natural_curvature", 0.0)
+        settings.setdefault("sagitta_radius_d", 0.0)  # knits stretched before the sagitta correction had none
         geometry = json.loads(f.attrs["geometry_json"])
         geometry["material"] = material
-        model = RodModel(**{name: f["model"][name][()] for name in RodModel._fields})
+        stored = {name: f["model"][name][()] for name in RodModel._fields if name in f["model"]}
+        # knits stored before cuts kept their pieces one yarn for the contact were never cut
+        stored.setdefault("yarn_parent", np.arange(stored["yarn_start"].shape[0] - 1, dtype=np.int64))
+        model = RodModel(**stored)
         state = RodState(**{name: f["state"][name][()] for name in RodState._fields})
         g = f["knit"]
         knit = KnitScene(geometry=Jersey(**geometry), rods=Rods(model, state, twist=bool(f.attrs.get("rods_twist", False))), H=float(f.attrs["H"]),

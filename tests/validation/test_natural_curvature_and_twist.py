@@ -97,7 +97,7 @@ def test_a_course_freed_of_the_knit_relaxes_to_the_natural_curvature_it_was_give
     from knitlad.simulation import Simulation
 
     K = 1.0
-    cfg = CutConfig(n_x=4, n_y=4, fx=4.0, natural_curvature=K)
+    cfg = CutConfig(n_x=4, n_y=4, fx=4.0, natural_curvature=K, preset="fast")
     knit = stretch(cfg.stretch_settings())
     rods, material = knit.knit.rods, cfg.stretch_settings().material
     assert rods.twist and cfg.twist

@@ -91,8 +91,8 @@ def test_the_fabric_away_from_its_edges_carries_the_tension_of_the_periodic_stit
     from knitlad.protocol import stretch
 
     # the affine stretch: the tiled one starts from the stitch and would agree by construction
-    r = stretch(CutConfig(fx=4.0, resolution=24, stretch_start="affine").stretch_settings())
-    stitch = stitch_tensions(r.lx_over_l0, r.ly_over_l0, nodes_per_stitch=24)
+    r = stretch(CutConfig(fx=4.0, preset="fast", stretch_start="affine").stretch_settings())
+    stitch = stitch_tensions(r.lx_over_l0, r.ly_over_l0, nodes_per_stitch=24, sagitta_radius_d=0.0)
     assert r.fx_ini == pytest.approx(stitch.fx, rel=0.05)
 
 
@@ -106,8 +106,8 @@ def test_the_tiled_knit_carries_the_stitch_tension_through_its_held_ends(lx):
     from knitlad.config import CutConfig
     from knitlad.protocol import stretch
 
-    knit = stretch(CutConfig(n_x=6, n_y=6, lx=lx).stretch_settings())
-    stitch = stitch_tensions(lx, 0.25, nodes_per_stitch=24)
+    knit = stretch(CutConfig(n_x=6, n_y=6, lx=lx, preset="fast").stretch_settings())
+    stitch = stitch_tensions(lx, 0.25, nodes_per_stitch=24, sagitta_radius_d=0.0)
     assert knit.fx_ini == pytest.approx(stitch.fx, rel=0.005, abs=0.01)
     assert knit.lx_over_l0 == pytest.approx(lx, rel=0.002)
     assert knit.ly_over_l0 == pytest.approx(0.25, rel=0.002)
