@@ -179,6 +179,7 @@ def cut(
     from knitlad.observers import Interpenetration
     from knitlad.plots import spatio_temporal_diagram
     from knitlad.protocol import KnitTooLarge, require_memory, run_ladder
+    from knitlad.scenes.jersey import CourseTooWide
     from knitlad.simulation import SimulationBlowUp
     from knitlad.stretching import OutOfReach
 
@@ -207,6 +208,10 @@ def cut(
         nothing_written()
         typer.echo(f"knitlad: run failed: {e}", err=True)
         raise typer.Exit(1)
+    except CourseTooWide as e:  # no stitch of this yarn fits: bad input, found when the knit is built
+        progress.close()
+        nothing_written()
+        fail(f"--d-over-l0: {e}")
     progress.close()
     from knitlad.render import write_xdmf
 

@@ -125,3 +125,12 @@ def test_natural_curvature_turns_twist_on_and_needs_the_tiled_stretch():
         CutConfig(fx=4, natural_curvature=2, stretch_start="affine")
     with pytest.raises(ValueError, match="natural_curvature"):
         CutConfig(fx=4, natural_curvature=-1)
+
+
+def test_a_yarn_too_thick_for_any_stitch_is_one_line_and_nothing_written(tmp_path):
+    """d/l0 = 0.1: no jersey stitch fits at l_y/l0 = 0.25 (found when the knit is built): bad input, exit 2."""
+    out = tmp_path / "out"
+    p = run("cut", "--d-over-l0", "0.1", "--stitches", "4", "--out", str(out))
+    assert p.returncode == 2, p.stderr
+    assert "--d-over-l0" in p.stderr and "Traceback" not in p.stderr and len(p.stderr.strip().splitlines()) == 1
+    assert not out.exists()
