@@ -340,7 +340,8 @@ def one_line(error: ValidationError, prefix: tuple = ()) -> str:
     e = error.errors()[0]
     # pydantic names the member of a union it tried ("list[any]", "Range"): not part of the user's path
     loc = [str(p) for p in prefix + tuple(e.get("loc", ())) if not (isinstance(p, str) and p in ("list[any]", "Range"))]
-    msg = e.get("msg", str(error)).removeprefix("Value error, ")
+    # never str(error): it formats the whole input, which an alias-expanded document makes huge
+    msg = (e["msg"] if "msg" in e else "invalid value").removeprefix("Value error, ")
     return f"{'.'.join(loc) or 'config'}: {msg}"
 
 

@@ -185,6 +185,54 @@ _UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
 
 
 
+# what a sweep file may hold: nesting and the values it expands to (aliases counted each time they are used)
+MAX_YAML_DEPTH = 64
+MAX_YAML_VALUES = 100_000
+
+
+def bounded_yaml(text: str, where: str):
+    """The document of ``text`` (unique keys), refused with a SweepError before it is built if it nests
+    deeper than MAX_YAML_DEPTH, expands to more than MAX_YAML_VALUES values through its aliases (a
+    "billion laughs" of a few hundred bytes), or uses a list or mapping as a mapping key."""
+    depth = 0
+    for event in yaml.parse(text, Loader=_UniqueKeyLoader):  # a stream of events: no recursion, no expansion
+        if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+            depth += 1
+            if depth > MAX_YAML_DEPTH:
+                raise SweepError(f"{where}: line {event.start_mark.line + 1}: nested deeper than {MAX_YAML_DEPTH} levels")
+        elif isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+            depth -= 1
+    loader = _UniqueKeyLoader(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        _expanded_values(node, {}, where)
+        return loader.construct_document(node)
+    finally:
+        loader.dispose()
+
+
+def _expanded_values(node: yaml.Node, seen: dict, where: str) -> int:
+    """Values under ``node`` with every alias expanded, counted without expanding (memoised by node)."""
+    if id(node) in seen:
+        return seen[id(node)]
+    count = 1
+    if isinstance(node, yaml.SequenceNode):
+        count += sum(_expanded_values(child, seen, where) for child in node.value)
+    elif isinstance(node, yaml.MappingNode):
+        for key, value in node.value:
+            if not isinstance(key, yaml.ScalarNode):
+                raise SweepError(f"{where}: line {key.start_mark.line + 1}: a mapping key must be a plain value, "
+                                 "not a list or a mapping")
+            count += 1 + _expanded_values(value, seen, where)
+    if count > MAX_YAML_VALUES:
+        raise SweepError(f"{where}: line {node.start_mark.line + 1}: expands to more than {MAX_YAML_VALUES:,} values "
+                         "(aliases of aliases?)")
+    seen[id(node)] = count
+    return count
+
+
 def load_sweep(path: str | Path, max_jobs: int = MAX_JOBS) -> tuple[SweepConfig, list[Job]]:
     """Read, validate and expand a sweep file; every problem raises SweepError('key: reason')."""
     path = Path(path)
@@ -195,7 +243,7 @@ def load_sweep(path: str | Path, max_jobs: int = MAX_JOBS) -> tuple[SweepConfig,
     except OSError as e:
         raise SweepError(f"{path}: cannot read ({e.strerror or e})") from None
     try:
-        raw = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader
+        raw = bounded_yaml(text, str(path))
     except yaml.YAMLError as e:
         mark = getattr(e, "problem_mark", None)
         where = f"line {mark.line + 1}" if mark is not None else "YAML"

@@ -276,3 +276,43 @@ def test_a_sigterm_during_a_submit_arrives_after_it():
         assert signal.getsignal(signal.SIGTERM) is note and len(seen) == 1 and seen[0] >= held_until
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+# ------------------------------------------------------------------ hostile YAML
+def alias_bomb(levels: int) -> str:
+    """A few hundred bytes whose aliases of aliases expand to 9**levels values."""
+    lines = ["a0: &a0 [1, 1, 1, 1, 1, 1, 1, 1, 1]"]
+    lines += [f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * 9) + "]" for i in range(1, levels)]
+    return "\n".join(lines + ["scene: ladder", f"fixed: {{lx: 0.4, n_x: *a{levels - 1}}}", "sweep: {axes: {mu: [0.4]}}"])
+
+
+@pytest.mark.parametrize("text, reason", [
+    (alias_bomb(9), "expands to more than"),  # 3.9e8 values: 58 s and 5.6 GB before the check
+    ("scene: ladder\nfixed: " + "[" * 20_000 + "]" * 20_000 + "\n", "nested deeper than"),  # was RecursionError
+    ("scene: ladder\nfixed: {lx: 0.4}\nsweep:\n  axes:\n    ? [mu]\n    : [0.4]\n", "mapping key must be a plain value"),
+])
+def test_hostile_yaml_is_refused_in_one_line_before_it_is_built(tmp_path, text, reason):
+    path = tmp_path / "hostile.yaml"
+    path.write_text(text)
+    t = time.perf_counter()
+    with pytest.raises(SweepError, match=reason):
+        load_sweep(path)
+    assert time.perf_counter() - t < 5.0
+    assert reason in one_line_error(knitlad("sweep", str(path), "--dry-run"))
+
+
+def test_a_validation_error_never_formats_the_whole_input(monkeypatch):
+    """one_line reads the first error's message: str(ValidationError) formats the whole input, which took
+    most of the 58 s of an alias bomb's one-line error."""
+    from pydantic import ValidationError
+
+    from knitlad.config import CutConfig, one_line
+
+    with pytest.raises(ValidationError) as info:
+        CutConfig(lx=0.4, n_x=list(range(1000)))
+
+    def formatted(self):
+        raise AssertionError("the whole input was formatted")
+
+    monkeypatch.setattr(ValidationError, "__str__", formatted)
+    assert one_line(info.value).startswith("n_x:")
