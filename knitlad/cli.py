@@ -178,7 +178,7 @@ def cut(
     from knitlad.io.hdf5 import write_ladder_result
     from knitlad.observers import Interpenetration
     from knitlad.plots import spatio_temporal_diagram
-    from knitlad.protocol import KnitTooLarge, require_memory, run_ladder
+    from knitlad.protocol import InfeasibleRun, KnitTooLarge, require_memory, run_ladder
     from knitlad.scenes.jersey import CourseTooWide
     from knitlad.simulation import SimulationBlowUp
     from knitlad.stretching import OutOfReach
@@ -212,6 +212,10 @@ def cut(
         progress.close()
         nothing_written()
         fail(f"--d-over-l0: {e}")
+    except InfeasibleRun as e:  # settings whose step cannot serve the run: bad input, found when it is set
+        progress.close()
+        nothing_written()
+        fail(str(e))
     progress.close()
     from knitlad.render import write_xdmf
 

@@ -516,7 +516,31 @@ def cut(knit: StretchedKnit, dynamics: DynamicsSettings) -> Laddering:
                      drag_per_s=dynamics.drag_per_s, framed_twist=dynamics.framed_twist,
                      implicit_axial=dynamics.implicit_axial, predicted_dashpots=dynamics.predicted_dashpots)
     sim.set_friction(dynamics.mu)
+    check_feasible(sim.dt_s, dynamics)
     return Laddering(knit, dynamics, sim, edge, row, column, baseline, time.perf_counter() - t0)
+
+
+MAX_LADDER_STEPS = 1e8  # a 42 x 42 run at 96 nodes per stitch takes a few 1e6
+
+
+class InfeasibleRun(ValueError):
+    """Settings whose time step cannot serve the run: longer than what it observes, or absurdly many steps."""
+
+
+STEP_SETTINGS = ("d_over_l0, contact_force_f0, overlap_fraction, contact_damping_ratio, stretch_damping_ratio, "
+                 "dt_safety")
+
+
+def check_feasible(dt_s: float, dynamics: DynamicsSettings) -> None:
+    """Refuse, before the first step, a laddering whose step [s] is longer than its observation interval
+    (it would "finish" in a few steps and report nothing real) or that would need over MAX_LADDER_STEPS."""
+    if dt_s > dynamics.observe_every_s:
+        raise InfeasibleRun(f"the time step ({dt_s:.3g} s) is longer than the observation interval "
+                            f"({dynamics.observe_every_s:.3g} s): check {STEP_SETTINGS}")
+    steps = dynamics.max_time_s / dt_s
+    if steps > MAX_LADDER_STEPS:
+        raise InfeasibleRun(f"max_time_ms {dynamics.max_time_s * 1e3:g} at a time step of {dt_s:.2g} s is "
+                            f"{steps:.1e} steps, over {MAX_LADDER_STEPS:.0e}: check {STEP_SETTINGS}")
 
 
 # ------------------------------------------------------------------ stage 3: propagate

@@ -316,3 +316,25 @@ def test_a_validation_error_never_formats_the_whole_input(monkeypatch):
 
     monkeypatch.setattr(ValidationError, "__str__", formatted)
     assert one_line(info.value).startswith("n_x:")
+
+
+# ------------------------------------------------------------------ absurd but valid physics
+@pytest.mark.parametrize("option", ["--contact-damping-ratio", "--stretch-damping-ratio"])
+def test_a_run_of_absurdly_many_steps_is_refused_before_its_first_step(option, tmp_path):
+    """A dashpot of 1e6 x critical makes the step 5e-14 s: 5e11 steps for 30 ms (it ran silently for ever)."""
+    p = knitlad("cut", "--stitches", "6x8", "--lx", "0.38", "--preset", "fast", option, "1e6",
+                "--out", str(tmp_path / "o"))
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
+    assert "steps, over" in p.stderr.strip().splitlines()[-1]  # after the stretch's progress line
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_step_longer_than_the_observation_interval_is_refused():
+    """d/l0 = 1e-6 gave a 1.2 ms step against 20 us between observations: the run 'finished' in 2 steps."""
+    from knitlad.config import CutConfig
+    from knitlad.protocol import InfeasibleRun, check_feasible
+
+    dynamics = CutConfig(lx=0.38, preset="fast").dynamics_settings()
+    check_feasible(1e-8, dynamics)
+    with pytest.raises(InfeasibleRun, match="longer than the observation interval"):
+        check_feasible(1.2e-3, dynamics)
