@@ -338,3 +338,74 @@ def test_a_step_longer_than_the_observation_interval_is_refused():
     check_feasible(1e-8, dynamics)
     with pytest.raises(InfeasibleRun, match="longer than the observation interval"):
         check_feasible(1.2e-3, dynamics)
+
+
+# ------------------------------------------------------------------ the stretched-knit cache
+@pytest.fixture(scope="module")
+def tiny_knit():
+    from knitlad.config import CutConfig
+    from knitlad.protocol import stretch
+
+    settings = CutConfig(n_x=4, n_y=4, lx=0.34, preset="fast", resolution=16).stretch_settings()
+    return settings, stretch(settings)
+
+
+def test_a_cache_that_cannot_be_written_costs_a_warning_not_the_job(tmp_path, tiny_knit):
+    from knitlad.io.knit_cache import cached_stretch
+
+    settings, knit = tiny_knit
+    (tmp_path / "stretched").write_text("a regular file where the cache folder goes")
+    with pytest.warns(RuntimeWarning, match="not kept"):
+        got, reused = cached_stretch(settings, tmp_path / "stretched", lambda s, p: knit)
+    assert got is knit and not reused
+
+
+def test_a_read_only_cache_costs_a_warning_not_the_job(tmp_path, tiny_knit):
+    from knitlad.io.knit_cache import cached_stretch
+
+    settings, knit = tiny_knit
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o500)
+    try:
+        if os.access(folder, os.W_OK):
+            pytest.skip("running as a user who writes into read-only folders")
+        with pytest.warns(RuntimeWarning, match="not kept"):
+            assert cached_stretch(settings, folder, lambda s, p: knit)[0] is knit
+    finally:
+        folder.chmod(0o700)
+
+
+def test_a_cached_knit_with_an_edited_attribute_is_made_again_and_stale_temporaries_go(tmp_path, tiny_knit):
+    """An fx_ini edited in the file came back as 99, exit 0; a .tmp of a killed writer stayed for ever."""
+    from knitlad.io.knit_cache import cached_stretch, stretch_key
+
+    settings, knit = tiny_knit
+    folder = tmp_path / "stretched"
+    made = []
+
+    def stretch_again(s, p):
+        made.append(1)
+        return knit
+
+    cached_stretch(settings, folder, stretch_again)
+    path = folder / f"{stretch_key(settings)}.h5"
+    with h5py.File(path, "r+") as f:
+        f.attrs["fx_ini"] = 99.0
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    stale = folder / f"{path.name}.{int(dead.stdout)}.tmp"
+    stale.write_bytes(b"half a file")
+    got, reused = cached_stretch(settings, folder, stretch_again)
+    assert not reused and len(made) == 2 and got.fx_ini == knit.fx_ini
+    assert not stale.exists()
+    assert cached_stretch(settings, folder, stretch_again)[1]  # the remade file is reused
+
+
+def test_the_cache_key_follows_the_code(tiny_knit, monkeypatch):
+    """Keyed by the settings and the version only, a knit stretched by older code was reused after a fix."""
+    from knitlad.io import knit_cache
+
+    settings, _ = tiny_knit
+    before = knit_cache.stretch_key(settings)
+    monkeypatch.setattr(knit_cache, "source_hash", lambda: "other code")
+    assert knit_cache.stretch_key(settings) != before

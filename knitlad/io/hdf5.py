@@ -28,6 +28,7 @@ and ``/knit/*`` (the course bookkeeping of :class:`knitlad.scenes.jersey.KnitSce
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import enum
 import json
 from pathlib import Path
@@ -82,6 +83,12 @@ def verify_datasets(path: str | Path) -> None:
             if isinstance(obj, h5py.Dataset):
                 obj[()]
         f.visititems(read)
+
+
+def attributes_checksum(f: h5py.File) -> str:
+    """sha256 of every file attribute but the checksum itself, in name order (datasets carry their own)."""
+    blob = json.dumps({k: repr(f.attrs[k]) for k in sorted(f.attrs) if k != "attrs_sha256"})
+    return hashlib.sha256(blob.encode()).hexdigest()
 
 
 def _write_run_attrs(f: h5py.File, settings, material) -> None:
@@ -196,6 +203,7 @@ def write_stretched_knit(path: str | Path, knit) -> Path:
         g = f.create_group("knit")
         for name in ("courses", "bars", "node_t", "left_end", "right_end"):
             checksummed_dataset(g, name, getattr(k, name))
+        f.attrs["attrs_sha256"] = attributes_checksum(f)
     return path
 
 
@@ -207,6 +215,8 @@ def read_stretched_knit(path: str | Path):
     from knitlad.units import Material
 
     with h5py.File(path, "r") as f:
+        if "attrs_sha256" in f.attrs and f.attrs["attrs_sha256"] != attributes_checksum(f):
+            raise OSError(f"{path}: its attributes fail their checksum (edited or damaged)")
         settings = json.loads(f.attrs["settings_json"])
         material = Material(**settings.pop("material"))
         settings.setdefault("start", "affine")  # knits stretched before the tiled start were affine
