@@ -495,7 +495,7 @@ def plot(
     if (Path(folder) / "ladder.h5").is_file():
         from knitlad.render import render_run
 
-        h5 = Path(folder) / "ladder.h5"
+        h5 = _run_file(folder)
         paths = [spatio_temporal_from_file(h5, Path(folder) / "spatio_temporal.png"),
                  column_midline_diagram(h5, Path(folder) / "midline_diagram.png"),
                  tension_history_plot(h5, Path(folder) / "tension_history.png"), *render_run(h5, Path(folder) / "render")]
@@ -541,6 +541,12 @@ def _run_file(run: str):
     path = path / "ladder.h5" if path.is_dir() else path
     if not path.is_file():
         fail(f"{run}: no ladder.h5 (a folder written by knitlad cut, or its file)")
+    from knitlad.io.hdf5 import RunFileError, check_run_file
+
+    try:
+        check_run_file(path)
+    except RunFileError as e:
+        fail(str(e))
     return path
 
 

@@ -101,3 +101,54 @@ def test_render_of_a_folder_without_a_run_is_one_line(tmp_path):
     p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(tmp_path)], capture_output=True, text=True,
                        cwd=ROOT)
     assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and "no ladder.h5" in p.stderr
+
+
+def _damaged(run_folder, tmp_path, how: str) -> Path:
+    import shutil
+
+    path = tmp_path / "ladder.h5"
+    shutil.copy(run_folder / "ladder.h5", path)
+    if how == "truncated":
+        path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    elif how == "empty":
+        path.write_bytes(b"")
+    elif how == "checksum":
+        with h5py.File(path, "r") as f:
+            dataset = f["frames/positions"].id
+            offset = dataset.get_offset() if dataset.get_offset() is not None else \
+                dataset.get_chunk_info(0).byte_offset + 8
+        data = bytearray(path.read_bytes())
+        data[offset] ^= 0xFF  # one byte of a checksummed dataset
+        path.write_bytes(bytes(data))
+    elif how == "no dataset":
+        with h5py.File(path, "r+") as f:
+            del f["topology/edges"]
+    elif how == "no attribute":
+        with h5py.File(path, "r+") as f:
+            del f.attrs["scale_l0_m"]
+    elif how == "short laddered":
+        with h5py.File(path, "r+") as f:
+            laddered = f["frames/laddered"][()][:-1]
+            del f["frames/laddered"]
+            f["frames/laddered"] = laddered
+    elif how == "no frame":
+        with h5py.File(path, "r+") as f:
+            for name in ("positions", "time", "laddered"):
+                shape = f[f"frames/{name}"].shape
+                dtype = f[f"frames/{name}"].dtype
+                del f[f"frames/{name}"]
+                f.create_dataset(f"frames/{name}", shape=(0, *shape[1:]), dtype=dtype)
+    return path
+
+
+@pytest.mark.parametrize("how", ["truncated", "empty", "checksum", "no dataset", "no attribute", "short laddered",
+                                 "no frame"])
+@pytest.mark.parametrize("command", ["render", "movie", "plot"])
+def test_a_damaged_run_file_is_one_line_and_exit_2_for_every_picture(run_folder, tmp_path, how, command):
+    """Each of these ended in a traceback (a KeyError, an IndexError, a FileNotFoundError of the movie's gif)."""
+    path = _damaged(run_folder, tmp_path, how)
+    p = subprocess.run([sys.executable, "-m", "knitlad.cli", command, str(path.parent)], capture_output=True,
+                       text=True, cwd=ROOT)
+    assert p.returncode == 2, p.stderr
+    assert "Traceback" not in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert str(path) in p.stderr

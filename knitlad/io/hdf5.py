@@ -85,6 +85,37 @@ def verify_datasets(path: str | Path) -> None:
         f.visititems(read)
 
 
+class RunFileError(ValueError):
+    """A run file that cannot be drawn: unreadable, damaged, or missing what a picture needs."""
+
+
+RUN_ATTRIBUTES = ("settings_json", "scale_l0_m", "scale_d_m", "box_lx_over_l0", "ly_over_l0")
+RUN_DATASETS = ("frames/positions", "frames/time", "frames/laddered", "topology/edges", "topology/node_course",
+                "cells/centres", "series/time", "series/fx")
+
+
+def check_run_file(path: str | Path) -> None:
+    """Refuse, in one line, a run file (``ladder.h5``, a sweep job's file) that renders, movies and plots
+    cannot draw: not HDF5 or truncated, a dataset failing its checksum, an attribute or a dataset
+    missing, no frame, or frames whose positions, times and laddered cells disagree in number."""
+    try:
+        verify_datasets(path)
+    except OSError as e:
+        reason = "a dataset fails its checksum" if "checksum" in str(e).lower() or "filter" in str(e).lower() \
+            else "not a readable HDF5 file (truncated or damaged)"
+        raise RunFileError(f"{path}: {reason}") from None
+    with h5py.File(path, "r") as f:
+        missing = [a for a in RUN_ATTRIBUTES if a not in f.attrs] + [d for d in RUN_DATASETS if d not in f]
+        if missing:
+            raise RunFileError(f"{path}: no {', '.join(missing)} (written without frames, by an older knitlad, or "
+                               "damaged)")
+        counts = {name: f[f"frames/{name}"].shape[0] for name in ("positions", "time", "laddered")}
+        if counts["positions"] == 0:
+            raise RunFileError(f"{path}: no frame to draw")
+        if len(set(counts.values())) > 1:
+            raise RunFileError(f"{path}: the frames disagree in number ({', '.join(f'{k} {v}' for k, v in counts.items())})")
+
+
 def attributes_checksum(f: h5py.File) -> str:
     """sha256 of every file attribute but the checksum itself, in name order (datasets carry their own)."""
     blob = json.dumps({k: repr(f.attrs[k]) for k in sorted(f.attrs) if k != "attrs_sha256"})
