@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import inspect
+import os
 import sys
 import time
 import types
@@ -27,6 +28,20 @@ app = typer.Typer(
     no_args_is_help=True,
     help="knitlad: discrete elastic rods with frictional contact, for the laddering of knitted fabric.",
 )
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        from knitlad import __version__
+
+        typer.echo(f"knitlad {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(version: bool = typer.Option(False, "--version", callback=_print_version, is_eager=True,
+                                       help="Print the version and exit.")) -> None:
+    """knitlad: discrete elastic rods with frictional contact, for the laddering of knitted fabric."""
 
 
 def fail(message: str) -> None:
@@ -175,9 +190,7 @@ def cut(
         options["fx"] = 13.6
     cfg = validated(_config.CutConfig, {**options, "n_x": n_x, "n_y": n_y}, {"n_x": "--stitches", "n_y": "--stitches"})
     from knitlad.io.folders import FolderError, writable_folder
-    from knitlad.io.hdf5 import write_ladder_result
     from knitlad.observers import Interpenetration
-    from knitlad.plots import spatio_temporal_diagram
     from knitlad.protocol import InfeasibleRun, KnitTooLarge, require_memory, run_ladder
     from knitlad.scenes.jersey import CourseTooWide
     from knitlad.simulation import SimulationBlowUp
@@ -217,12 +230,15 @@ def cut(
         nothing_written()
         fail(str(e))
     progress.close()
-    from knitlad.render import write_xdmf
-
-    h5 = write_ladder_result(out_dir / "ladder.h5", result)
-    write_xdmf(h5)
-    png = spatio_temporal_diagram(result, out_dir / "spatio_temporal.png")
     summary = result.summary()
+    try:
+        h5, png = _write_run_outputs(out_dir, result)
+    except OSError as e:  # a full disk or a file-size limit: keep the summary, say it in one line
+        kept = _keep_summary(out_dir, summary)
+        typer.echo(json.dumps(summary, default=float))
+        typer.echo(f"knitlad: run finished but its files could not be written ({e}); the summary is "
+                   f"{'in ' + str(kept) if kept else 'printed above'}", err=True)
+        raise typer.Exit(1)
     if not result.fx_within_tolerance:
         typer.echo(
             f"knitlad: warning: f_x^ini = {result.fx_ini:.3f} is not within {100 * cfg.fx_tolerance:g} % of the "
@@ -533,6 +549,42 @@ def _render_jobs(out_dir, job_ids: list[str]) -> None:
     typer.echo(f"rendered {len(job_ids)} jobs in {out_dir / 'renders'}")
 
 
+def _write_run_outputs(out_dir, result):
+    """ladder.h5, ladder.xdmf and spatio_temporal.png of a run; OSError if any cannot be written, with
+    nothing half-written left (temporary files removed, HDF5's complaints while closing a failed file
+    kept off the terminal)."""
+    from knitlad.io.hdf5 import write_ladder_result
+    from knitlad.plots import spatio_temporal_diagram
+    from knitlad.render import write_xdmf
+
+    previous = sys.unraisablehook
+    sys.unraisablehook = lambda info: None  # h5py's __dealloc__ of a file whose writes failed
+    try:
+        h5 = write_ladder_result(out_dir / "ladder.h5", result)
+        write_xdmf(h5)
+        return h5, spatio_temporal_diagram(result, out_dir / "spatio_temporal.png")
+    except RuntimeError as e:  # h5py reports some failed writes as RuntimeError
+        raise OSError(str(e).splitlines()[0]) from None
+    finally:
+        sys.unraisablehook = previous
+        for tmp in out_dir.glob("*.tmp*"):
+            tmp.unlink(missing_ok=True)
+
+
+def _keep_summary(out_dir, summary: dict):
+    """summary.json beside the run (a few hundred bytes), or None if even that cannot be written."""
+    import json
+
+    from knitlad.io.atomic import atomic_path
+
+    try:
+        with atomic_path(out_dir / "summary.json") as tmp:
+            tmp.write_text(json.dumps(summary, default=float))
+        return out_dir / "summary.json"
+    except OSError:
+        return None
+
+
 def _run_file(run: str):
     """The ``ladder.h5`` of a run folder (or the file itself); one line and exit 2 if there is none."""
     from pathlib import Path
@@ -572,6 +624,9 @@ def render(
                            (width, width * 3 // 4))
     except ValueError as e:
         fail(str(e))
+    except OSError as e:  # a full disk: what was written whole stays, the rest is said
+        typer.echo(f"knitlad: render stopped: {e}", err=True)
+        raise typer.Exit(1)
     typer.echo(f"wrote {len(paths)} images in {h5.parent / 'render'}")
 
 
@@ -592,11 +647,35 @@ def movie(
         path = make_movie(h5, h5.with_suffix(".gif" if gif else ".mp4"), fps=fps, size=(width, width * 3 // 4))
     except ValueError as e:
         fail(str(e))
+    except OSError as e:  # a full disk: the movie is not renamed into place
+        typer.echo(f"knitlad: movie not written: {e}", err=True)
+        raise typer.Exit(1)
     typer.echo(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB)")
 
 
-def main() -> None:  # pragma: no cover - console entry point
-    sys.exit(app())
+def main(argv: list[str] | None = None) -> None:
+    """The console entry point: a usage error (an unknown option, a value of the wrong type) is one line and
+    exit 2, as every other bad input is, instead of click's boxed usage text."""
+    try:  # typer vendors click from 0.20 on
+        from typer._click import exceptions as cx
+    except ImportError:  # pragma: no cover - older typer, on click itself
+        from click import exceptions as cx
+
+    try:
+        result = app(args=argv, standalone_mode=False)
+    except cx.UsageError as e:
+        message = e.format_message()  # the help itself when no command is given
+        typer.echo(message if message.startswith("Usage:") else f"knitlad: error: {message}", err=True)
+        sys.exit(2)
+    except typer.Exit as e:
+        sys.exit(e.exit_code)
+    except BrokenPipeError:  # the reader went away (knitlad scales | head): nothing more to say
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        sys.exit(0)
+    except typer.Abort:  # Ctrl-C outside a run
+        typer.echo("knitlad: interrupted", err=True)
+        sys.exit(130)
+    sys.exit(result if isinstance(result, int) else 0)
 
 
 if __name__ == "__main__":  # python -m knitlad.cli

@@ -184,8 +184,28 @@ def _picture(run: Run, frame: int, path: Path, view: str, size=(1200, 900), wind
         writer.SetFileName(str(tmp))
         writer.SetInputConnection(grab.GetOutputPort())
         writer.Write()
-    win.Finalize()
+        try:
+            whole_png(tmp)
+        finally:
+            win.Finalize()
     return path
+
+
+PNG_END = b"IEND\xaeB`\x82"  # the last chunk of every complete PNG
+
+
+def whole_png(path: Path) -> None:
+    """OSError unless ``path`` is a complete PNG: VTK's writer only prints libpng's errors (a full disk
+    left truncated images that were renamed into place and reported written)."""
+    try:
+        size = path.stat().st_size
+        with open(path, "rb") as f:
+            f.seek(max(size - len(PNG_END), 0))
+            end = f.read()
+    except OSError as e:
+        raise OSError(f"{path.name}: the image was not written ({e.strerror or e})") from None
+    if size < 64 or end != PNG_END:
+        raise OSError(f"{path.name}: the image was not written whole ({size} bytes; a full disk?)")
 
 
 def default_instants(run: Run) -> list[float]:

@@ -300,13 +300,20 @@ def expand(cfg: SweepConfig, max_jobs: int = MAX_JOBS) -> list[Job]:
         except ValidationError as e:
             err = e.errors()[0]
             field = err["loc"][0] if err.get("loc") else None
+            reason = one_line(e).partition(": ")[2]
+            if field is None:  # a rule across fields names the field it is about first, if any
+                named, _, rest = reason.partition(": ")
+                if named in fields and rest:
+                    field, reason = named, rest
             if field in axes:
                 where = f"sweep.axes.{field}[{idx[names.index(field)]}]"
             elif field in cfg.fixed:
                 where = f"fixed.{field}"
+            elif field in extras:
+                where = f"output.{field}"
             else:
                 where = "fixed"  # a rule across fields (e.g. neither fx nor lx given)
-            raise SweepError(f"{where}: {one_line(e).partition(': ')[2]}") from None
+            raise SweepError(f"{where}: {reason}") from None
         job = Job(scene=cfg.scene, params=resolved.model_dump(), output=cfg.output)
         if job.id in seen:
             raise SweepError("sweep.axes: two jobs are identical (a value repeats)")

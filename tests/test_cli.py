@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import h5py
 import pytest
@@ -134,3 +135,20 @@ def test_a_yarn_too_thick_for_any_stitch_is_one_line_and_nothing_written(tmp_pat
     assert p.returncode == 2, p.stderr
     assert "--d-over-l0" in p.stderr and "Traceback" not in p.stderr and len(p.stderr.strip().splitlines()) == 1
     assert not out.exists()
+
+
+@pytest.mark.parametrize("args, where", [(["sweep", "configs/smoke.yaml", "--workers", "two"], "--workers"),
+                                         (["cut", "--bogus"], "--bogus")])
+def test_a_usage_error_is_one_line(args, where):
+    """Click's usage errors took four lines (a usage line, a hint, a box) where every other bad input takes one."""
+    p = run(*args, cwd=Path(__file__).resolve().parents[1])
+    assert p.returncode == 2 and where in p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1, p.stderr
+
+
+def test_the_version_and_python_dash_m_knitlad():
+    from knitlad import __version__
+
+    for command in ([*KNITLAD, "--version"], [sys.executable, "-m", "knitlad", "--version"]):
+        p = subprocess.run(command, capture_output=True, text=True)
+        assert p.returncode == 0 and p.stdout.strip() == f"knitlad {__version__}", p.stderr

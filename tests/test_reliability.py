@@ -201,7 +201,7 @@ def test_a_job_that_outlives_its_sweep_writes_nothing(tmp_path):
     ({"fixed": {**{k: v for k, v in TINY.items() if k != "preset"}, "lx": 0.4, "resolution": 16, "sagitta_radius": 0,
                 "implicit_axial": False}, "sweep": {"axes": {"preset": ["fast", "accurate"]}}}, "preset"),
     ({"fixed": {**TINY, "lx": 0.4, "observe_every_us": 50}, "sweep": {"axes": {"mu": [0.4]}},
-      "output": {"frame_every_us": 20}}, "frame_every_us"),
+      "output": {"frame_every_us": 20}}, "output.frame_every_us: 20 is shorter"),  # was "fixed: frame_every_us"
     ({"fixed": {**TINY, "lx": 0.4, "n_x": True}, "sweep": {"axes": {"mu": [0.4]}}}, "n_x"),
     ({"fixed": {**TINY, "lx": float("nan")}, "sweep": {"axes": {"mu": [0.4]}}}, "finite number"),
     ({"fixed": {**TINY, "lx": 0.4}, "sweep": {"axes": {"mu": {"start": 0, "stop": 1, "step": 1e-300}}}}, "jobs"),

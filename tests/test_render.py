@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -152,3 +153,36 @@ def test_a_damaged_run_file_is_one_line_and_exit_2_for_every_picture(run_folder,
     assert p.returncode == 2, p.stderr
     assert "Traceback" not in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
     assert str(path) in p.stderr
+
+
+def _file_size_limit(limit: int):
+    import resource
+
+    return lambda: resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+
+def test_a_render_that_runs_out_of_room_says_so_and_leaves_no_broken_image(run_folder, tmp_path):
+    """On a full disk VTK printed libpng's errors, renamed the truncated PNGs into place and said 'wrote 10 images'."""
+    import shutil
+
+    folder = tmp_path / "run"
+    shutil.copytree(run_folder, folder, ignore=shutil.ignore_patterns("render", "*.mp4", "*.gif"))
+    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(folder), "--width", "640"],
+                       capture_output=True, text=True, cwd=ROOT, preexec_fn=_file_size_limit(20_000))
+    assert p.returncode == 1, p.stderr
+    assert "render stopped" in p.stderr and "Traceback" not in p.stderr
+    for png in (folder / "render").glob("*.png"):
+        assert png.read_bytes().endswith(b"IEND\xaeB`\x82"), png
+    assert not list((folder / "render").glob("*.tmp*"))
+
+
+def test_a_cut_that_cannot_write_its_files_keeps_its_summary(tmp_path):
+    """A file-size limit under ladder.h5's size: it was about 20 tracebacks of h5py and a segmentation fault."""
+    out = tmp_path / "out"
+    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "cut", "--stitches", "6x8", "--lx", "0.40", "--preset",
+                        "fast", "--resolution", "16", "--max-time-ms", "0.3", "--out", str(out)],
+                       capture_output=True, text=True, cwd=ROOT, preexec_fn=_file_size_limit(100_000))
+    assert p.returncode == 1, p.stderr
+    assert "could not be written" in p.stderr.strip().splitlines()[-1] and "Traceback" not in p.stderr
+    assert json.loads((out / "summary.json").read_text())["n_lad"] >= 0
+    assert sorted(f.name for f in out.iterdir()) == ["summary.json"]

@@ -28,10 +28,13 @@ and ``/knit/*`` (the course bookkeeping of :class:`knitlad.scenes.jersey.KnitSce
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import enum
+import hashlib
+import io
 import json
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Iterator
 
 import h5py
 import numpy as np
@@ -85,6 +88,21 @@ def verify_datasets(path: str | Path) -> None:
         f.visititems(read)
 
 
+@contextmanager
+def atomic_hdf5(path: str | Path) -> Iterator[h5py.File]:
+    """An HDF5 file built in memory, then written whole to a temporary file renamed onto ``path``.
+
+    A full disk or a file-size limit is then one OSError of a plain write, and the temporary file
+    goes (:func:`knitlad.io.atomic.atomic_path`); when HDF5 itself met the failed writes of a file
+    on disk, it printed a traceback per object it closed and could crash the process.
+    """
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w") as f:
+        yield f
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(buffer.getbuffer())
+
+
 class RunFileError(ValueError):
     """A run file that cannot be drawn: unreadable, damaged, or missing what a picture needs."""
 
@@ -132,7 +150,7 @@ def _write_run_attrs(f: h5py.File, settings, material) -> None:
 def write_ladder_result(path: str | Path, result, compression: str | None = "gzip", attrs: dict | None = None) -> Path:
     """Write one run (:class:`knitlad.protocol.LadderResult`); ``attrs`` adds file attributes (a sweep's job record)."""
     path = Path(path)
-    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
+    with atomic_hdf5(path) as f:
         _set_attrs(f, result.summary())
         _set_attrs(f, attrs or {})
         _write_run_attrs(f, result.settings, result.settings.material)
@@ -175,7 +193,7 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
 def write_record(path: str | Path, attrs: dict) -> Path:
     """A file holding attributes only (a failed sweep job: its config, status and error), atomically."""
     path = Path(path)
-    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
+    with atomic_hdf5(path) as f:
         _set_attrs(f, attrs)
         f.attrs["knitlad_version"] = __version__
     return path
@@ -219,7 +237,7 @@ def write_stretched_knit(path: str | Path, knit) -> Path:
     """Write a :class:`knitlad.protocol.StretchedKnit` so that :func:`read_stretched_knit` gives it back exactly."""
     path = Path(path)
     k = knit.knit
-    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
+    with atomic_hdf5(path) as f:
         _write_run_attrs(f, knit.settings, knit.settings.material)
         f.attrs["geometry_json"] = json.dumps(jsonable(k.geometry))
         f.attrs["H"] = k.H
