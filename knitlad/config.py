@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import ClassVar, Literal, get_args
+from typing import ClassVar, Literal, get_args, get_origin
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
@@ -51,13 +51,19 @@ class _WithPreset(BaseModel):
     @model_validator(mode="before")
     @classmethod
     def no_bool_for_numbers(cls, data):
-        """``n_x: true`` is a mistake, not 1: a yes/no is taken only where the field is one."""
+        """``n_x: true`` is a mistake, not 1, and ``mu: "0.4"`` or ``twist: "yes"`` (quoted in YAML) are text:
+        a yes/no is taken only where the field is one, text only where it is a choice of words."""
         if isinstance(data, dict):
             for name, value in data.items():
                 field = cls.model_fields.get(name)
-                if isinstance(value, bool) and field is not None and bool not in (field.annotation,
-                                                                                  *get_args(field.annotation)):
+                if field is None:
+                    continue
+                kinds = (field.annotation, *get_args(field.annotation))
+                if isinstance(value, bool) and bool not in kinds:
                     raise ValueError(f"{name}: a number is needed, got {value!r}")
+                if isinstance(value, str) and str not in kinds and not any(get_origin(k) is Literal for k in kinds):
+                    wanted = "true or false" if bool in kinds else "a number"
+                    raise ValueError(f"{name}: {wanted} is needed, got the text {value!r}")
         return data
 
 

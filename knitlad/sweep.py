@@ -58,7 +58,8 @@ class Range(BaseModel):
     model_config = ConfigDict(extra="forbid")
     start: float = Field(allow_inf_nan=False, description="first value, in the axis' unit")
     stop: float = Field(allow_inf_nan=False, description="last value, in the axis' unit (included)")
-    num: int | None = Field(None, ge=1, le=MAX_JOBS, strict=True, description="number of values [-]")
+    # no bound here: the sweep's job count is checked against --max-jobs before any value is built
+    num: int | None = Field(None, ge=1, strict=True, description="number of values [-]")
     step: float | None = Field(None, gt=0, allow_inf_nan=False, description="spacing, in the axis' unit")
 
     @model_validator(mode="after")
@@ -266,8 +267,9 @@ def expand(cfg: SweepConfig, max_jobs: int = MAX_JOBS) -> list[Job]:
     counts = cfg.sweep.counts()
     n_jobs = math.prod(counts.values()) if cfg.sweep.expand == "grid" else max(counts.values())
     if n_jobs > max_jobs:
-        raise SweepError(f"sweep.axes: {n_jobs:.3g} jobs ({' x '.join(map(str, counts.values()))}), more than "
-                         f"{max_jobs}; use fewer values or --max-jobs")
+        sizes = " x ".join(f"{c:.3g}" if c >= 1e6 else str(c) for c in counts.values())
+        raise SweepError(f"sweep.axes: {n_jobs:.3g} jobs ({sizes}), more than {max_jobs}; use fewer values or "
+                         "--max-jobs")
     preset_sets = tuple(next(iter(model.PRESETS.values()))) if hasattr(model, "PRESETS") else ()
     if "preset" in cfg.sweep.axes and preset_sets and all(k in cfg.fixed or k in cfg.sweep.axes for k in preset_sets):
         raise SweepError(f"sweep.axes.preset: has no effect where {', '.join(preset_sets)} are given (the preset "

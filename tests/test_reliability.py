@@ -409,3 +409,26 @@ def test_the_cache_key_follows_the_code(tiny_knit, monkeypatch):
     before = knit_cache.stretch_key(settings)
     monkeypatch.setattr(knit_cache, "source_hash", lambda: "other code")
     assert knit_cache.stretch_key(settings) != before
+
+
+def test_an_absurd_count_is_said_briefly_and_max_jobs_lifts_every_limit(tmp_path):
+    """A step of 1e-300 printed a 300-digit count; --max-jobs 20000 could not lift a per-axis cap of 10,000."""
+    tiny = config(tmp_path, {"fixed": {**TINY, "lx": 0.4}, "sweep": {"axes": {"mu": {"start": 0, "stop": 1,
+                                                                                      "step": 1e-300}}}})
+    with pytest.raises(SweepError) as e:
+        load_sweep(tiny)
+    assert len(str(e.value)) < 120 and "1e+300 jobs" in str(e.value)
+    big = config(tmp_path, {"scene": "stitch", "fixed": {"ly": 0.25},
+                            "sweep": {"axes": {"lx": {"start": 0.3, "stop": 0.4, "num": 15_000}}}}, "big.yaml")
+    with pytest.raises(SweepError, match="max-jobs"):
+        load_sweep(big)
+    assert len(load_sweep(big, max_jobs=20_000)[1]) == 15_000
+
+
+@pytest.mark.parametrize("field, text", [("mu", "0.4"), ("twist", "yes"), ("resolution", "24")])
+def test_quoted_text_is_not_taken_for_a_number_or_a_yes(tmp_path, field, text):
+    """mu: "0.4" and twist: "yes" were coerced silently."""
+    cfg = config(tmp_path, {"fixed": {**TINY, "lx": 0.4, field: text}, "sweep": {"axes": {"mu" if field != "mu" else
+                                                                                         "ly": [0.25]}}})
+    with pytest.raises(SweepError, match=f"fixed.{field}: .* needed, got the text"):
+        load_sweep(cfg)
