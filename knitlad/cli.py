@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 import inspect
 import os
+import signal
 import sys
 import time
 import types
@@ -28,6 +29,14 @@ app = typer.Typer(
     no_args_is_help=True,
     help="knitlad: discrete elastic rods with frictional contact, for the laddering of knitted fabric.",
 )
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM during a run: handled as Ctrl-C, said as "terminated", exit 143."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
 
 
 def _print_version(value: bool) -> None:
@@ -209,13 +218,15 @@ def cut(
             out_dir.rmdir()
 
     progress = _StageProgress()
+    previous = signal.signal(signal.SIGTERM, _on_sigterm)  # a batch system's kill: said, as Ctrl-C is
     try:
         result = run_ladder(cfg.settings(), progress=progress)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as e:
         progress.close()
         nothing_written()
-        typer.echo("knitlad: interrupted; nothing written", err=True)
-        raise typer.Exit(130)
+        how, code = ("terminated", 143) if isinstance(e, Terminated) else ("interrupted", 130)
+        typer.echo(f"knitlad: {how}; nothing written", err=True)
+        raise typer.Exit(code)
     except (OutOfReach, Interpenetration, SimulationBlowUp) as e:  # the run failed (not bad input): one line, exit 1
         progress.close()
         nothing_written()
@@ -229,6 +240,8 @@ def cut(
         progress.close()
         nothing_written()
         fail(str(e))
+    finally:
+        signal.signal(signal.SIGTERM, previous)
     progress.close()
     summary = result.summary()
     try:

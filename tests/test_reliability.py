@@ -432,3 +432,16 @@ def test_quoted_text_is_not_taken_for_a_number_or_a_yes(tmp_path, field, text):
                                                                                          "ly": [0.25]}}})
     with pytest.raises(SweepError, match=f"fixed.{field}: .* needed, got the text"):
         load_sweep(cfg)
+
+
+def test_sigterm_to_cut_says_so_and_leaves_nothing(tmp_path):
+    """It exited with no message."""
+    out = tmp_path / "o"
+    proc = subprocess.Popen([*KNITLAD, "cut", "--stitches", "6x8", "--lx", "0.38", "--preset", "fast", "--out", str(out)],
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(6)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, err
+    assert err.strip().splitlines()[-1] == "knitlad: terminated; nothing written" and "Traceback" not in err
+    assert not out.exists()
