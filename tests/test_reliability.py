@@ -437,7 +437,8 @@ def test_quoted_text_is_not_taken_for_a_number_or_a_yes(tmp_path, field, text):
 def test_sigterm_to_cut_says_so_and_leaves_nothing(tmp_path):
     """It exited with no message."""
     out = tmp_path / "o"
-    proc = subprocess.Popen([*KNITLAD, "cut", "--stitches", "6x8", "--lx", "0.38", "--preset", "fast", "--out", str(out)],
+    proc = subprocess.Popen([*KNITLAD, "cut", "--stitches", "6x8", "--lx", "0.38", "--preset", "fast", "--max-time-ms",
+                             "200", "--arrest-ms", "100", "--out", str(out)],
                             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     time.sleep(6)
     proc.send_signal(signal.SIGTERM)
