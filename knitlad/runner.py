@@ -436,15 +436,31 @@ SCHEDULER_TIMEOUT_S = 5
 
 
 def connect(scheduler: str):
-    """A Dask client of ``scheduler``, or :class:`SchedulerError` within SCHEDULER_TIMEOUT_S seconds."""
+    """A Dask client of ``scheduler``, or :class:`SchedulerError` within SCHEDULER_TIMEOUT_S seconds.
+
+    The client is made in a thread of its own with a hard deadline: an address that accepts the
+    connection but never speaks Dask's protocol (a stalled server, a dashboard's HTTP port) kept
+    ``Client`` waiting for ever, or answered with garbage it tried to allocate (3 EiB)."""
     try:
         from distributed import Client
     except ImportError:
         raise SchedulerError("--executor dask needs the optional extra: pip install 'knitlad[dask]'") from None
-    try:
-        return Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S}s")
-    except (OSError, TimeoutError, ValueError, TypeError) as e:
-        raise SchedulerError(f"--scheduler {scheduler}: cannot connect ({_one_line(e)})") from None
+    outcome: dict = {}
+
+    def attempt() -> None:
+        try:
+            outcome["client"] = Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S}s")
+        except BaseException as e:  # noqa: BLE001 - whatever a wrong peer makes of it: said in one line
+            outcome["error"] = e
+
+    thread = threading.Thread(target=attempt, name="knitlad-dask-connect", daemon=True)
+    thread.start()
+    thread.join(SCHEDULER_TIMEOUT_S + 2)
+    if thread.is_alive():
+        raise SchedulerError(f"--scheduler {scheduler}: no Dask scheduler answered within {SCHEDULER_TIMEOUT_S} s")
+    if "error" in outcome:
+        raise SchedulerError(f"--scheduler {scheduler}: cannot connect ({_one_line(outcome['error'])})")
+    return outcome["client"]
 
 
 def _run_dask(todo: list[Job], jobs_dir: Path, workers: int | None, scheduler: str | None, runner: Runner, finish,

@@ -446,3 +446,39 @@ def test_sigterm_to_cut_says_so_and_leaves_nothing(tmp_path):
     assert proc.returncode == 143, err
     assert err.strip().splitlines()[-1] == "knitlad: terminated; nothing written" and "Traceback" not in err
     assert not out.exists()
+
+
+@pytest.mark.parametrize("reply", [None, b"HTTP/1.1 200 OK\r\nContent-Length: 5\r\n\r\nhello" * 3])
+def test_an_address_that_answers_but_is_no_dask_scheduler_is_one_line_in_seconds(reply):
+    """A server that accepts and stalls hung `--executor dask` for ever; an HTTP port gave a 40-line traceback."""
+    import socket
+    import threading
+
+    pytest.importorskip("distributed")
+    from knitlad.runner import SCHEDULER_TIMEOUT_S, SchedulerError, connect
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(8)
+    held = []
+
+    def serve():
+        while True:
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                return
+            held.append(conn)
+            if reply:
+                conn.recv(100)
+                conn.sendall(reply)
+
+    threading.Thread(target=serve, daemon=True).start()
+    t = time.perf_counter()
+    try:
+        with pytest.raises(SchedulerError) as e:
+            connect(f"tcp://127.0.0.1:{server.getsockname()[1]}")
+    finally:
+        server.close()
+    assert time.perf_counter() - t < SCHEDULER_TIMEOUT_S + 5
+    assert "\n" not in str(e.value) and "--scheduler" in str(e.value)
