@@ -328,9 +328,20 @@ def _locked_sweep(jobs, out: Path, executor, workers, scheduler, force, retry_fa
             lock.release()  # from here on, a job still running elsewhere writes nothing
             for stale in jobs_dir.glob("*.tmp"):
                 stale.unlink(missing_ok=True)
+            _take_late_files(todo, jobs_dir, outcome)
             write_summary(out, list(outcome.rows.values()))
             if bar:
                 bar.close()
+
+
+def _take_late_files(todo: list[Job], jobs_dir: Path, outcome: SweepOutcome) -> None:
+    """Rows for the jobs whose trusted file appeared while an interrupted sweep was stopping its
+    workers (a Dask task that finished after the cancel), so the summary lists what was written."""
+    for job in todo:
+        if outcome.rows[job.id]["status"] == "pending":
+            attrs, _ = trusted_attrs(job_path(jobs_dir, job), job)
+            if attrs is not None:
+                outcome.rows[job.id] = summary_row(job, attrs)
 
 
 def _failed_row(jobs_dir: Path, job: Job, message: str) -> dict:

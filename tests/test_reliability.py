@@ -482,3 +482,19 @@ def test_an_address_that_answers_but_is_no_dask_scheduler_is_one_line_in_seconds
         server.close()
     assert time.perf_counter() - t < SCHEDULER_TIMEOUT_S + 5
     assert "\n" not in str(e.value) and "--scheduler" in str(e.value)
+
+
+def test_a_job_file_written_while_the_sweep_stopped_is_in_the_summary(tmp_path):
+    """After Ctrl-C on Dask, tasks already past the cancel wrote their files 1-2 s later, and the summary
+    still listed them as pending: the rows are taken from the trusted files once the workers are stopped."""
+    from knitlad.runner import SweepOutcome, _take_late_files, summary_row
+    from tests.sweep_helpers import fast_ladder_scene
+
+    jobs = fake_jobs(tmp_path, [0.1, 0.2])
+    jobs_dir = tmp_path / "out" / "jobs"
+    jobs_dir.mkdir(parents=True)
+    with fast_ladder_scene():
+        run_job(jobs[0], str(jobs_dir))  # finished after the interrupt: no row was made for it
+    outcome = SweepOutcome(rows={job.id: summary_row(job, None) for job in jobs})
+    _take_late_files(jobs, jobs_dir, outcome)
+    assert [outcome.rows[job.id]["status"] for job in jobs] == ["ok", "pending"]
