@@ -498,3 +498,17 @@ def test_a_job_file_written_while_the_sweep_stopped_is_in_the_summary(tmp_path):
     outcome = SweepOutcome(rows={job.id: summary_row(job, None) for job in jobs})
     _take_late_files(jobs, jobs_dir, outcome)
     assert [outcome.rows[job.id]["status"] for job in jobs] == ["ok", "pending"]
+
+
+def test_the_summary_is_not_rewritten_after_every_job_and_is_whole_at_the_end(tmp_path, monkeypatch):
+    """A 10,000-job sweep rewrote summary.csv after each job (0.22 s each, 36 min in all)."""
+    from knitlad import runner
+    from tests.sweep_helpers import fake_runner
+
+    writes = []
+    real = runner.write_summary
+    monkeypatch.setattr(runner, "write_summary", lambda out, rows: (writes.append(len(rows)), real(out, rows)))
+    jobs = fake_jobs(tmp_path, [round(0.3 + 0.01 * k, 2) for k in range(30)])
+    run_sweep(jobs, tmp_path / "out", workers=2, runner=fake_runner, progress=False)
+    assert len(writes) < 10  # the plan, the end, and at most one per SUMMARY_EVERY_S
+    assert list(read_summary(tmp_path / "out")["status"]) == ["ok"] * 30
