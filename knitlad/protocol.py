@@ -54,7 +54,7 @@ from knitlad.scenes.jersey import BUILD_LX, CourseTooWide, Jersey, KnitScene, bu
 from knitlad.simulation import Simulation, numba_threads
 from knitlad.stitch_model import StitchRun, StitchSettings, zero_tension_lx
 from knitlad.state import Rods, cut_edge, with_axial_stiffness, with_twist
-from knitlad.stretching import force_control, relax_to_steady_tension, stretch_to
+from knitlad.stretching import OutOfReach, force_control, relax_to_steady_tension, stretch_to
 from knitlad.timestep import DEFAULT_SAFETY, critical_time_steps
 from knitlad.units import Material
 
@@ -347,7 +347,30 @@ def stretch(s: StretchSettings, progress: Callable[[str, float], None] | None = 
     elif fx is None:
         fx, within = force_control(box, s.fx_target, s.fx_tolerance, s.stretch_increment, box.build_lx,
                                    progress=report)
-    return box.stretched(fx, within, time.perf_counter() - t0)
+    knit = box.stretched(fx, within, time.perf_counter() - t0)
+    check_whole(knit)
+    return knit
+
+
+class KnitCameApart(OutOfReach):
+    """A knit stretched past what holds it together: its loops slipped out of each other."""
+
+
+def check_whole(knit: StretchedKnit) -> None:
+    """Refuse a stretched knit that is no knit: no tension (f_x <= 0) at a width 0.02 l0 or more beyond the
+    periodised stitch's f_x = 0 curve, where a knit whose loops still hold each other is in tension
+    (position control to l_x/l0 = 0.999 gave f_x^ini = -0.98 and every cell undone, exit 0)."""
+    s = knit.settings
+    if knit.fx_ini > 0 or s.lx_over_l0 is None:
+        return
+    try:
+        unloaded = unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material, s.sagitta_radius_d)
+    except ValueError:  # no f_x = 0 point on the stitch's range: nothing to hold it against
+        return
+    if knit.lx_over_l0 > unloaded + 0.02:
+        raise KnitCameApart(f"the knit came apart: at l_x/l0 = {knit.lx_over_l0:.3f} it carries f_x = "
+                            f"{knit.fx_ini:.3g}, where a knit that holds together is in tension (beyond the "
+                            f"f_x = 0 width {unloaded:.3f} at l_y/l0 = {s.ly_over_l0:g}); stretch it less")
 
 
 def stitch_of(s: StretchSettings, lx_over_l0: float) -> StitchRun:

@@ -512,3 +512,12 @@ def test_the_summary_is_not_rewritten_after_every_job_and_is_whole_at_the_end(tm
     run_sweep(jobs, tmp_path / "out", workers=2, runner=fake_runner, progress=False)
     assert len(writes) < 10  # the plan, the end, and at most one per SUMMARY_EVERY_S
     assert list(read_summary(tmp_path / "out")["status"]) == ["ok"] * 30
+
+
+def test_a_knit_stretched_until_it_comes_apart_is_no_result(tmp_path):
+    """--lx 0.999 exited 0 with f_x^ini = -0.98: a compressive reading of a nearly straight yarn."""
+    out = tmp_path / "o"
+    p = knitlad("cut", "--stitches", "6x8", "--lx", "0.999", "--preset", "fast", "--resolution", "16", "--out", str(out))
+    assert p.returncode == 1 and "Traceback" not in p.stderr, p.stderr
+    assert "came apart" in p.stderr.strip().splitlines()[-1]
+    assert not out.exists()
