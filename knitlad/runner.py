@@ -305,6 +305,9 @@ def _locked_sweep(jobs, out: Path, executor, workers, scheduler, force, retry_fa
     with FolderLock(out) as lock:
         for stale in jobs_dir.glob("*.tmp"):  # left by a job killed while writing (the lock says none runs)
             stale.unlink(missing_ok=True)
+        if force:  # every job again, from a fresh stretch: cached knits are not reused
+            for knit in (out / "stretched").glob("*.h5"):
+                knit.unlink(missing_ok=True)
         if config_text is not None:
             with atomic_path(out / "sweep.yaml") as tmp:
                 tmp.write_text(config_text)

@@ -521,3 +521,19 @@ def test_a_knit_stretched_until_it_comes_apart_is_no_result(tmp_path):
     assert p.returncode == 1 and "Traceback" not in p.stderr, p.stderr
     assert "came apart" in p.stderr.strip().splitlines()[-1]
     assert not out.exists()
+
+
+def test_force_stretches_again(tmp_path):
+    """--force reran every job but reused the cached stretched knits."""
+    from knitlad.runner import run_sweep as sweep
+
+    cached = tmp_path / "out" / "stretched"
+    cached.mkdir(parents=True)
+    (cached / "0123456789abcdef.h5").write_bytes(b"a knit stretched by older code")
+    jobs = fake_jobs(tmp_path, [0.4])
+    from tests.sweep_helpers import fake_runner
+
+    sweep(jobs, tmp_path / "out", workers=1, runner=fake_runner, progress=False)
+    assert (cached / "0123456789abcdef.h5").exists()
+    sweep(jobs, tmp_path / "out", workers=1, runner=fake_runner, progress=False, force=True)
+    assert not list(cached.glob("*.h5"))
