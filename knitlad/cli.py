@@ -399,6 +399,8 @@ def sweep(
     workers: int = typer.Option(None, "--workers", help="Parallel jobs (default: all cores), one Numba thread each."),
     force: bool = typer.Option(False, "--force", help="Rerun jobs that already have a result."),
     retry_failed: bool = typer.Option(False, "--retry-failed", help="Rerun jobs recorded as failed."),
+    rerun_stale: bool = typer.Option(False, "--rerun-stale", help="Rerun finished jobs whose file another knitlad "
+                                     "(version or commit) made; by default they are kept and counted."),
     dry_run: bool = typer.Option(False, "--dry-run", help="Validate and list the jobs, run nothing."),
     max_jobs: int = typer.Option(10_000, "--max-jobs", help="Refuse a sweep of more jobs than this."),
     render: bool = typer.Option(False, "--render", help="Render each finished ladder job (<out>/renders/<id>/)."),
@@ -440,7 +442,7 @@ def sweep(
     typer.echo(f"{len(jobs)} jobs -> {out_dir} ({executor})", err=True)
     try:
         outcome = run_sweep(jobs, out_dir, executor=executor, workers=workers, scheduler=scheduler, force=force,
-                            retry_failed=retry_failed, config_text=Path(config).read_text())
+                            retry_failed=retry_failed, config_text=Path(config).read_text(), rerun_stale=rerun_stale)
     except (FolderError, SchedulerError) as e:
         fail(str(e))
     summary = out_dir / "summary.csv"
@@ -450,6 +452,12 @@ def sweep(
                    "run the same command again to go on", err=True)
         raise typer.Exit(143 if outcome.terminated else 130)
     typer.echo(f"{outcome.ran} jobs run ({outcome.failed} failed), {outcome.skipped} already done; summary: {summary}")
+    if outcome.stale:
+        from knitlad.provenance import code_identity
+
+        typer.echo(f"knitlad: {len(outcome.stale)} finished jobs were made by another knitlad than this one "
+                   f"({code_identity()}), kept (the summary's knitlad_code column); --rerun-stale runs them again",
+                   err=True)
     if render:
         _render_jobs(out_dir, [row["job_id"] for row in outcome.rows.values()
                                if row["status"] == "ok" and row["scene"] == "ladder"])
@@ -534,6 +542,14 @@ def plot(
     df, problems = _sweep_table(folder)
     if not (df["status"] == "ok").any():
         fail(f"{folder}: no finished job to plot yet")
+    if "knitlad_code" in df:
+        from knitlad.provenance import code_identity
+
+        codes = sorted({str(c) for c in df.loc[df["status"] == "ok", "knitlad_code"]})
+        if len(codes) > 1 or (codes and codes[0] != code_identity()):
+            typer.echo(f"knitlad: warning: these results were made by {len(codes)} versions of knitlad "
+                       f"({', '.join(codes)}; this one is {code_identity()}): knitlad sweep --rerun-stale makes "
+                       "them again with this one", err=True)
     fig_dir = Path(folder) / "plots"
     paths = summary_plots(df, fig_dir)
     if diagrams:

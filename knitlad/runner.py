@@ -35,6 +35,7 @@ from knitlad.io.atomic import atomic_path
 from knitlad.io.folders import FolderLock, lock_holds, writable_folder
 from knitlad.io.hdf5 import read_attrs, verify_datasets, write_record
 from knitlad.io.summary import write_summary
+from knitlad.provenance import code_identity
 from knitlad.registry import SCENES
 from knitlad.sweep import Job
 
@@ -50,6 +51,7 @@ def _record(job: Job, status: str, error: str = "", wall_s: float = float("nan")
         "error": error,
         "job_json": job.model_dump_json(),
         "knitlad_version": __version__,
+        "knitlad_code": code_identity(),
         "job_wall_s": wall_s,
     }
 
@@ -104,6 +106,7 @@ def summary_row(job: Job, attrs: dict | None) -> dict:
         return {**row, "status": "pending", "error": ""}
     row["status"] = attrs.get("status", "ok")
     row["error"] = attrs.get("error", "")
+    row["knitlad_code"] = made_by(attrs)
     for key in SCENES[job.scene].summary_keys:
         value = attrs.get(key, float("nan"))
         row[key] = json.dumps(value) if isinstance(value, (list, dict)) else value
@@ -151,6 +154,7 @@ class SweepOutcome:
     skipped: int = 0
     interrupted: bool = False
     terminated: bool = False  # by SIGTERM (exit 143), else Ctrl-C (exit 130)
+    stale: list[str] = field(default_factory=list)  # finished jobs whose file another code made, kept
 
     @property
     def failed_rows(self) -> list[dict]:
@@ -233,12 +237,24 @@ Runner = Callable[[Job, str, int, str], dict]  # (job, jobs folder, threads, loc
 WORKER_DIED = "worker process died (killed, out of memory or crashed)"
 
 
-def _plan(jobs: list[Job], jobs_dir: Path, force: bool, retry_failed: bool, outcome: SweepOutcome) -> list[Job]:
+def made_by(attrs: dict) -> str:
+    """The code that wrote a job file (files older than the record hold their version only)."""
+    return str(attrs.get("knitlad_code", attrs.get("knitlad_version", "")))
+
+
+def _plan(jobs: list[Job], jobs_dir: Path, force: bool, retry_failed: bool, outcome: SweepOutcome,
+          rerun_stale: bool = False) -> list[Job]:
     """The jobs to run; the rows of the others. A job file that is not the job's own or is
-    damaged is not trusted: the job runs again and its row says why until then."""
+    damaged is not trusted: the job runs again and its row says why until then. One that
+    another code made is kept and listed in ``outcome.stale`` (run again with ``rerun_stale``)."""
     todo = []
     for job in jobs:
         attrs, why = (None, "") if force else trusted_attrs(job_path(jobs_dir, job), job)
+        if attrs is not None and made_by(attrs) != code_identity():
+            if rerun_stale:
+                attrs, why = None, f"made by knitlad {made_by(attrs)}"
+            else:
+                outcome.stale.append(job.id)
         if attrs is not None and (attrs.get("status") == "ok" or not retry_failed):
             outcome.rows[job.id] = summary_row(job, attrs)
             outcome.skipped += 1
@@ -271,13 +287,16 @@ def run_sweep(
     progress: bool = True,
     runner: Runner = run_job,
     config_text: str | None = None,
+    rerun_stale: bool = False,
 ) -> SweepOutcome:
     """Run the jobs that have no trusted file yet (all with ``force``; failed ones too with ``retry_failed``).
 
     The folder is checked and locked first (:mod:`knitlad.io.folders`: one sweep at a time;
     :class:`~knitlad.io.folders.FolderError` before anything runs). The summary is rewritten
-    after every finished job and once more at the end, also after Ctrl-C or SIGTERM (then
+    every few seconds and once more at the end, also after Ctrl-C or SIGTERM (then
     ``interrupted`` is set, the workers are stopped and the unfinished jobs stay pending).
+    Finished jobs whose file another code made are kept and listed in ``outcome.stale``, or
+    run again with ``rerun_stale``.
     """
     outcome = SweepOutcome()
     # SIGTERM is handled as Ctrl-C from the start: one arriving while the folder is being
@@ -287,8 +306,8 @@ def run_sweep(
     if main_thread:
         signal.signal(signal.SIGTERM, _on_sigterm)
     try:
-        _locked_sweep(jobs, writable_folder(out_dir), executor, workers, scheduler, force, retry_failed, progress,
-                      runner, config_text, outcome)
+        _locked_sweep(jobs, writable_folder(out_dir), executor, workers, scheduler, (force, retry_failed, rerun_stale),
+                      progress, runner, config_text, outcome)
     except KeyboardInterrupt as e:
         outcome.interrupted = True
         outcome.terminated = isinstance(e, _Terminated)
@@ -298,9 +317,11 @@ def run_sweep(
     return outcome
 
 
-def _locked_sweep(jobs, out: Path, executor, workers, scheduler, force, retry_failed, progress, runner, config_text,
-                  outcome: SweepOutcome) -> None:
-    """run_sweep with the folder locked; KeyboardInterrupt (Ctrl-C, SIGTERM) leaves a consistent folder."""
+def _locked_sweep(jobs, out: Path, executor, workers, scheduler, rerun: tuple[bool, bool, bool], progress, runner,
+                  config_text, outcome: SweepOutcome) -> None:
+    """run_sweep with the folder locked; KeyboardInterrupt (Ctrl-C, SIGTERM) leaves a consistent folder.
+    ``rerun``: (force, retry_failed, rerun_stale)."""
+    force, retry_failed, rerun_stale = rerun
     jobs_dir = writable_folder(out / "jobs")
     with FolderLock(out) as lock:
         for stale in jobs_dir.glob("*.tmp"):  # left by a job killed while writing (the lock says none runs)
@@ -311,7 +332,7 @@ def _locked_sweep(jobs, out: Path, executor, workers, scheduler, force, retry_fa
         if config_text is not None:
             with atomic_path(out / "sweep.yaml") as tmp:
                 tmp.write_text(config_text)
-        todo = _sharing_first(_plan(jobs, jobs_dir, force, retry_failed, outcome))
+        todo = _sharing_first(_plan(jobs, jobs_dir, force, retry_failed, outcome, rerun_stale))
         write_summary(out, list(outcome.rows.values()))
         bar = SweepProgress(len(jobs), outcome.skipped) if progress else None
         written = [time.monotonic()]

@@ -282,3 +282,21 @@ def test_jobs_that_share_a_stretch_stretch_once_and_ladder_as_fresh_runs(tmp_pat
     fresh = run_ladder(jobs[1].scene_config().settings())
     with h5py.File(tmp_path / "out" / "jobs" / f"{jobs[1].id}.h5", "r") as f:
         assert list(f["series/fx"][()]) == fresh.fx_series
+
+
+def test_job_files_of_another_code_are_kept_counted_and_rerun_on_request(tmp_path):
+    """A resumed sweep trusted job files of older code silently; a physics fix could mix with results before it."""
+    from tests.sweep_helpers import fake_runner
+
+    cfg = {"fixed": {**TINY, "lx": 0.38}, "sweep": {"axes": {"mu": [0.1, 0.3]}}}
+    _, jobs = load_sweep(write_config(tmp_path / "c.yaml", cfg))
+    run_sweep(jobs, tmp_path / "out", workers=1, runner=fake_runner, progress=False)
+    for path in (tmp_path / "out" / "jobs").glob("*.h5"):  # as an older knitlad wrote them
+        with h5py.File(path, "r+") as f:
+            f.attrs["knitlad_code"] = "0.1.0+older"
+    kept = run_sweep(jobs, tmp_path / "out", workers=1, runner=fake_runner, progress=False)
+    assert kept.ran == 0 and len(kept.stale) == 2
+    assert set(read_summary(tmp_path / "out")["knitlad_code"]) == {"0.1.0+older"}
+    again = run_sweep(jobs, tmp_path / "out", workers=1, runner=fake_runner, progress=False, rerun_stale=True)
+    assert again.ran == 2 and not again.stale
+    assert "0.1.0+older" not in set(read_summary(tmp_path / "out")["knitlad_code"])

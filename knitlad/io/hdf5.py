@@ -41,6 +41,7 @@ import numpy as np
 
 from knitlad import __version__
 from knitlad.io.atomic import atomic_path
+from knitlad.provenance import code_identity
 from knitlad.units import Scales
 
 
@@ -142,6 +143,7 @@ def attributes_checksum(f: h5py.File) -> str:
 
 def _write_run_attrs(f: h5py.File, settings, material) -> None:
     f.attrs["knitlad_version"] = __version__
+    f.attrs["knitlad_code"] = code_identity()
     f.attrs["settings_json"] = json.dumps(jsonable(settings), default=str)
     for key, value in Scales(material).as_attributes().items():
         f.attrs[f"scale_{key}"] = value
@@ -196,6 +198,7 @@ def write_record(path: str | Path, attrs: dict) -> Path:
     with atomic_hdf5(path) as f:
         _set_attrs(f, attrs)
         f.attrs["knitlad_version"] = __version__
+        f.attrs["knitlad_code"] = code_identity()
     return path
 
 
