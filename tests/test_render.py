@@ -186,3 +186,16 @@ def test_a_cut_that_cannot_write_its_files_keeps_its_summary(tmp_path):
     assert "could not be written" in p.stderr.strip().splitlines()[-1] and "Traceback" not in p.stderr
     assert json.loads((out / "summary.json").read_text())["n_lad"] >= 0
     assert sorted(f.name for f in out.iterdir()) == ["summary.json"]
+
+
+def test_every_dataset_of_a_run_file_carries_its_unit(run_folder):
+    """Units were written only in a docstring."""
+    from knitlad.io.hdf5 import RUN_UNITS
+
+    missing = []
+    with h5py.File(run_folder / "ladder.h5", "r") as f:
+        f.visititems(lambda name, obj: missing.append(name) if isinstance(obj, h5py.Dataset) and
+                     obj.attrs.get("unit") not in RUN_UNITS.values() else None)
+        assert f["frames/positions"].attrs["unit"] == "m" and f["series/fx"].attrs["unit"] == "f0"
+        assert f.attrs["knitlad_code"]
+    assert not missing, missing

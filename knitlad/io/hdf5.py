@@ -5,6 +5,7 @@ A laddering run (``ladder.h5``, a sweep's ``jobs/<id>.h5``)::
     /attrs              summary (f_x^ini, f_x^fin, n_lad/n_y, v_lad/c_b, mu, twist, ...), knitlad version,
                         the settings (JSON) and the scales (SI) of units.Scales.as_attributes
     /frames/positions   (n_frames, n_nodes, 3) float32 [m]; the first frame is the knit just cut, the last the stop
+                        (every dataset carries its unit as the attribute "unit": RUN_UNITS)
     /frames/velocities  (n_frames, n_nodes, 3) float32 [m/s]
     /frames/laddered    (n_frames, n_y, n_x) bool: cells undone since the cut
     /frames/contact     (n_frames, n_nodes) uint8: 0 free, 1 touching another yarn, 2 sliding on it
@@ -189,7 +190,22 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
         g.attrs["cut_node"] = result.cut_node
         if result.cell_centres is not None:
             checksummed_dataset(f.require_group("cells"), "centres", result.cell_centres)
+        for name, unit in RUN_UNITS.items():
+            if name in f:
+                f[name].attrs["unit"] = unit
     return path
+
+
+# the unit of every dataset of a run file, written beside it as its attribute "unit" ("1": a pure
+# number, a flag or an index; f0: f_x = F_x / (n_y f0), per thread; l0: the stitch length)
+RUN_UNITS = {
+    "frames/positions": "m", "frames/velocities": "m/s", "frames/laddered": "1", "frames/contact": "1",
+    "frames/time": "s", "fields/axial_strain": "1", "fields/curvature": "1/m", "series/time": "s",
+    "series/front_up": "stitches", "series/front_down": "stitches", "series/fx": "f0",
+    "series/laddering_column_cells": "1", "stretch/relax_steps": "1", "stretch/box_lx_over_l0": "l0",
+    "stretch/fx": "f0", "final/laddered": "1", "cells/centres": "m", "topology/yarn_start": "1",
+    "topology/edges": "1", "topology/node_course": "1",
+}
 
 
 def write_record(path: str | Path, attrs: dict) -> Path:
