@@ -115,6 +115,7 @@ class _StageProgress:
     def close(self) -> None:
         if self.tty and self.stage is not None:
             sys.stderr.write("\n")
+        self.stage = None
 
 
 def _option_type(annotation):
@@ -182,6 +183,8 @@ def cut(
     stitches: str = typer.Option("42", "--stitches", help="Fabric size: N (N x N) or NXxNY."),
     out: str = typer.Option(None, "--out", help="Output folder (HDF5 + PNG); default runs/cut-<time>."),
     json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace the earlier run in --out (its files, renders "
+                                   "and movies are removed once this run is written)."),
     options: dict = None,
 ) -> None:
     """The laddering experiment: stretch at mu = 0, relax, switch friction on, cut a loop, follow the ladder.
@@ -199,11 +202,7 @@ def cut(
         options["fx"] = 13.6
     cfg = validated(_config.CutConfig, {**options, "n_x": n_x, "n_y": n_y}, {"n_x": "--stitches", "n_y": "--stitches"})
     from knitlad.io.folders import FolderError, writable_folder
-    from knitlad.observers import Interpenetration
-    from knitlad.protocol import InfeasibleRun, KnitTooLarge, require_memory, run_ladder
-    from knitlad.scenes.jersey import CourseTooWide
-    from knitlad.simulation import SimulationBlowUp
-    from knitlad.stretching import OutOfReach
+    from knitlad.protocol import KnitTooLarge, require_memory
 
     out_dir = Path(out) if out else Path("runs") / time.strftime("cut-%Y%m%d-%H%M%S")
     made = not out_dir.exists()
@@ -212,38 +211,24 @@ def cut(
         writable_folder(out_dir)
     except (KnitTooLarge, FolderError) as e:
         fail(str(e) if isinstance(e, KnitTooLarge) else f"--out {e}")
+    earlier = earlier_run_outputs(out_dir)
+    if earlier and not overwrite:
+        fail(f"--out {out_dir}: holds an earlier run ({', '.join(p.name for p in earlier[:4])}"
+             f"{', ...' if len(earlier) > 4 else ''}); --overwrite replaces it")
 
     def nothing_written() -> None:
         if made and out_dir.is_dir() and not any(out_dir.iterdir()):
             out_dir.rmdir()
 
     progress = _StageProgress()
-    previous = signal.signal(signal.SIGTERM, _on_sigterm)  # a batch system's kill: said, as Ctrl-C is
     try:
-        result = run_ladder(cfg.settings(), progress=progress)
-    except KeyboardInterrupt as e:
-        progress.close()
+        result = _ladder_or_exit(cfg, progress)
+    except typer.Exit:
         nothing_written()
-        how, code = ("terminated", 143) if isinstance(e, Terminated) else ("interrupted", 130)
-        typer.echo(f"knitlad: {how}; nothing written", err=True)
-        raise typer.Exit(code)
-    except (OutOfReach, Interpenetration, SimulationBlowUp) as e:  # the run failed (not bad input): one line, exit 1
-        progress.close()
-        nothing_written()
-        typer.echo(f"knitlad: run failed: {e}", err=True)
-        raise typer.Exit(1)
-    except CourseTooWide as e:  # no stitch of this yarn fits: bad input, found when the knit is built
-        progress.close()
-        nothing_written()
-        fail(f"--d-over-l0: {e}")
-    except InfeasibleRun as e:  # settings whose step cannot serve the run: bad input, found when it is set
-        progress.close()
-        nothing_written()
-        fail(str(e))
-    finally:
-        signal.signal(signal.SIGTERM, previous)
+        raise
     progress.close()
     summary = result.summary()
+    _remove(earlier)  # the earlier run's renders and movies would not match this one
     try:
         h5, png = _write_run_outputs(out_dir, result)
     except OSError as e:  # a full disk or a file-size limit: keep the summary, say it in one line
@@ -576,6 +561,54 @@ def _render_jobs(out_dir, job_ids: list[str]) -> None:
         except (OSError, KeyError, ValueError) as e:
             typer.echo(f"knitlad: job {job}: no render ({type(e).__name__}: {str(e).splitlines()[0]})", err=True)
     typer.echo(f"rendered {len(job_ids)} jobs in {out_dir / 'renders'}")
+
+
+def _ladder_or_exit(cfg, progress):
+    """run_ladder, every way it can end without a result said in one line: Ctrl-C (130) and SIGTERM (143),
+    a run that failed (1), settings found infeasible once the knit is built (2)."""
+    from knitlad.observers import Interpenetration
+    from knitlad.protocol import InfeasibleRun, run_ladder
+    from knitlad.scenes.jersey import CourseTooWide
+    from knitlad.simulation import SimulationBlowUp
+    from knitlad.stretching import OutOfReach
+
+    previous = signal.signal(signal.SIGTERM, _on_sigterm)  # a batch system's kill: said, as Ctrl-C is
+    try:
+        return run_ladder(cfg.settings(), progress=progress)
+    except KeyboardInterrupt as e:
+        progress.close()
+        how, code = ("terminated", 143) if isinstance(e, Terminated) else ("interrupted", 130)
+        typer.echo(f"knitlad: {how}; nothing written", err=True)
+        raise typer.Exit(code)
+    except (OutOfReach, Interpenetration, SimulationBlowUp) as e:  # the run failed (not bad input): one line, exit 1
+        progress.close()
+        typer.echo(f"knitlad: run failed: {e}", err=True)
+        raise typer.Exit(1)
+    except CourseTooWide as e:  # no stitch of this yarn fits: bad input, found when the knit is built
+        progress.close()
+        fail(f"--d-over-l0: {e}")
+    except InfeasibleRun as e:  # settings whose step cannot serve the run: bad input, found when it is set
+        progress.close()
+        fail(str(e))
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+# what knitlad cut, render, movie and plot write in a run folder
+RUN_OUTPUTS = ("ladder.h5", "ladder.xdmf", "spatio_temporal.png", "midline_diagram.png", "tension_history.png",
+               "ladder.mp4", "ladder.gif", "summary.json", "render")
+
+
+def earlier_run_outputs(out_dir) -> list:
+    """The files and folders of an earlier run in ``out_dir``."""
+    return [out_dir / name for name in RUN_OUTPUTS if (out_dir / name).exists()]
+
+
+def _remove(paths) -> None:
+    import shutil
+
+    for path in paths:
+        shutil.rmtree(path) if path.is_dir() else path.unlink(missing_ok=True)
 
 
 def _write_run_outputs(out_dir, result):

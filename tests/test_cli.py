@@ -152,3 +152,19 @@ def test_the_version_and_python_dash_m_knitlad():
     for command in ([*KNITLAD, "--version"], [sys.executable, "-m", "knitlad", "--version"]):
         p = subprocess.run(command, capture_output=True, text=True)
         assert p.returncode == 0 and p.stdout.strip() == f"knitlad {__version__}", p.stderr
+
+
+def test_a_rerun_into_a_used_folder_is_refused_or_replaces_the_whole_earlier_run(tmp_path):
+    """A rerun replaced ladder.h5 and left the earlier run's renders, movie and diagrams beside it."""
+    out = tmp_path / "run"
+    args = ["cut", "--stitches", "4x4", "--lx", "0.36", "--preset", "fast", "--resolution", "16", "--max-time-ms",
+            "0.05", "--out", str(out)]
+    assert run(*args).returncode == 0
+    (out / "render").mkdir()
+    (out / "render" / "render_front_0000000.0us.png").write_bytes(b"an earlier run's picture")
+    (out / "ladder.gif").write_bytes(b"an earlier run's movie")
+    p = run(*args)
+    assert p.returncode == 2 and "--overwrite" in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    p = run(*args, "--overwrite")
+    assert p.returncode == 0, p.stderr
+    assert (out / "ladder.h5").exists() and not (out / "render").exists() and not (out / "ladder.gif").exists()
