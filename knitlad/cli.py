@@ -249,9 +249,9 @@ def cut(
     typer.echo(
         f"{n_x} x {n_y} jersey, mu = {cfg.mu}, {cfg.resolution} nodes/stitch ({result.nodes} nodes)\n"
         f"  f_x^ini     = {result.fx_ini:.3f}\n"
-        f"  f_x^fin     = {result.fx_fin:.3f}\n"
+        f"  f_x^fin     = {result.fx_fin:.3f}{_fin_caveat(result)}\n"
         f"  n_lad/n_y   = {result.n_lad_over_ny:.3f}  ({result.n_lad} cells)\n"
-        f"  v_lad/c_b   = {result.v_lad_over_cb:.3f}  (front fit over stitches {result.v_fit_stitches[0]}-{result.v_fit_stitches[1]})\n"
+        f"  v_lad/c_b   = {result.v_lad_over_cb:.3f}  {_velocity_caveat(result)}\n"
         f"  l_x/l0, l_y/l0 = {result.lx_over_l0:.3f}, {result.ly_over_l0:.3f}\n"
         f"  stop: {result.stop_reason}\n"
         f"  wall time   = {summary['wall_s']:.1f} s (stretch {result.wall_s.get('stretch', 0):.1f} s, propagate {result.wall_s.get('propagate', 0):.1f} s)\n"
@@ -561,6 +561,24 @@ def _render_jobs(out_dir, job_ids: list[str]) -> None:
         except (OSError, KeyError, ValueError) as e:
             typer.echo(f"knitlad: job {job}: no render ({type(e).__name__}: {str(e).splitlines()[0]})", err=True)
     typer.echo(f"rendered {len(job_ids)} jobs in {out_dir / 'renders'}")
+
+
+MIN_FIT_STITCHES = 5  # a front fitted over fewer stitches is a rough figure
+
+
+def _fin_caveat(result) -> str:
+    """f_x^fin is the tension after an arrest only if the ladder arrested (Arrested stop rule)."""
+    if result.stop_reason.startswith("no cell changed"):
+        return "  (after the arrest)"
+    return f"  (no arrest: {result.stop_reason}; the mean tension while it ran, not an arrest value)"
+
+
+def _velocity_caveat(result) -> str:
+    first, last = result.v_fit_stitches
+    span = f"front fit over stitches {first}-{last}"
+    if last - first + 1 < MIN_FIT_STITCHES:
+        return f"({span}: fewer than {MIN_FIT_STITCHES} stitches, a rough figure)"
+    return f"({span})"
 
 
 def _ladder_or_exit(cfg, progress):

@@ -168,3 +168,16 @@ def test_a_rerun_into_a_used_folder_is_refused_or_replaces_the_whole_earlier_run
     p = run(*args, "--overwrite")
     assert p.returncode == 0, p.stderr
     assert (out / "ladder.h5").exists() and not (out / "render").exists() and not (out / "ladder.gif").exists()
+
+
+def test_the_read_out_says_when_f_x_fin_is_no_arrest_value_and_when_v_lad_is_rough():
+    """The demo printed an f_x^fin averaged over the ringing after the ladder reached an edge, and a
+    v_lad fitted over three stitches, with no caveat."""
+    from types import SimpleNamespace
+
+    from knitlad.cli import _fin_caveat, _velocity_caveat
+
+    edge = SimpleNamespace(stop_reason="ladder reached an edge course", v_fit_stitches=(1, 3))
+    arrest = SimpleNamespace(stop_reason="no cell changed for 2.0 ms", v_fit_stitches=(2, 10))
+    assert "no arrest" in _fin_caveat(edge) and "after the arrest" in _fin_caveat(arrest)
+    assert "rough" in _velocity_caveat(edge) and "rough" not in _velocity_caveat(arrest)
