@@ -16,6 +16,7 @@ import sys
 import time
 import types
 import typing
+from pathlib import Path
 
 import typer
 
@@ -220,6 +221,7 @@ def cut(
         if made and out_dir.is_dir() and not any(out_dir.iterdir()):
             out_dir.rmdir()
 
+    _say_if_compiling()
     progress = _StageProgress()
     try:
         result = _ladder_or_exit(cfg, progress)
@@ -425,6 +427,7 @@ def sweep(
     except FolderError as e:
         fail(f"--out {e}")
     typer.echo(f"{len(jobs)} jobs -> {out_dir} ({executor})", err=True)
+    _say_if_compiling()
     try:
         outcome = run_sweep(jobs, out_dir, executor=executor, workers=workers, scheduler=scheduler, force=force,
                             retry_failed=retry_failed, config_text=Path(config).read_text(), rerun_stale=rerun_stale)
@@ -561,6 +564,19 @@ def _render_jobs(out_dir, job_ids: list[str]) -> None:
         except (OSError, KeyError, ValueError) as e:
             typer.echo(f"knitlad: job {job}: no render ({type(e).__name__}: {str(e).splitlines()[0]})", err=True)
     typer.echo(f"rendered {len(job_ids)} jobs in {out_dir / 'renders'}")
+
+
+def _say_if_compiling() -> None:
+    """One line on stderr when Numba's cache holds no compiled step kernel yet: the first run of a fresh
+    install compiles for one to two minutes, and said nothing."""
+    import numba
+
+    if numba.config.CACHE_DIR:  # NUMBA_CACHE_DIR: Numba keeps every cache there, in a tree of its own
+        cached = any(Path(numba.config.CACHE_DIR).rglob("integrate.verlet_steps-*.nbi"))
+    else:
+        cached = any((Path(__file__).resolve().parent / "kernels" / "__pycache__").glob("integrate.verlet_steps-*.nbi"))
+    if not cached:
+        typer.echo("knitlad: compiling the kernels (the first run only: one to two minutes, then cached)", err=True)
 
 
 MIN_FIT_STITCHES = 5  # a front fitted over fewer stitches is a rough figure

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -181,3 +182,16 @@ def test_the_read_out_says_when_f_x_fin_is_no_arrest_value_and_when_v_lad_is_rou
     arrest = SimpleNamespace(stop_reason="no cell changed for 2.0 ms", v_fit_stitches=(2, 10))
     assert "no arrest" in _fin_caveat(edge) and "after the arrest" in _fin_caveat(arrest)
     assert "rough" in _velocity_caveat(edge) and "rough" not in _velocity_caveat(arrest)
+
+
+def test_a_first_run_says_it_is_compiling(tmp_path):
+    """With a fresh Numba cache knitlad cut printed nothing for 94 s."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    proc = subprocess.Popen([*KNITLAD, "cut", "--stitches", "4", "--lx", "0.36", "--preset", "fast", "--out",
+                             str(tmp_path / "o")], stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True, env=env)
+    try:
+        first = proc.stderr.readline()
+    finally:
+        proc.kill()
+        proc.wait()
+    assert first.startswith("knitlad: compiling the kernels")
