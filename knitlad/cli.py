@@ -267,7 +267,7 @@ def loop(
     json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
     options: dict = None,
 ) -> None:
-    """Single-loop model (paper Fig. 5b): a loop under tension f_x lets go of the row above once the row below is removed."""
+    """Single-loop model of the paper's Fig 5b: a loop under tension f_x lets go of the row above once the row below is removed."""
     import json
 
     from knitlad.periodic_loop import run_single_loop
