@@ -102,7 +102,9 @@ class CutConfig(_WithPreset):
         "the yarns carry twist during the laddering, so friction also turns them (the friction couple) [-]; "
         "about 1.27 x the laddering's cost (42 x 42 at f_x 13.6, 2026-12-03)"))
     # --- the model's choices
-    d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description="yarn diameter over stitch length d/l0 [-] (the paper: 1/70)")
+    d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description=(
+        "yarn diameter over stitch length d/l0 [-]; 1/70, the paper's rounded value and the default, means its "
+        "Nylon itself: d = 0.14 mm with l0 = 9.74 mm, d/l0 = 0.01437 (knitlad.config.material_for)"))
     contact_force_f0: float = Field(20.0, gt=0, description=(
         "contact stiffness: a contact carrying this force overlaps by overlap_fraction d [f0]"))
     overlap_fraction: float = Field(0.05, gt=0, lt=1, description="overlap at contact_force_f0, over d [-]")
@@ -288,7 +290,9 @@ class StitchConfig(_WithPreset):
     resolution: int | None = Field(None, ge=12, le=280, description="nodes per stitch [-]; default: the preset's")
     sagitta_radius: float | None = Field(None, ge=0, le=1000, description=(
         "the contact's sagitta correction (see knitlad cut --help) [d]; 0: none; default: the preset's"))
-    d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description="yarn diameter over stitch length d/l0 [-]")
+    d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description=(
+        "yarn diameter over stitch length d/l0 [-]; 1/70, the paper's rounded value and the default, means its "
+        "Nylon itself: d = 0.14 mm with l0 = 9.74 mm, d/l0 = 0.01437 (knitlad.config.material_for)"))
 
     @model_validator(mode="after")
     def sagitta_within_reach(self) -> "StitchConfig":
