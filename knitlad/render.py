@@ -63,7 +63,17 @@ class Run:
         return int(np.argmin(np.abs(self.times_s - t)))
 
 
+def _quiet_vtk() -> None:
+    """VTK's log off the terminal: with no display it warns "bad X server connection" before rendering off
+    screen anyway, and its XDMF reader reports an element it skips as an error; knitlad says what failed."""
+    from vtkmodules.vtkCommonCore import vtkLogger, vtkObject
+
+    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)
+    vtkObject.GlobalWarningDisplayOff()
+
+
 def _vtk():
+    _quiet_vtk()
     import vtkmodules.vtkFiltersCore  # noqa: F401 - tube filter
     import vtkmodules.vtkRenderingFreeType  # noqa: F401 - text
     import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 - the off-screen render window

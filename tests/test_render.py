@@ -199,3 +199,16 @@ def test_every_dataset_of_a_run_file_carries_its_unit(run_folder):
         assert f["frames/positions"].attrs["unit"] == "m" and f["series/fx"].attrs["unit"] == "f0"
         assert f.attrs["knitlad_code"]
     assert not missing, missing
+
+
+def test_a_render_without_a_display_prints_no_vtk_noise(run_folder, tmp_path):
+    """With no X display VTK printed a coloured 'WARN| bad X server connection' before every render."""
+    import os
+    import shutil
+
+    folder = tmp_path / "run"
+    shutil.copytree(run_folder, folder, ignore=shutil.ignore_patterns("render", "*.mp4", "*.gif"))
+    env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
+    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(folder), "--width", "160", "--view", "front"],
+                       capture_output=True, text=True, cwd=ROOT, env=env)
+    assert p.returncode == 0 and p.stderr == "", p.stderr
