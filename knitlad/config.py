@@ -39,6 +39,11 @@ class _WithPreset(BaseModel):
         "accuracy preset: fast, default or accurate; sets the resolution and the settings its error was "
         "measured with (docs/accuracy.md) [-]"))
 
+    def replace(self, **changes):
+        """A copy with ``changes``, validated as a new config is (``model_copy(update=...)`` skips validation:
+        ``mu=-1`` would pass)."""
+        return type(self).model_validate({**self.model_dump(), **changes})
+
     @model_validator(mode="before")
     @classmethod
     def preset_settings(cls, data):

@@ -195,3 +195,15 @@ def test_a_first_run_says_it_is_compiling(tmp_path):
         proc.kill()
         proc.wait()
     assert first.startswith("knitlad: compiling the kernels")
+
+
+def test_replace_validates_as_a_new_config_does():
+    """The README taught model_copy(update=...), which took mu = -1 and dt_safety = 5."""
+    from pydantic import ValidationError
+
+    from knitlad.config import CutConfig
+
+    cfg = CutConfig(fx=4, preset="fast")
+    assert cfg.replace(mu=0.8).mu == 0.8 and cfg.replace(mu=0.8).resolution == 24
+    with pytest.raises(ValidationError, match="mu"):
+        cfg.replace(mu=-1.0)
