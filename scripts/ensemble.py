@@ -38,6 +38,16 @@ def resumed_rows(out: str | Path, name: str) -> tuple[Path, list[dict]]:
     return csv, pd.read_csv(csv).to_dict("records") if csv.exists() else []
 
 
-def save_rows(csv: Path, rows: list[dict]) -> None:
+def save_rows(csv: Path, rows: list[dict], key: tuple[str, ...] | None = None) -> None:
+    """Write ``rows``; with ``key``, merged with the rows another process wrote to ``csv`` since (ours win on
+    the same key), so that two studies sharing one file do not overwrite each other's rows."""
+    df = pd.DataFrame(rows)
+    if key is not None and csv.exists():
+        theirs = pd.read_csv(csv)
+        for name in key:
+            for frame in (df, theirs):
+                if name not in frame:
+                    frame[name] = "plain" if name == "variant" else None
+        df = pd.concat([theirs, df], ignore_index=True).drop_duplicates(subset=list(key), keep="last")
     with atomic_path(csv) as tmp:
-        pd.DataFrame(rows).to_csv(tmp, index=False)
+        df.to_csv(tmp, index=False)

@@ -32,6 +32,9 @@ sys.path.insert(0, str(Path(__file__).parent))
 from ensemble import resumed_rows, save_rows, target_offsets  # noqa: E402
 
 
+KEY = ("fx_nominal", "resolution", "member", "variant")  # one row per run: merged with other writers of the file
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--size", type=int, default=16, help="knit size N for N x N")
@@ -68,7 +71,7 @@ def main() -> None:
                     rows.append({"fx_nominal": fx, "resolution": res, "member": k, "variant": variant, "fx_target": cfg.fx,
                                  "fx_ini": knit.fx_ini, "lx_over_l0": knit.lx_over_l0, "error": str(error),
                                  "stretch_s": t1 - t0, "date": time.strftime("%Y-%m-%d")})
-                    save_rows(csv, rows)
+                    save_rows(csv, rows, KEY)
                     print(f"f_x {fx:5.2f} res {res:3d} member {k}: failed: {error}", flush=True)
                     continue
                 row = {"fx_nominal": fx, "resolution": res, "member": k, "variant": variant, "fx_target": cfg.fx,
@@ -80,7 +83,7 @@ def main() -> None:
                        "stretch_s": t1 - t0, "ladder_s": time.perf_counter() - t1,
                        "date": time.strftime("%Y-%m-%d")}
                 rows.append(row)
-                save_rows(csv, rows)
+                save_rows(csv, rows, KEY)
                 print(f"{variant}: f_x {fx:5.2f} res {res:3d} member {k}: f_x^ini {row['fx_ini']:.3f} l_x {row['lx_over_l0']:.4f} "
                       f"v {row['v_lad_over_cb']:.3f} n {row['n_lad_over_ny']:.3f} fin {row['fx_fin']:.3f} "
                       f"({row['ladder_s']:.0f} s, {row['steps']} steps)", flush=True)

@@ -187,7 +187,8 @@ def main() -> None:
         stitch_table(stitch, sag)
         width_table(stitch, sag)
     if (ref / "ladder16.csv").exists():
-        ladder_table(pd.read_csv(ref / "ladder16.csv"))
+        extra = [pd.read_csv(p) for p in sorted(ref.glob("ladder16_*.csv")) if "cut_overlap" not in p.name]
+        ladder_table(pd.concat([pd.read_csv(ref / "ladder16.csv"), *extra], ignore_index=True))
 
 
 if __name__ == "__main__":
