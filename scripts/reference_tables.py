@@ -148,11 +148,11 @@ def ladder_table(df: pd.DataFrame) -> None:
     plain = ok[ok.variant == "plain"]
     if plain.empty:
         return
-    finest = int(plain.resolution.max())
-    print(f"\n### Each preset against the finest plain resolution ({finest} nodes per stitch), 16 x 16\n")
-    print("| f_x | preset | " + " | ".join(label for _, label in OBSERVABLES[1:]) + " |")
-    print("|---|---|" + "---|" * (len(OBSERVABLES) - 1))
+    print("\n### Each preset against the finest plain resolution of its tension, 16 x 16\n")
+    print("| f_x | reference | preset | " + " | ".join(label for _, label in OBSERVABLES[1:]) + " |")
+    print("|---|---|---|" + "---|" * (len(OBSERVABLES) - 1))
     for fx, g in ok.groupby("fx_nominal"):
+        finest = int(g[g.variant == "plain"].resolution.max())
         ref = g[(g.variant == "plain") & (g.resolution == finest)]
         if ref.empty:
             continue
@@ -168,7 +168,7 @@ def ladder_table(df: pd.DataFrame) -> None:
                     cells.append(f"{diff:+.4f} +- {se:.4f}")
                 else:
                     cells.append(f"{diff / ref[c].mean():+.1%} +- {se / abs(ref[c].mean()):.1%}")
-            print(f"| {fx:g} | {name} ({res}) | " + " | ".join(cells) + " |")
+            print(f"| {fx:g} | {finest} x {len(ref)} | {name} ({res}) | " + " | ".join(cells) + " |")
     print("\n(l_x/l0 as a difference in l0, the others relative; +- the standard error of the difference of means)")
 
 
