@@ -95,7 +95,10 @@ def node_contact_state(sim) -> np.ndarray:
     if n == 0:
         return state
     results, edges = c.pair_results[:n], c.pairs[:n]
-    for flag, mask in ((TOUCHING, results[:, OVERLAP] > 0), (SLIDING, results[:, SLIDING_COLUMN] > 0)):
+    touching = results[:, OVERLAP] > 0
+    # a pair that separated keeps its last sliding flag in the scratch results (and a rebuild moves
+    # it onto another pair): sliding counts only where the pair touches now
+    for flag, mask in ((TOUCHING, touching), (SLIDING, touching & (results[:, SLIDING_COLUMN] > 0))):
         touched = edges[mask].ravel()
         for ends in (sim.model.edge_a, sim.model.edge_b):
             state[ends[touched]] = np.maximum(state[ends[touched]], flag)

@@ -29,3 +29,23 @@ def test_arrest_is_declared_after_the_window_without_change():
     assert rule.check(0.5e-3, undone) is None
     assert rule.check(1.4e-3, undone) is None
     assert rule.check(1.5e-3, undone) is not None
+
+
+def test_a_pair_that_separated_is_not_read_as_sliding():
+    """Stale sliding flags of separated pairs marked 29 % of the nodes as sliding where 13 % were (16 x 16)."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from knitlad.kernels.contact import OVERLAP, PAIR_RESULTS, SLIDING as SLIDING_COLUMN
+    from knitlad.observers import FREE, SLIDING, TOUCHING, node_contact_state
+
+    results = np.zeros((3, PAIR_RESULTS))
+    results[0, OVERLAP], results[0, SLIDING_COLUMN] = 1e-3, 1.0  # touching and sliding
+    results[1, OVERLAP], results[1, SLIDING_COLUMN] = 0.0, 1.0  # separated, a stale flag
+    results[2, OVERLAP] = 1e-3  # touching, sticking
+    contacts = SimpleNamespace(n_pairs=np.array([3]), pair_results=results,
+                               pairs=np.array([[0, 1], [2, 3], [4, 5]]))
+    model = SimpleNamespace(n_nodes=12, edge_a=np.arange(0, 12, 2), edge_b=np.arange(1, 12, 2))
+    state = node_contact_state(SimpleNamespace(contacts=contacts, model=model))
+    assert list(state[[0, 2, 4, 6, 8, 10]]) == [SLIDING, SLIDING, FREE, FREE, TOUCHING, TOUCHING]
