@@ -11,21 +11,10 @@ from typing import ClassVar, Literal, get_args, get_origin
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-# Accuracy presets, chosen from the converged reference (docs/accuracy.md, scripts/reference_*.py):
-# each sets the resolution and the contact's sagitta correction (knitlad.contact.sagitta_corrected_radius),
-# and the laddering's axial springs. `fast` is the model as it stood before the reference
-# (24 nodes per stitch, capsules of the yarn's radius). Each preset's measured error is in its
-# --help text (PRESET_HELP) and in docs/accuracy.md.
+from knitlad.observers import AUTO_FRAMES
+from knitlad.presets import LADDER_PRESETS, LOOP_PRESETS, PRESET_HELP, STITCH_PRESETS
+
 Preset = Literal["fast", "default", "accurate"]
-AUTO_FRAMES = 60  # frames over the expected ladder duration when frame_every_us is not given
-SAGITTA_RADIUS_D = 11.0  # the stitch's contacts' radius of curvature for the sagitta correction, in d
-LADDER_PRESETS = {
-    "fast": {"resolution": 24, "sagitta_radius": 0.0, "implicit_axial": False},
-    "default": {"resolution": 48, "sagitta_radius": SAGITTA_RADIUS_D, "implicit_axial": True},
-    "accurate": {"resolution": 96, "sagitta_radius": SAGITTA_RADIUS_D, "implicit_axial": True},
-}
-STITCH_PRESETS = {name: {k: v for k, v in p.items() if k != "implicit_axial"} for name, p in LADDER_PRESETS.items()}
-LOOP_PRESETS = {"fast": {"resolution": 24}, "default": {"resolution": 36}, "accurate": {"resolution": 48}}
 
 
 class _WithPreset(BaseModel):
@@ -35,9 +24,7 @@ class _WithPreset(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
     PRESETS: ClassVar[dict[str, dict]] = LADDER_PRESETS
 
-    preset: Preset = Field("default", description=(
-        "accuracy preset: fast, default or accurate; sets the resolution and the settings its error was "
-        "measured with (docs/accuracy.md) [-]"))
+    preset: Preset = Field("default", description=PRESET_HELP)
 
     def replace(self, **changes):
         """A copy with ``changes``, validated as a new config is (``model_copy(update=...)`` skips validation:

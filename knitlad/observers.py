@@ -81,6 +81,7 @@ class TensionRecorder:
         self.fx.append(run.tension())
 
 
+AUTO_FRAMES = 60  # frames over a ladder's expected duration when no frame interval is given (protocol.frame_interval)
 FREE, TOUCHING, SLIDING = 0, 1, 2  # contact state of a node (FrameRecorder.contact)
 
 

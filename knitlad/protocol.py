@@ -39,6 +39,7 @@ from knitlad import units
 from knitlad.contact import ContactModel, Counting, contact_time_step
 from knitlad.measure import cell_overlap, laddered_cells, periodicities, tension_per_thread
 from knitlad.observers import (
+    AUTO_FRAMES,
     Arrested,
     EdgeReached,
     FrameRecorder,
@@ -612,8 +613,6 @@ def frame_interval(run: Laddering) -> float:
     """The frame interval [s]: the dynamics' setting, or AUTO_FRAMES frames over the ladder's
     expected duration: half the courses at the paper's velocity line 0.1 f_x^ini c_b (at
     least 1), no longer than max_time_s, no shorter than the observation interval."""
-    from knitlad.config import AUTO_FRAMES
-
     d, k = run.dynamics, run.knit
     if d.frame_every_s is not None:
         return d.frame_every_s

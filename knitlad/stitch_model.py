@@ -33,6 +33,7 @@ from knitlad.kernels.contact import contact_energy
 from knitlad.kernels.elastic import bending_energy, edge_vectors, framed_bending_twisting_energy, stretching_energy
 from knitlad.kernels.frames import material_frames, transport_reference_frames, update_reference_twist
 from knitlad.natural_curvature import remember_shape
+from knitlad.presets import STITCH_PRESETS
 from knitlad.scenes.jersey import BUILD_LX, Jersey, widest_fitting_width
 from knitlad.scenes.stitch import PeriodicStitch, build_periodic_stitch
 from knitlad.simulation import Simulation, numba_threads
@@ -155,14 +156,12 @@ class StitchRun:
 def stitch_tensions(lx_over_l0: float, ly_over_l0: float, nodes_per_stitch: int | None = None,
                     material: Material = NYLON, sagitta_radius_d: float | None = None) -> StitchResult:
     """The stitch at (l_x, l_y) [l/l0]; the resolution and the sagitta correction default to the
-    default preset's (:class:`knitlad.config.StitchConfig`)."""
-    from knitlad.config import StitchConfig
-
-    preset = StitchConfig(lx=lx_over_l0, ly=ly_over_l0)
+    default preset's (:mod:`knitlad.presets`)."""
+    preset = STITCH_PRESETS["default"]
     if nodes_per_stitch is None:
-        nodes_per_stitch = preset.resolution
+        nodes_per_stitch = preset["resolution"]
     if sagitta_radius_d is None:
-        sagitta_radius_d = preset.sagitta_radius
+        sagitta_radius_d = preset["sagitta_radius"]
     return StitchRun(StitchSettings(lx_over_l0, ly_over_l0, nodes_per_stitch, material,
                                     sagitta_radius_d=sagitta_radius_d)).run()
 

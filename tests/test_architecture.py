@@ -40,3 +40,46 @@ def test_no_module_calls_a_private_function_of_another():
             if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("knitlad"):
                 private = [a.name for a in node.names if a.name.startswith("_") and not a.name.endswith("__")]
                 assert not private, f"{path.name} imports {private} from {node.module}"
+
+
+# the layers of docs/architecture.md, bottom up: a module imports only from its own layer or below
+LAYERS = {
+    1: ("kernels", "units", "measure", "stretching", "presets", "provenance"),
+    2: ("state", "topology", "observers"),
+    3: ("contact", "timestep", "natural_curvature", "scenes"),
+    4: ("simulation",),
+    5: ("protocol", "stitch_model", "loop_model", "periodic_loop", "demo"),
+    6: ("config",),
+    7: ("io", "plots", "render", "registry"),
+    8: ("sweep", "runner"),
+    9: ("cli", "__main__"),
+}
+
+
+def _layer(module: str) -> int:
+    top = module.split(".")[1]
+    return next(k for k, names in LAYERS.items() if top in names)
+
+
+def test_every_module_imports_only_from_its_layer_or_below():
+    """docs/architecture.md's layer rule, for every module of the package, lazy imports included (an
+    import inside a function is still a dependency): no cycle between layers can form."""
+    upward = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        if len(parts) == 1:
+            continue  # knitlad/__init__.py: the public names, re-exported
+        module = ".".join(parts)
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("knitlad"):
+                names = [f"knitlad.{a.name}" for a in node.names] if node.module == "knitlad" else [node.module]
+            elif isinstance(node, ast.Import):
+                names = [a.name for a in node.names if a.name.startswith("knitlad.")]
+            else:
+                continue
+            for name in names:
+                if name != "knitlad.__version__" and _layer(name) > _layer(module):
+                    upward.append(f"{module} (layer {_layer(module)}) imports {name} (layer {_layer(name)})")
+    assert not upward, upward
