@@ -67,6 +67,16 @@ class FrontRecorder:
     def extents(self) -> tuple[np.ndarray, ...]:
         return tuple(np.array(f, dtype=np.int64).reshape(-1, 2) for f in self._fronts)
 
+    def reach(self, n_rows: int) -> float:
+        """How far the farthest front has gone towards the edge it runs to, 0 to 1: a ladder's progress,
+        which ends it sooner than the time limit does."""
+        best = 0.0
+        for fronts in self._fronts:
+            if fronts:
+                up, down = fronts[-1]
+                best = max(best, up / max(n_rows - 1 - self.cut_row, 1), down / max(self.cut_row, 1))
+        return min(best, 1.0)
+
     def cells(self) -> tuple[np.ndarray, ...]:
         return tuple(np.array(c) for c in self._cells)
 

@@ -648,8 +648,8 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
         times.append(t)
         for obs in (fronts, tension, frames, *observers):
             obs.observe(t, run, undone)
-        if progress:
-            progress("propagate", min(t / d.max_time_s, 1.0))
+        if progress:  # the ladder's reach (it stops at an edge course) or the time limit, whichever is further
+            progress("propagate", max(min(t / d.max_time_s, 1.0), fronts.reach(run.knit.settings.n_y)))
         fired = next(((rule, reason) for rule in rules if (reason := rule.check(t, undone))), None)
         if fired:
             break

@@ -49,3 +49,23 @@ def test_a_pair_that_separated_is_not_read_as_sliding():
     model = SimpleNamespace(n_nodes=12, edge_a=np.arange(0, 12, 2), edge_b=np.arange(1, 12, 2))
     state = node_contact_state(SimpleNamespace(contacts=contacts, model=model))
     assert list(state[[0, 2, 4, 6, 8, 10]]) == [SLIDING, SLIDING, FREE, FREE, TOUCHING, TOUCHING]
+
+
+def test_the_progress_of_a_ladder_is_how_far_its_front_has_gone():
+    """The stage bar measured simulated time against max_time_ms and froze at a few per cent, since
+    ladders stop at an edge course long before."""
+    import numpy as np
+
+    from knitlad.observers import FrontRecorder
+
+    n_y, cut = 10, 5
+    fronts = FrontRecorder((2, 3), cut)
+    undone = np.zeros((n_y, 6), dtype=bool)
+    fronts.observe(0.0, None, undone)
+    assert fronts.reach(n_y) == 0.0
+    undone[cut:cut + 3, 3] = True  # three cells up the column beside the cut
+    fronts.observe(1e-4, None, undone)
+    assert 0.4 < fronts.reach(n_y) < 1.0
+    undone[cut:, 3] = True  # up to the last free course: the ladder is at the edge
+    fronts.observe(2e-4, None, undone)
+    assert fronts.reach(n_y) == 1.0
