@@ -411,6 +411,8 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
             target = s.fx_target
             force_control(cell, target, 0.25 * s.fx_tolerance, s.stretch_increment, MIN_BUILD_LX)
         cell_fx = settled_tension(cell)
+    # soft contact lets the stitch's loops pass through each other: say so, not that the knit came apart
+    box.guard.check(cell.sim, "while stretching the periodised stitch")
     report(0.2)
     box.tile(cell)
     fx = relax_to_steady_tension(box)
@@ -423,6 +425,7 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
         with numba_threads(1):
             force_control(cell, target * cell_fx / fx, 0.25 * s.fx_tolerance, s.stretch_increment, MIN_BUILD_LX)
             cell_fx = settled_tension(cell)
+        box.guard.check(cell.sim, "while stretching the periodised stitch")
         box.tile(cell)
         fx = relax_to_steady_tension(box)
         report(0.2 + 0.8 * (k + 1) / corrections)

@@ -8,6 +8,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -435,14 +436,25 @@ def test_quoted_text_is_not_taken_for_a_number_or_a_yes(tmp_path, field, text):
 
 
 def test_sigterm_to_cut_says_so_and_leaves_nothing(tmp_path):
-    """It exited with no message."""
+    """It exited with no message. The signal is sent once the laddering runs (a fixed sleep let a cached
+    stretch and a quick run finish first)."""
     out = tmp_path / "o"
     proc = subprocess.Popen([*KNITLAD, "cut", "--stitches", "6x8", "--lx", "0.38", "--preset", "fast", "--max-time-ms",
-                             "200", "--arrest-ms", "100", "--out", str(out)],
+                             "3000", "--arrest-ms", "3000", "--out", str(out)],
                             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(6)
+    seen = []
+    reader = threading.Thread(target=lambda: seen.extend(iter(lambda: proc.stderr.read(1), "")), daemon=True)
+    reader.start()
+    deadline = time.monotonic() + 300
+    while "propagate" not in "".join(seen) and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.2)
     proc.send_signal(signal.SIGTERM)
-    _, err = proc.communicate(timeout=60)
+    try:
+        proc.wait(timeout=60)
+    finally:
+        proc.kill()
+    reader.join(timeout=10)
+    err = "".join(seen)
     assert proc.returncode == 143, err
     assert err.strip().splitlines()[-1] == "knitlad: terminated; nothing written" and "Traceback" not in err
     assert not out.exists()
