@@ -1,12 +1,42 @@
-"""knitlad: discrete elastic rods with frictional contact, for knitted fabric."""
+"""knitlad: discrete elastic rods with frictional contact, for knitted fabric.
 
+The public surface is the names in ``__all__`` (listed with their promise in ``docs/api.md``;
+changes in ``CHANGELOG.md``). The rod engine is imported at once; the laddering experiment's
+names load on first use, so that ``import knitlad`` stays light.
+"""
+
+import importlib
+
+from knitlad.contact import ContactModel, ContactPairs, ContactStats
 from knitlad.simulation import Simulation, SimulationBlowUp, UnstableTimeStep
 from knitlad.state import RodModel, Rods, RodState, Scene
 from knitlad.units import NYLON, Material, Scales
 
-__version__ = "0.2.0"
+__version__ = "0.3.0"
+
+# the laddering experiment: name -> module that defines it (loaded on first use, PEP 562)
+_EXPERIMENT = {
+    "CutConfig": "knitlad.config",
+    "StitchConfig": "knitlad.config",
+    "LoopConfig": "knitlad.config",
+    "LADDER_PRESETS": "knitlad.presets",
+    "StretchedKnit": "knitlad.protocol",
+    "Laddering": "knitlad.protocol",
+    "LadderTrace": "knitlad.protocol",
+    "LadderResult": "knitlad.protocol",
+    "stretch": "knitlad.protocol",
+    "cut": "knitlad.protocol",
+    "propagate": "knitlad.protocol",
+    "analyse": "knitlad.protocol",
+    "run_ladder": "knitlad.protocol",
+    "read_stretched_knit": "knitlad.io.hdf5",
+    "write_stretched_knit": "knitlad.io.hdf5",
+}
 
 __all__ = [
+    "ContactModel",
+    "ContactPairs",
+    "ContactStats",
     "Material",
     "NYLON",
     "RodModel",
@@ -18,4 +48,17 @@ __all__ = [
     "SimulationBlowUp",
     "UnstableTimeStep",
     "__version__",
+    *_EXPERIMENT,
 ]
+
+
+def __getattr__(name: str):
+    if name in _EXPERIMENT:
+        value = getattr(importlib.import_module(_EXPERIMENT[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'knitlad' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPERIMENT))

@@ -8,6 +8,7 @@ gives the k_n at which a contact carrying F overlaps by 5 % of the diameter.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from enum import Enum
 from typing import NamedTuple
@@ -327,11 +328,60 @@ class ContactStats(NamedTuple):
     sliding: int  # pairs sliding (friction at the Coulomb limit)
     candidates: int  # pairs in the candidate list
 
+    def __getitem__(self, key):
+        """``stats["touching"]``: the dict of 0.1.0, deprecated in 0.2.0 (use ``stats.touching``)."""
+        if isinstance(key, str):
+            warnings.warn("contact_stats()[name] is deprecated since knitlad 0.2.0: use contact_stats().name",
+                          DeprecationWarning, stacklevel=2)
+            return getattr(self, key)
+        return tuple.__getitem__(self, key)
+
     @staticmethod
     def of(contacts: Contacts) -> "ContactStats":
         st = contacts.stats
         return ContactStats(int(st[TOUCHING]), float(st[MAX_OVERLAP] * units.LENGTH),
                             float(st[NORMAL_FORCE_SUM] * units.FORCE), int(st[SLIDING_PAIRS]), int(contacts.n_pairs[0]))
+
+
+class ContactPairs(NamedTuple):
+    """The touching pairs at the last force evaluation, one row each (SI). Forces act on the first
+    edge of the pair; the second feels their opposite."""
+
+    edges: np.ndarray  # (m, 2) edge indices
+    yarns: np.ndarray  # (m, 2) the edges' yarns (a cut yarn's pieces count as one)
+    points_m: np.ndarray  # (m, 3) contact point: midway between the two axes' closest points
+    normal_N: np.ndarray  # (m, 3) normal force on the first edge (penalty and its dashpot)
+    friction_N: np.ndarray  # (m, 3) tangential force on the first edge
+    overlap_m: np.ndarray  # (m,) d minus the axes' distance (sagitta-corrected radii)
+    sliding: np.ndarray  # (m,) bool: friction at the Coulomb limit
+
+    @staticmethod
+    def of(contacts: Contacts, x: np.ndarray, edge_a: np.ndarray, edge_b: np.ndarray,
+           edge_shift: np.ndarray) -> "ContactPairs":
+        """From the kernel's per-pair scratch (:func:`knitlad.kernels.contact.contact_forces`), internal units in."""
+        from knitlad.kernels.contact import FORCE_X, FORCE_Z, OVERLAP, S_PAIR, SLIDING, T_PAIR
+
+        n = int(contacts.n_pairs[0])
+        results, pairs = contacts.pair_results[:n], contacts.pairs[:n]
+        touching = results[:, OVERLAP] > 0.0  # separated pairs keep stale scratch: only touching rows count
+        results, pairs = results[touching], pairs[touching]
+        i, j = pairs[:, 0], pairs[:, 1]
+
+        def on_axis(edge, frac):
+            a = x[edge_a[edge]]
+            return a + frac[:, None] * (x[edge_b[edge]] + edge_shift[edge] - a)
+
+        pi, pj = on_axis(i, results[:, S_PAIR]), on_axis(j, results[:, T_PAIR])
+        gap = pi - pj
+        dist = np.linalg.norm(gap, axis=1)
+        n_hat = np.divide(gap, dist[:, None], out=np.zeros_like(gap), where=dist[:, None] > 0)
+        force = results[:, FORCE_X:FORCE_Z + 1]
+        normal = np.where(dist[:, None] > 0, np.sum(force * n_hat, axis=1)[:, None] * n_hat, force)
+        return ContactPairs(
+            edges=pairs.copy(), yarns=contacts.edge_yarn[pairs], points_m=0.5 * (pi + pj) * units.LENGTH,
+            normal_N=normal * units.FORCE, friction_N=(force - normal) * units.FORCE,
+            overlap_m=results[:, OVERLAP] * units.LENGTH, sliding=results[:, SLIDING] > 0,
+        )
 
 
 def contact_time_step(m: RodModel, model: ContactModel | None, spin: bool = False, predicted: bool = False) -> float:

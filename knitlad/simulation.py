@@ -14,7 +14,7 @@ import numba
 import numpy as np
 
 from knitlad import units
-from knitlad.contact import ContactModel, Contacts, ContactStats, contact_time_step, make_contacts
+from knitlad.contact import ContactModel, ContactPairs, Contacts, ContactStats, contact_time_step, make_contacts
 from knitlad.kernels.contact import PAIRS_NEEDED, PEAK_OVERLAP, refresh_contacts, touching_pairs_among
 from knitlad.kernels.integrate import (
     AXIAL_EXPLICIT,
@@ -187,6 +187,12 @@ class Simulation:
     def contact_stats(self) -> ContactStats:
         """At the last force evaluation: touching pairs, largest overlap [m], sum of normal forces [N], sliding pairs, candidate pairs."""
         return ContactStats.of(self.contacts)
+
+    def contact_pairs(self) -> ContactPairs:
+        """Each touching pair at the last force evaluation: edges, yarns, contact point [m], normal and
+        friction force on the first edge [N], overlap [m], sliding flag (arrays, one row per pair)."""
+        m = self.model
+        return ContactPairs.of(self.contacts, self.state.x, m.edge_a, m.edge_b, m.edge_shift)
 
     def peak_overlap_m(self, reset: bool = False) -> float:
         """Largest overlap of two yarns [m] at any step since the last reset (``reset``: start a new window)."""

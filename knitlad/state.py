@@ -191,6 +191,7 @@ class _Yarn:
     closed: bool
     period: np.ndarray  # (3,) metres, shift of the closing edge
     natural_curvature: str
+    start: np.ndarray | None = None  # (k, 3) metres: where the yarn starts, when not at its rest shape
     held: dict[int, np.ndarray] = field(default_factory=dict)  # node -> velocity (m/s)
     rails: dict[int, np.ndarray] = field(default_factory=dict)  # node -> unit axis it slides along
     image_of: tuple[int, np.ndarray] | None = None  # (master yarn, lattice shift [m]) for a periodic image
@@ -221,6 +222,7 @@ class Scene:
         closed: bool = False,
         period: Sequence[float] | None = None,
         natural_curvature: str = "straight",
+        start: np.ndarray | None = None,
     ) -> int:
         """Add a yarn through ``points`` (k, 3) [m]; returns its index.
 
@@ -228,9 +230,18 @@ class Scene:
         the closing edge goes to ``points[0] + period`` (a yarn periodised along
         ``period``). ``natural_curvature``: ``"straight"`` (rest shape straight,
         the paper's simulations) or ``"rest"`` (the given shape is force-free;
-        needs ``build(twist=True)``).
+        needs ``build(twist=True)``). ``points`` are the rest shape: they set the rest lengths
+        (and, with ``"rest"``, the rest curvatures and twists, in the rest shape's twist-free frames).
+        ``start`` (k, 3) [m]: the yarn starts there instead, strained, e.g. a straight column started
+        with an imperfection, or a ring started squeezed; with ``"straight"`` it needs no twist.
         """
         pts = np.asarray(points, dtype=float)
+        if start is not None:
+            start = np.asarray(start, dtype=float)
+            if start.shape != pts.shape:
+                raise ValueError(f"start must have the shape of points {pts.shape}, got {start.shape}")
+            if not np.all(np.isfinite(start)):
+                raise ValueError("start contains NaN or infinity")
         if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] < 2:
             raise ValueError(f"points must be a (k >= 2, 3) array, got shape {pts.shape}")
         if not np.all(np.isfinite(pts)):
@@ -245,7 +256,8 @@ class Scene:
         ends = np.vstack([pts, pts[:1] + shift]) if closed else pts
         if np.any(np.linalg.norm(np.diff(ends, axis=0), axis=1) <= 0):
             raise ValueError("two consecutive points coincide (zero-length edge)")
-        self._yarns.append(_Yarn(pts, material or self.material, closed, shift, natural_curvature))
+        self._yarns.append(_Yarn(pts, material or self.material, closed, shift, natural_curvature,
+                                 None if start is None else start.copy()))
         return len(self._yarns) - 1
 
     def _yarn(self, yarn: int) -> _Yarn:
@@ -293,7 +305,7 @@ class Scene:
         if shift.shape != (3,) or not np.any(shift):
             raise ValueError(f"shift must be a non-zero 3-vector, got {shift!r}")
         y = _Yarn(master.points + shift, master.material, master.closed, master.period.copy(),
-                  master.natural_curvature)
+                  master.natural_curvature, None if master.start is None else master.start + shift)
         y.held = {j: np.zeros(3) for j in range(master.points.shape[0])}
         y.image_of = (yarn, shift)
         self._yarns.append(y)
@@ -338,6 +350,10 @@ class Scene:
         model = RodModel(**topology, **parameters, **self._constraints(yarn_start, topology["edge_a"].shape[0]))
         frames = _initial_frames(x, model, twist, [y.natural_curvature == "rest" for y in self._yarns])
         kappa_bar, twist_bar, state = frames
+        if any(y.start is not None for y in self._yarns):
+            # the rest shape gave lengths and curvatures; the yarns start elsewhere, in their own frames
+            x0 = np.vstack([y.points if y.start is None else y.start for y in self._yarns]) / units.LENGTH
+            state = _initial_frames(x0, model, twist, [False] * len(self._yarns))[2]
         return Rods(model._replace(kappa_bar=kappa_bar, twist_bar=twist_bar), state, bool(twist))
 
     def _topology(self, yarn_start: np.ndarray) -> dict:

@@ -28,7 +28,8 @@ tension per thread f_x = F_x / (n_y f0), lengths as l/l0, velocities as v/c_b.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+import warnings
+from dataclasses import dataclass, field, replace
 
 # --- conversion factors: multiply an SI value by TO_INTERNAL to get internal units
 LENGTH = 1e-3  # m per internal length unit
@@ -128,6 +129,13 @@ class Material:
     def t_b(self) -> float:
         """Bending time l0 / c_b [s]."""
         return self.stitch_length / self.c_b
+
+    def with_(self, **changes: float) -> "Material":
+        """A copy with some fields changed: removed in 0.2.0 without notice, back as a deprecated alias of
+        ``dataclasses.replace(material, ...)`` until 0.4.0."""
+        warnings.warn("Material.with_ is deprecated since knitlad 0.2.0: use dataclasses.replace(material, ...)",
+                      DeprecationWarning, stacklevel=2)
+        return replace(self, **changes)
 
 
 NYLON = Material()

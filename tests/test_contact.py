@@ -310,3 +310,44 @@ def test_the_two_ends_of_a_cut_do_not_push_each_other_apart():
     sim = Simulation(apart.build(), contact=ContactModel.for_knit(kl.NYLON))
     sim.compute_forces()
     assert sim.contact_stats().touching == 1
+
+
+def test_per_contact_read_out_carries_each_crossing_and_sums_to_the_totals():
+    """Simulation.contact_pairs: one row per touching crossing of the pressed weave, normal forces
+    summing to the kernel's total, no friction at rest, the point midway between the two axes."""
+    sim = kl.Simulation(pressed_weave(), contact=ContactModel(stiffness=1e3))
+    pairs, stats = sim.contact_pairs(), sim.contact_stats()
+    assert len(pairs.edges) == stats.touching >= 16
+    assert np.all(pairs.yarns[:, 0] != pairs.yarns[:, 1])  # crossings of warp and weft only
+    assert np.linalg.norm(pairs.normal_N, axis=1).sum() == pytest.approx(stats.normal_force_sum_N, rel=1e-12)
+    np.testing.assert_allclose(pairs.friction_N, 0.0, atol=1e-15)
+    assert np.all(pairs.overlap_m == pytest.approx(0.2 * D, rel=0.05)) and not pairs.sliding.any()
+    # the contact point sits at half the axes' distance, (d - overlap) / 2, from each yarn's centreline
+    x = sim.positions_m()
+    for k, (point, edges) in enumerate(zip(pairs.points_m, pairs.edges)):
+        for e in edges:
+            a, b = x[sim.model.edge_a[e]], x[sim.model.edge_b[e]]
+            s = np.clip(np.dot(point - a, b - a) / np.dot(b - a, b - a), 0, 1)
+            assert np.linalg.norm(point - a - s * (b - a)) == pytest.approx(0.5 * (D - pairs.overlap_m[k]), rel=1e-6)
+
+
+def test_per_contact_friction_is_at_the_coulomb_limit_where_a_pair_slides():
+    """A straight yarn dragged at 1 m/s across two others, all held rigid, pressed 0.2 d into them:
+    the sliding rows carry mu |f_n| of friction, tangential to the normal; no row carries more."""
+    mu = 0.4
+    scene = kl.Scene(kl.NYLON)
+    t = np.linspace(-10 * D, 10 * D, 21)
+    dragged = scene.add_yarn(np.column_stack([t, np.zeros_like(t), np.full_like(t, 0.8 * D)]))
+    scene.hold(dragged, range(t.size), velocity=(1.0, 0.0, 0.0))
+    for x0 in (-3 * D, 3 * D):
+        crossed = scene.add_yarn(np.column_stack([np.full_like(t, x0), t, np.zeros_like(t)]))
+        scene.hold(crossed, range(t.size))
+    sim = kl.Simulation(scene.build(), contact=ContactModel(stiffness=1e3, friction=mu), dt_s=1e-6)
+    sim.step(100)  # 100 um of drag (all held: no stability limit), beyond the tangential spring's stick length
+    pairs = sim.contact_pairs()
+    fn, ft = np.linalg.norm(pairs.normal_N, axis=1), np.linalg.norm(pairs.friction_N, axis=1)
+    assert pairs.sliding.any() and np.all(fn > 0)
+    np.testing.assert_allclose(ft[pairs.sliding], mu * fn[pairs.sliding], rtol=1e-6)
+    assert np.all(ft <= mu * fn * (1 + 1e-9))
+    assert np.all(np.abs(np.sum(pairs.friction_N * pairs.normal_N, axis=1)) <= 1e-9 * fn * fn)
+    assert np.all(pairs.friction_N[pairs.sliding, 0] < 0)  # friction on the dragged yarn opposes its motion

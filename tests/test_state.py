@@ -120,3 +120,33 @@ def test_frame_anchors_are_the_yarn_starts_and_the_cut_ends_and_need_hinges_in_o
     m = rods.model
     with pytest.raises(ValueError, match="not stored in order"):
         frame_anchors(m._replace(hinge_e0=m.hinge_e0[::-1].copy(), hinge_e1=m.hinge_e1[::-1].copy()))
+
+
+def test_a_yarn_straight_at_rest_can_start_crooked_without_twist():
+    """add_yarn(rest, start=...): a 20 mm column straight at rest, started as a half sine of amplitude a.
+    Its rest length is the straight one, its bending energy the continuum's B a^2 pi^4 / (4 L^3) (1 % at
+    100 edges), and released with free ends it relaxes back to a straight rod of length L."""
+    import knitlad as kl
+
+    L, n, a = 0.02, 101, 2e-4
+    s = np.linspace(0.0, L, n)
+    rest = np.column_stack([s, 0 * s, 0 * s])
+    scene = kl.Scene(kl.NYLON)
+    scene.add_yarn(rest, start=np.column_stack([s, a * np.sin(np.pi * s / L), 0 * s]))
+    rods = scene.build()
+    assert not rods.twist
+    assert rods.model.rest_length.sum() * kl.units.LENGTH == pytest.approx(L, rel=1e-12)
+    sim = kl.Simulation(rods)
+    bending = kl.NYLON.bending_stiffness * a**2 * np.pi**4 / (4 * L**3)
+    assert sim.energies_J()["bending"] == pytest.approx(bending, rel=0.01)
+    assert sim.relax(force_tol_N=1e-10)["converged"]
+    x = sim.positions_m()
+    off_line = np.linalg.svd(x - x.mean(axis=0), compute_uv=False)[1] / np.sqrt(n)
+    assert off_line < 1e-4 * a and np.linalg.norm(x[-1] - x[0]) == pytest.approx(L, rel=1e-6)
+
+
+def test_a_start_shape_must_match_the_rest_shape():
+    import knitlad as kl
+
+    with pytest.raises(ValueError, match="start must have the shape of points"):
+        kl.Scene(kl.NYLON).add_yarn(np.zeros((3, 3)) + np.arange(3)[:, None], start=np.zeros((4, 3)))

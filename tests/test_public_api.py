@@ -1,0 +1,117 @@
+"""The public surface (``knitlad.__all__``) is recorded in docs/api_surface.txt: a name may not
+disappear unless CHANGELOG.md says so, a new name is recorded, and the versions agree.
+
+After a deliberate change: ``python -m tests.test_public_api --write``, then a CHANGELOG.md entry.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import inspect
+import re
+import sys
+import tomllib
+import warnings
+from pathlib import Path
+
+import pytest
+
+import knitlad
+
+ROOT = Path(__file__).resolve().parents[1]
+RECORD = ROOT / "docs" / "api_surface.txt"
+CHANGELOG = ROOT / "CHANGELOG.md"
+
+
+def _parameters(obj) -> str:
+    try:
+        return "(" + ", ".join(p for p in inspect.signature(obj).parameters if p not in ("self", "cls")) + ")"
+    except (TypeError, ValueError):
+        return ""
+
+
+def _members(cls) -> list[str]:
+    """A class's public members: pydantic fields, dataclass fields, named-tuple fields, methods, properties."""
+    names = set(getattr(cls, "model_fields", {}))
+    if dataclasses.is_dataclass(cls):
+        names |= {f.name for f in dataclasses.fields(cls)}
+    names |= set(getattr(cls, "_fields", ()))
+    for klass in cls.__mro__:
+        if klass.__module__.startswith("knitlad"):
+            names |= {n for n in vars(klass) if not n.startswith("_")}
+    out = []
+    for n in sorted(names):
+        member = inspect.getattr_static(cls, n, None)
+        if isinstance(member, (staticmethod, classmethod)):
+            member = member.__func__
+        out.append(f"{n}{_parameters(member)}" if inspect.isfunction(member) else n)
+    return out
+
+
+def public_surface() -> list[str]:
+    """Every public name as a line: ``knitlad.Name``, ``knitlad.func(params)``, ``knitlad.Class.member``."""
+    lines = []
+    for name in sorted(knitlad.__all__):
+        obj = getattr(knitlad, name)
+        if inspect.isclass(obj):
+            lines.append(f"knitlad.{name}{_parameters(obj) if not issubclass(obj, BaseException) else ''}")
+            lines += [f"knitlad.{name}.{m}" for m in _members(obj)]
+        elif inspect.isfunction(obj):
+            lines.append(f"knitlad.{name}{_parameters(obj)}")
+        else:
+            lines.append(f"knitlad.{name}")
+    return lines
+
+
+def _recorded() -> list[str]:
+    return [ln.strip() for ln in RECORD.read_text().splitlines() if ln.strip() and not ln.startswith("#")]
+
+
+def _name(line: str) -> str:
+    return line.split("(")[0]
+
+
+def test_no_public_name_disappears_without_a_changelog_entry():
+    now = {_name(ln) for ln in public_surface()}
+    changelog = CHANGELOG.read_text()
+    gone = [_name(ln) for ln in _recorded() if _name(ln) not in now
+            and f"`{_name(ln).removeprefix('knitlad.')}`" not in changelog]
+    assert not gone, f"public names gone without a CHANGELOG.md entry (`Name` under the new version): {gone}"
+
+
+def test_every_public_name_and_signature_is_recorded():
+    missing = sorted(set(public_surface()) - set(_recorded()))
+    assert not missing, (f"public names or signatures not in {RECORD.name}: {missing}; record them with "
+                         "`python -m tests.test_public_api --write` and say so in CHANGELOG.md")
+
+
+def test_the_versions_agree():
+    """The package, pyproject.toml and the newest CHANGELOG.md entry name one version."""
+    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+    newest = re.search(r"^## (\d+\.\d+\.\d+) \(\d{4}-\d{2}-\d{2}\)", CHANGELOG.read_text(), re.M)
+    assert newest, "CHANGELOG.md has no '## X.Y.Z (YYYY-MM-DD)' entry"
+    assert knitlad.__version__ == pyproject == newest.group(1)
+
+
+def test_deprecated_names_still_work_and_warn():
+    with pytest.warns(DeprecationWarning, match="dataclasses.replace"):
+        m = knitlad.NYLON.with_(diameter=1e-4)
+    assert m.diameter == 1e-4 and m.young_modulus == knitlad.NYLON.young_modulus
+    stats = knitlad.ContactStats(3, 1e-6, 0.5, 1, 9)
+    with pytest.warns(DeprecationWarning, match="contact_stats\\(\\).name"):
+        assert stats["touching"] == 3 and stats["candidates"] == 9
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert stats[0] == 3 and stats.sliding == 1  # the named tuple's own access does not warn
+
+
+def test_the_experiment_names_load_lazily_and_unknown_names_fail():
+    assert knitlad.cut is __import__("knitlad.protocol", fromlist=["cut"]).cut
+    with pytest.raises(AttributeError, match="no attribute 'cutt'"):
+        knitlad.cutt  # noqa: B018
+
+
+if __name__ == "__main__" and "--write" in sys.argv:
+    RECORD.write_text("# knitlad's public surface (tests/test_public_api.py): names, and parameters of callables\n"
+                      + "\n".join(public_surface()) + "\n")
+    print(f"wrote {RECORD}")
