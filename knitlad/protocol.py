@@ -44,6 +44,7 @@ from knitlad.observers import (
     EdgeReached,
     FrameRecorder,
     FrontRecorder,
+    Interpenetration,
     Observer,
     OverlapGuard,
     TOP_ROWS_HELD,
@@ -411,8 +412,7 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
             target = s.fx_target
             force_control(cell, target, 0.25 * s.fx_tolerance, s.stretch_increment, MIN_BUILD_LX)
         cell_fx = settled_tension(cell)
-    # soft contact lets the stitch's loops pass through each other: say so, not that the knit came apart
-    box.guard.check(cell.sim, "while stretching the periodised stitch")
+    check_stitch_held(box, cell)
     report(0.2)
     box.tile(cell)
     fx = relax_to_steady_tension(box)
@@ -425,12 +425,30 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
         with numba_threads(1):
             force_control(cell, target * cell_fx / fx, 0.25 * s.fx_tolerance, s.stretch_increment, MIN_BUILD_LX)
             cell_fx = settled_tension(cell)
-        box.guard.check(cell.sim, "while stretching the periodised stitch")
+        check_stitch_held(box, cell)
         box.tile(cell)
         fx = relax_to_steady_tension(box)
         report(0.2 + 0.8 * (k + 1) / corrections)
     report(1.0)
     return fx, bool(abs(fx - target) <= s.fx_tolerance * target)
+
+
+class StitchPassedThrough(KnitCameApart, Interpenetration):
+    """The periodised stitch's yarns passed through each other while it was stretched: stretched too far,
+    or on a contact too soft for the tension (either cause; one error for both handlers)."""
+
+
+def check_stitch_held(box: KnitBox, cell: StitchRun) -> None:
+    """Stop when the stitch's yarns overlapped past the guard's limit while it was stretched: its loops
+    went through each other, and a knit tiled from it would read as one that came apart."""
+    try:
+        box.guard.check(cell.sim, "while stretching the periodised stitch")
+    except Interpenetration:
+        g = box.guard
+        raise StitchPassedThrough(
+            f"yarns overlap by {g.peak_over_d:.2f} d while stretching the periodised stitch (limit {g.limit} d): its "
+            "loops passed through each other and the knit came apart; stretch it less, or, if the contact is too "
+            "soft for this tension, raise contact_force_f0") from None
 
 
 @functools.lru_cache(maxsize=16)

@@ -7,6 +7,7 @@ arguments speak SI; the state itself is in internal units (:mod:`knitlad.units`)
 from __future__ import annotations
 
 import math
+import time
 from contextlib import contextmanager
 from typing import Callable
 
@@ -15,7 +16,7 @@ import numpy as np
 
 from knitlad import units
 from knitlad.contact import ContactModel, ContactPairs, Contacts, ContactStats, contact_time_step, make_contacts
-from knitlad.kernels.contact import PAIRS_NEEDED, PEAK_OVERLAP, refresh_contacts, touching_pairs_among
+from knitlad.kernels.contact import PAIRS_NEEDED, PEAK_OVERLAP, STALE, refresh_contacts, touching_pairs_among
 from knitlad.kernels.integrate import (
     AXIAL_EXPLICIT,
     AXIAL_IMPLICIT,
@@ -56,6 +57,51 @@ def numba_threads(n: int):
         yield
     finally:
         numba.set_num_threads(before)
+
+
+class ThreadGovernor:
+    """Chooses, as a run goes, between the Numba threads it was given and one thread: whichever steps faster.
+
+    A parallel step meets its threads at barriers several times; when another process holds
+    one of two cores, each barrier waits for a descheduled thread and a 16 x 16 run went from
+    5.45 s to 48 s (2026-12-03). The governor times every chunk of steps and, now and then, a
+    probe chunk at the other count; it keeps the faster, and probes more rarely each time the
+    choice holds (every 8 chunks at first, then 16, ... up to 256). Results do not change: every
+    kernel gives the same bits on any number of threads (the contact pairs are evaluated in blocks
+    fixed when the buffers are made, and summed in pair order), and a probe is a whole chunk, so
+    the chunks (whose fused half-kicks round differently from two halves) fall where they would.
+    """
+
+    FIRST_INTERVAL, LAST_INTERVAL = 8, 256
+
+    def __init__(self) -> None:
+        self.seconds_per_step: dict[int, float] = {}
+        self.current: int | None = None
+        self.interval = self.FIRST_INTERVAL
+        self.until_probe = self.FIRST_INTERVAL
+
+    def plan(self, allowed: int) -> int:
+        """The number of threads for the next chunk, ``allowed`` at most."""
+        if allowed <= 1:
+            return 1
+        if self.current is None or self.current > allowed:
+            self.current = allowed
+        if self.until_probe > 0 or not self.seconds_per_step:
+            return self.current
+        return 1 if self.current > 1 else allowed
+
+    def record(self, threads: int, steps: int, seconds: float) -> None:
+        if steps <= 0:
+            return
+        self.seconds_per_step[threads] = seconds / steps
+        if self.current is None or threads == self.current:  # a chunk at the chosen count, not a probe
+            self.until_probe -= 1
+            return
+        if self.seconds_per_step[threads] < 0.9 * self.seconds_per_step[self.current]:
+            self.current, self.interval = threads, self.FIRST_INTERVAL
+        else:
+            self.interval = min(2 * self.interval, self.LAST_INTERVAL)
+        self.until_probe = self.interval
 
 
 def axial_wave_speed(m) -> float:
@@ -119,6 +165,7 @@ class Simulation:
         self.guard_every = int(guard_every)
         self.steps = 0
         self.time = 0.0  # internal ms
+        self.threads = ThreadGovernor()
         self.max_speed = axial_wave_speed(self.model)
         self.compute_forces()
 
@@ -169,6 +216,57 @@ class Simulation:
     def replace_model(self, **arrays) -> None:
         """Replace model arrays of the same shapes (e.g. a periodic cell's shifts) from the next step on."""
         self.rods = self.rods.replace_model(**arrays)
+
+    # ------------------------------------------------------------------ constraints during a run
+    def _nodes(self, nodes) -> np.ndarray:
+        idx = np.atleast_1d(np.asarray(nodes, dtype=np.int64))
+        n = self.model.n_nodes
+        if idx.size and (idx.min() < -n or idx.max() >= n):
+            raise IndexError(f"node out of range for a scene of {n} nodes")
+        return idx % n
+
+    def nodes_of(self, yarn: int, nodes=None) -> np.ndarray:
+        """Global indices of ``nodes`` of ``yarn`` (all of them by default; negative counts from its end)."""
+        start, stop = int(self.model.yarn_start[yarn]), int(self.model.yarn_start[yarn + 1])
+        local = np.arange(stop - start) if nodes is None else np.atleast_1d(np.asarray(nodes, dtype=np.int64))
+        if local.size and (local.min() < start - stop or local.max() >= stop - start):
+            raise IndexError(f"node out of range for yarn {yarn} of {stop - start} nodes")
+        return start + local % (stop - start)
+
+    def hold(self, nodes, velocity_m_s=(0.0, 0.0, 0.0)) -> None:
+        """Hold ``nodes`` (global indices, :meth:`nodes_of`) from the next step on, moving at ``velocity_m_s``
+        (one 3-vector, or one per node); held nodes already held get the new velocity."""
+        idx = self._nodes(nodes)
+        v = np.broadcast_to(np.asarray(velocity_m_s, dtype=float) / units.VELOCITY, (idx.size, 3))
+        held, v_prescribed = self.model.held.copy(), self.model.v_prescribed.copy()
+        held[idx], v_prescribed[idx] = True, v
+        self.replace_model(held=held, v_prescribed=v_prescribed)
+        self.state.v[idx] = v
+
+    def release(self, nodes) -> None:
+        """Let ``nodes`` go from the next step on: they keep their prescribed velocity as their own."""
+        idx = self._nodes(nodes)
+        held, v_prescribed = self.model.held.copy(), self.model.v_prescribed.copy()
+        held[idx] = False
+        v_prescribed[idx] = 0.0
+        self.replace_model(held=held, v_prescribed=v_prescribed)
+
+    def move_held(self, nodes, to_m=None, by_m=None) -> None:
+        """Put held ``nodes`` at positions ``to_m`` [m] or shift them by ``by_m`` [m] (one 3-vector or one
+        per node), for displacement-controlled statics: move, then :meth:`relax`. The forces of the old
+        positions stay until the next evaluation (a step or a relaxation), as a jump in a real test would;
+        the contact list is rebuilt at the next evaluation."""
+        idx = self._nodes(nodes)
+        if (to_m is None) == (by_m is None):
+            raise ValueError("give exactly one of to_m and by_m")
+        if not self.model.held[idx].all():
+            raise ValueError("move_held moves held nodes only: hold() them first")
+        x = self.state.x
+        if to_m is not None:
+            x[idx] = np.broadcast_to(np.asarray(to_m, dtype=float) / units.LENGTH, (idx.size, 3))
+        else:
+            x[idx] += np.broadcast_to(np.asarray(by_m, dtype=float) / units.LENGTH, (idx.size, 3))
+        self.contacts.status[STALE] = 1
 
     def set_external_forces(self, forces_N) -> None:
         """Replace the constant external forces [N], (n, 3) or one 3-vector for all, from now on (a new model).
@@ -240,10 +338,18 @@ class Simulation:
     def step(self, n_steps: int = 1) -> None:
         """Advance ``n_steps`` steps, checking for blow-up every ``guard_every``."""
         left = int(n_steps)
+        allowed = numba.get_num_threads()
         while left > 0:
             chunk = min(left, self.guard_every)
-            done = verlet_steps(self.model, self.state, self.work, self.contacts, self.dt, chunk, self.twist_mode,
-                                self.has_contact, self.drag, self.axial_mode, self.dashpot_mode)
+            threads = self.threads.plan(allowed)
+            numba.set_num_threads(threads)
+            t0 = time.perf_counter()
+            try:
+                done = verlet_steps(self.model, self.state, self.work, self.contacts, self.dt, chunk, self.twist_mode,
+                                    self.has_contact, self.drag, self.axial_mode, self.dashpot_mode)
+            finally:
+                numba.set_num_threads(allowed)
+            self.threads.record(threads, done, time.perf_counter() - t0)
             if done < chunk:
                 # the contact buffer overflowed inside step `done`: grow it and close that step
                 self.compute_forces(predicted=True)

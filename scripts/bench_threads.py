@@ -6,7 +6,7 @@ on a quiet machine and with a second process busy on one core.
 
 Each measurement is a fresh process (a threading layer is chosen once per process): it
 reads a stretched knit (made once, kept in --knit), cuts it, steps 500 steps to warm up,
-then times --steps steps. "loaded" runs a pure-Python busy loop beside it for the whole
+then times --steps steps, with the thread governor of ``Simulation.step`` on or off. "loaded" runs a pure-Python busy loop beside it for the whole
 measurement, the way a second run or a browser takes a core. Prints the median node-steps/s
 of --repeats measurements and each one's ratio to one thread of the same layer alone.
 """
@@ -31,6 +31,8 @@ from knitlad.protocol import cut
 knit = read_stretched_knit(sys.argv[1])
 cfg = CutConfig(n_x=knit.settings.n_x, n_y=knit.settings.n_y, fx=4.0, preset=sys.argv[2])
 run = cut(knit, cfg.dynamics_settings())
+if sys.argv[4] == "off":  # the thread governor never probes: the count given is the count used
+    run.sim.threads.until_probe = 10**12
 run.sim.step(500)
 t = time.perf_counter()
 run.sim.step(int(sys.argv[3]))
@@ -52,14 +54,14 @@ def make_knit(path: Path, stitches: int, preset: str) -> None:
         write_stretched_knit(path, stretch(cfg.stretch_settings()))
 
 
-def measure(knit: Path, preset: str, steps: int, layer: str, threads: int, loaded: bool) -> float:
+def measure(knit: Path, preset: str, steps: int, layer: str, threads: int, loaded: bool, governor: str) -> float:
     name, _, policy = layer.partition("+")  # omp+passive: OpenMP's threads sleep at barriers instead of spinning
     env = {**os.environ, "NUMBA_THREADING_LAYER": name, "NUMBA_NUM_THREADS": str(threads)}
     if policy:
         env["OMP_WAIT_POLICY"] = policy.upper()
     busy = subprocess.Popen([sys.executable, "-c", BUSY]) if loaded else None
     try:
-        out = subprocess.run([sys.executable, "-c", WORKER, str(knit), preset, str(steps)], env=env, check=True,
+        out = subprocess.run([sys.executable, "-c", WORKER, str(knit), preset, str(steps), governor], env=env, check=True,
                              capture_output=True, text=True)
     finally:
         if busy:
@@ -77,25 +79,29 @@ def main() -> None:
                    help="Numba threading layers; omp+passive sets OMP_WAIT_POLICY=PASSIVE")
     p.add_argument("--threads", nargs="+", type=int, default=[1, 2])
     p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--governor", nargs="+", default=["off", "on"], choices=["off", "on"],
+                   help="the thread governor of Simulation.step (off: the given count throughout)")
     p.add_argument("--knit", type=Path, default=Path("runs/bench/knit{n}_{preset}.h5"))
     args = p.parse_args()
     knit = Path(str(args.knit).format(n=args.stitches, preset=args.preset))
     make_knit(knit, args.stitches, args.preset)
     print(f"{time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores, {args.stitches} x {args.stitches}, preset "
           f"{args.preset}, {args.steps} steps; node-steps/s, median of {args.repeats}")
-    print("| layer | threads | quiet | loaded | loaded / quiet | / 1 thread quiet |")
-    print("|---|---|---|---|---|---|")
+    print("| layer | threads | governor | quiet | loaded | loaded / quiet | loaded / 1 thread quiet |")
+    print("|---|---|---|---|---|---|---|")
     for layer in args.layers:
         one = None
         for threads in args.threads:
-            rates = {}
-            for loaded in (False, True):
-                rates[loaded] = statistics.median(measure(knit, args.preset, args.steps, layer, threads, loaded)
-                                                  for _ in range(args.repeats))
-            one = one or (rates[False] if threads == 1 else None)
-            base = f"{rates[True] / one:.2f}" if one else "-"
-            print(f"| {layer} | {threads} | {rates[False]:.3e} | {rates[True]:.3e} | "
-                  f"{rates[True] / rates[False]:.2f} | {base} |", flush=True)
+            for governor in (args.governor if threads > 1 else ["off"]):
+                rates = {}
+                for loaded in (False, True):
+                    rates[loaded] = statistics.median(
+                        measure(knit, args.preset, args.steps, layer, threads, loaded, governor)
+                        for _ in range(args.repeats))
+                one = one or (rates[False] if threads == 1 else None)
+                base = f"{rates[True] / one:.2f}" if one else "-"
+                print(f"| {layer} | {threads} | {governor} | {rates[False]:.3e} | {rates[True]:.3e} | "
+                      f"{rates[True] / rates[False]:.2f} | {base} |", flush=True)
 
 
 if __name__ == "__main__":

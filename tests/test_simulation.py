@@ -173,3 +173,85 @@ def test_a_twisting_yarn_straight_at_rest_hands_back_complete_frames():
     update_reference_twist(st.tangent, st.ref_u, m.hinge_e0, m.hinge_e1, twist)
     assert np.abs(st.ref_twist).max() > 1e-3
     np.testing.assert_allclose(twist, st.ref_twist, rtol=0, atol=1e-12)
+
+
+def _bar(n: int = 11, length: float = 0.01):
+    s = np.linspace(0.0, length, n)
+    scene = kl.Scene(kl.NYLON)
+    scene.add_yarn(np.column_stack([s, 0 * s, 0 * s]))
+    return kl.Simulation(scene.build(), drag_per_s=0.0)
+
+
+def test_displacement_control_moves_held_ends_between_relaxations_and_reads_ea_strain():
+    """A 10 mm bar held at both ends, its end moved 1 um at a time: after each relaxation the support
+    reaction is EA dL / L (springs in series are linear), and the free nodes sit evenly."""
+    sim = _bar()
+    ends = np.concatenate([sim.nodes_of(0, [0]), sim.nodes_of(0, [-1])])
+    sim.hold(ends)
+    ea = kl.NYLON.stretching_stiffness
+    for k in range(1, 4):
+        sim.move_held(ends[1], by_m=(1e-6, 0.0, 0.0))
+        assert sim.relax(force_tol_N=1e-12)["converged"]
+        assert sim.reaction_forces_N()[ends[0], 0] == pytest.approx(-ea * k * 1e-6 / 0.01, rel=1e-6)
+        np.testing.assert_allclose(np.diff(sim.positions_m()[:, 0]), (0.01 + k * 1e-6) / 10, rtol=1e-9)
+    sim.move_held(ends[1], to_m=(0.01, 0.0, 0.0))  # back to the rest length
+    assert sim.relax(force_tol_N=1e-12)["converged"]
+    assert abs(sim.reaction_forces_N()[ends[0], 0]) < 1e-9
+
+
+def test_held_nodes_change_velocity_and_are_released_mid_run():
+    sim = _bar()
+    end = sim.nodes_of(0, [-1])
+    sim.hold(end, velocity_m_s=(0.0, 0.0, 0.0))
+    sim.step(100)
+    x0, t0 = sim.positions_m()[end[0]].copy(), sim.time_s
+    sim.hold(end, velocity_m_s=(0.0, 0.0, 2e-3))  # a new velocity for a held node
+    sim.step(200)
+    assert sim.positions_m()[end[0], 2] - x0[2] == pytest.approx(2e-3 * (sim.time_s - t0), rel=1e-9)
+    sim.release(end)
+    assert not sim.model.held[end].any()
+    z = sim.positions_m()[end[0], 2]
+    sim.step(200)
+    assert sim.positions_m()[end[0], 2] != pytest.approx(z + 2e-3 * 200 * sim.dt_s, rel=1e-3)  # no longer prescribed
+    with pytest.raises(ValueError, match="held nodes only"):
+        sim.move_held(end, by_m=(0, 0, 1e-6))
+    with pytest.raises(IndexError, match="out of range"):
+        sim.nodes_of(0, [11])
+
+
+def test_the_thread_governor_keeps_the_faster_count_and_probes_ever_more_rarely():
+    from knitlad.simulation import ThreadGovernor
+
+    g = ThreadGovernor()
+    assert g.plan(1) == 1  # one thread allowed: nothing to choose
+    seen = []
+    for _ in range(40):  # two threads ten times slower than one (a loaded machine)
+        threads = g.plan(2)
+        seen.append(threads)
+        g.record(threads, 500, 500 * (1e-3 if threads == 2 else 1e-4))
+    assert seen[:8] == [2] * 8 and seen[8] == 1 and set(seen[9:]) == {1, 2} and g.current == 1
+    assert seen[9:].count(2) <= 3  # the probes back at two threads thin out
+    g = ThreadGovernor()
+    for _ in range(2000):  # two threads twice as fast: kept, probed at 8, 16, ... 256 chunks
+        threads = g.plan(2)
+        g.record(threads, 500, 500 * (5e-4 if threads == 1 else 2.5e-4))
+    assert g.current == 2 and g.interval == ThreadGovernor.LAST_INTERVAL
+
+
+def test_switching_thread_counts_mid_run_changes_no_bit():
+    """The governor may change the count every chunk: the positions are those of a one-thread run."""
+    from knitlad.contact import ContactModel
+    from knitlad.scenes.weave import plain_weave
+    from knitlad.simulation import numba_threads
+
+    def run(threads: int, probe_often: bool):
+        rods = plain_weave(4, spacing=4 * kl.NYLON.diameter, nodes_per_spacing=6,
+                           amplitude=0.4 * kl.NYLON.diameter).build()
+        sim = kl.Simulation(rods, contact=ContactModel(stiffness=1e3, friction=0.4), guard_every=50)
+        if probe_often:
+            sim.threads.FIRST_INTERVAL = sim.threads.until_probe = sim.threads.LAST_INTERVAL = 1
+        with numba_threads(threads):
+            sim.step(1500)
+        return sim.state.x.copy()
+
+    np.testing.assert_array_equal(run(2, probe_often=True), run(1, probe_often=False))
