@@ -66,13 +66,14 @@ class ThreadGovernor:
     one of two cores, each barrier waits for a descheduled thread and a 16 x 16 run went from
     5.45 s to 48 s (2026-12-03). The governor times every chunk of steps and, now and then, a
     probe chunk at the other count; it keeps the faster, and probes more rarely each time the
-    choice holds (every 8 chunks at first, then 16, ... up to 256). Results do not change: every
+    choice holds (after 2 chunks at first, then 4, 8, ... up to 256, and at least 20 times as many
+    chunks as the probe was slower, so that probing costs 5 % at most). Results do not change: every
     kernel gives the same bits on any number of threads (the contact pairs are evaluated in blocks
     fixed when the buffers are made, and summed in pair order), and a probe is a whole chunk, so
     the chunks (whose fused half-kicks round differently from two halves) fall where they would.
     """
 
-    FIRST_INTERVAL, LAST_INTERVAL = 8, 256
+    FIRST_INTERVAL, LAST_INTERVAL = 2, 256
 
     def __init__(self) -> None:
         self.seconds_per_step: dict[int, float] = {}
@@ -97,10 +98,11 @@ class ThreadGovernor:
         if self.current is None or threads == self.current:  # a chunk at the chosen count, not a probe
             self.until_probe -= 1
             return
-        if self.seconds_per_step[threads] < 0.9 * self.seconds_per_step[self.current]:
+        ratio = self.seconds_per_step[threads] / self.seconds_per_step[self.current]
+        if ratio < 0.9:
             self.current, self.interval = threads, self.FIRST_INTERVAL
-        else:
-            self.interval = min(2 * self.interval, self.LAST_INTERVAL)
+        else:  # a probe r times slower costs r chunks: wait 20 r chunks for the next (5 % at most)
+            self.interval = min(max(2 * self.interval, math.ceil(20 * ratio)), self.LAST_INTERVAL)
         self.until_probe = self.interval
 
 
