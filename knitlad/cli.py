@@ -19,6 +19,7 @@ import typing
 from pathlib import Path
 
 import typer
+from rich.markup import escape as rich_escape
 
 from knitlad import config as _config
 from knitlad.config import cli_option, one_line
@@ -26,7 +27,7 @@ from knitlad.config import cli_option, one_line
 app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
-    rich_markup_mode=None,  # help texts carry units in [brackets]: no markup
+    rich_markup_mode="rich",
     no_args_is_help=True,
     help="knitlad: discrete elastic rods with frictional contact, for the laddering of knitted fabric.",
 )
@@ -129,6 +130,20 @@ def _option_type(annotation):
     return annotation
 
 
+# the help's option groups: what the experiment is, how long and how it is recorded, and the rest (the model
+# and its numerics), so that a first reader finds the few settings of the physics first
+EXPERIMENT_PANEL, OUTPUT_PANEL, MODEL_PANEL = "The experiment", "Run length and output", "Model and numerics"
+EXPERIMENT_FIELDS = ("preset", "fx", "lx", "ly", "mu", "natural_curvature", "geometry", "columns")
+OUTPUT_FIELDS = ("max_time_ms", "arrest_ms", "observe_every_us", "frame_every_us")
+
+
+def option_panel(field: str) -> str:
+    """The help group of a config field."""
+    if field in EXPERIMENT_FIELDS:
+        return EXPERIMENT_PANEL
+    return OUTPUT_PANEL if field in OUTPUT_FIELDS else MODEL_PANEL
+
+
 def config_options(model, exclude: tuple[str, ...] = ()):
     """Give a command one option per field of the pydantic config ``model`` (its default, unit and
     description are the field's: declared once, in :mod:`knitlad.config`).
@@ -145,10 +160,12 @@ def config_options(model, exclude: tuple[str, ...] = ()):
                 continue
             flag = cli_option(model, name)
             typ = _option_type(f.annotation)
-            help_text = f.description + (f" [default: {f.default}]" if f.default is not None else "")
+            # units and defaults are in [brackets], which rich reads as markup unless escaped
+            help_text = rich_escape(f.description + (f" [default: {f.default}]" if f.default is not None else ""))
             decls = [f"{flag}/--no-{flag[2:]}"] if typ is bool else [flag]
             derived.append(inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, annotation=typing.Optional[typ],
-                                             default=typer.Option(None, *decls, help=help_text, show_default=False)))
+                                             default=typer.Option(None, *decls, help=help_text, show_default=False,
+                                                                 rich_help_panel=option_panel(name))))
 
         @functools.wraps(func)
         def command(**kwargs):
@@ -181,10 +198,14 @@ def validated(model, options: dict, names: dict | None = None):
 @app.command()
 @config_options(_config.CutConfig, exclude=("n_x", "n_y"))
 def cut(
-    stitches: str = typer.Option("42", "--stitches", help="Fabric size: N (N x N) or NXxNY."),
-    out: str = typer.Option(None, "--out", help="Output folder (HDF5 + PNG); default runs/cut-<time>."),
-    json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace the earlier run in --out (its files, renders "
+    stitches: str = typer.Option("42", "--stitches", help="Fabric size: N (N x N) or NXxNY.",
+                                 rich_help_panel=EXPERIMENT_PANEL),
+    out: str = typer.Option(None, "--out", help="Output folder (HDF5 + PNG); default runs/cut-<time>.",
+                            rich_help_panel=OUTPUT_PANEL),
+    json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object.",
+                                  rich_help_panel=OUTPUT_PANEL),
+    overwrite: bool = typer.Option(False, "--overwrite", rich_help_panel=OUTPUT_PANEL,
+                                   help="Replace the earlier run in --out (its files, renders "
                                    "and movies are removed once this run is written)."),
     options: dict = None,
 ) -> None:
@@ -701,10 +722,10 @@ def _run_file(run: str):
 @app.command()
 def render(
     run: str = typer.Argument(..., help="A run folder written by knitlad cut (or its ladder.h5)."),
-    at_ms: list[float] = typer.Option(None, "--at-ms", help="Instants after the cut [ms] (repeat); default: just "
+    at_ms: list[float] = typer.Option(None, "--at-ms", help="Instants after the cut \\[ms] (repeat); default: just "
                                       "after the cut, then four evenly spaced instants of the ladder."),
     view: list[str] = typer.Option(None, "--view", help="front (the x-y plane) and/or oblique (repeat); default both."),
-    width: int = typer.Option(1200, "--width", help="Image width [pixels]; height 3/4 of it."),
+    width: int = typer.Option(1200, "--width", help="Image width \\[pixels]; height 3/4 of it."),
 ) -> None:
     """Images of the fabric: yarns as tubes of their diameter coloured by course, the cut course black, undone cells red."""
     from knitlad.render import render_run
@@ -731,7 +752,7 @@ def movie(
     run: str = typer.Argument(..., help="A run folder written by knitlad cut (or its ladder.h5)."),
     gif: bool = typer.Option(False, "--gif", help="An animated GIF instead of an MP4."),
     fps: int = typer.Option(12, "--fps", help="Frames per second of the movie."),
-    width: int = typer.Option(960, "--width", help="Frame width [pixels]; height 3/4 of it."),
+    width: int = typer.Option(960, "--width", help="Frame width \\[pixels]; height 3/4 of it."),
 ) -> None:
     """A movie of the laddering: every stored frame, front view, with a time stamp and the undone cells."""
     from knitlad.render import movie as make_movie

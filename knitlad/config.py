@@ -88,11 +88,11 @@ class CutConfig(_WithPreset):
         "interval between stored frames (positions, velocities, laddered cells) [us]; default: 1/60 of the "
         "ladder's expected duration, n_y l_y / 2 over the paper's velocity 0.1 f_x^ini c_b, for a movie of 50+ frames"))
     drag_per_s: float = Field(0.0, ge=0, le=1e5, json_schema_extra={"cli": "--drag"}, description=(
-        "global drag -gamma m v on every node during the laddering [1/s]; 0 is the physics. 2e3 brings the "
-        "42 x 42 runs to the paper's two DER velocities (docs/accuracy.md); 3e4 stops the ladder"))
+        "global drag -gamma m v on every node during the laddering [1/s]; 0 is the physics (its effect on v_lad: "
+        "docs/accuracy.md)"))
     twist: bool = Field(False, description=(
         "the yarns carry twist during the laddering, so friction also turns them (the friction couple) [-]; "
-        "about 1.27 x the laddering's cost (42 x 42 at f_x 13.6, 2026-12-03)"))
+        "costs more (docs/performance.md)"))
     # --- the model's choices
     d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description=(
         "yarn diameter over stitch length d/l0 [-]; 1/70, the paper's rounded value and the default, means its "
@@ -123,30 +123,29 @@ class CutConfig(_WithPreset):
         "then corrected (clamped ends; tails, and yarns too thick for the stitch, d/l0 = 1/20, affine), or affine increments of the built knit [-]"))
     dt_safety: float = Field(0.35, gt=0, le=1, description=(
         "time step of the laddering dynamics, fraction of the stability limit of the yarns' sliding (rods and "
-        "contact springs; with twist the spin modes are only held stable) [-]; 0.35: from identical "
-        "16 x 16 knits at f_x^ini 4, 0.5 and 0.7 moved v_lad by up to 16 %, 0.35 by 3 % from 0.175 (docs/accuracy.md)"))
+        "contact springs; with twist the spin modes are only held stable) [-]; 0.35 from a paired time-step "
+        "study (docs/accuracy.md)"))
 
     axial_stiffness_factor: float = Field(1.0, gt=0, le=1, description=(
         "stretching stiffness of the laddering dynamics over the yarn's EA [-]; below 1 the axial waves "
-        "slow down and the step grows as 1/sqrt(factor), every edge keeping its tension at the cut. 0.25 moved "
-        "v_lad by +8 % (f_x 4) and +18 % (13.6), f_x^fin by +14 % and +18 % (16 x 16, docs/accuracy.md)"))
+        "slow down and the step grows as 1/sqrt(factor), every edge keeping its tension at the cut; it "
+        "changes v_lad and f_x^fin (docs/accuracy.md)"))
 
     twist_inertia_factor: float = Field(1.0, ge=1, le=1000, description=(
         "with twist: the yarn's inertia about its axis in the laddering dynamics over rho_L d^2/8 per length [-]; "
-        "a setting for studies (the step does not need it): 4 moved v_lad "
-        "by +1 to +3 %, n_lad/n_y by -3 to +5 % (16 x 16); 16 and 64 slowed the ladder by 8 % and 16-30 % at "
-        "f_x 4: the yarns roll at the contacts (docs/accuracy.md)"))
+        "a setting for studies (the step does not need it); large factors slow the ladder, as the yarns roll "
+        "at the contacts (docs/accuracy.md)"))
 
     framed_twist: bool = Field(False, description=(
         "with twist and no natural curvature: bend and twist through material frames (framed DER, the "
         "averaged material curvature) instead of the frame-free isotropic path (|kb|^2 and the reference "
-        "twist by holonomy), whose bent hinges are a little softer in twist (by B |kb|^2 / 4GJ, 4 % in the median "
-        "hinge); about 1.3 x the laddering's cost: for comparisons [-]"))
+        "twist by holonomy), whose bent hinges are a little softer in twist (by B |kb|^2 / 4GJ); costlier: "
+        "for comparisons [-]"))
 
     implicit_axial: bool | None = Field(None, description=(
         "the laddering dynamics take the yarn's axial springs and dashpots at the end of each kick "
         "(linearly implicit, a tridiagonal solve per yarn): the axial waves set no limit and the step, "
-        "dt_safety x the contact and bending limit, grows 1.4 x; the static tensions are unchanged [-]; "
+        "dt_safety x the contact and bending limit, grows; the static tensions are unchanged [-]; "
         "default: the preset's"))
 
     predicted_dashpots: bool = Field(False, description=(

@@ -207,3 +207,17 @@ def test_replace_validates_as_a_new_config_does():
     assert cfg.replace(mu=0.8).mu == 0.8 and cfg.replace(mu=0.8).resolution == 24
     with pytest.raises(ValidationError, match="mu"):
         cfg.replace(mu=-1.0)
+
+
+def test_cut_help_groups_its_options_and_keeps_units_and_carries_no_dated_measurement():
+    """27 options were one flat list with dated measurements in it; rich read the units in [brackets] as markup."""
+    import re
+
+    p = subprocess.run([*KNITLAD, "cut", "--help"], capture_output=True, text=True, env={**os.environ, "COLUMNS": "200"})
+    assert p.returncode == 0, p.stderr
+    panels = [m.group(1) for m in re.finditer(r"╭─ ([A-Za-z ]+?) ─", p.stdout)]
+    assert panels[1:] == ["The experiment", "Run length and output", "Model and numerics"], panels
+    experiment = p.stdout[p.stdout.index("The experiment"):p.stdout.index("Run length and output")]
+    assert all(f"--{o} " in experiment for o in ("stitches", "preset", "fx", "lx", "ly", "mu"))
+    assert "[ms] [default: 30.0]" in p.stdout and "[us]" in p.stdout and "[1/s]" in p.stdout
+    assert not re.search(r"20\d\d-\d\d-\d\d", p.stdout)
