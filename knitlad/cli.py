@@ -198,14 +198,10 @@ def validated(model, options: dict, names: dict | None = None):
 @app.command()
 @config_options(_config.CutConfig, exclude=("n_x", "n_y"))
 def cut(
-    stitches: str = typer.Option("42", "--stitches", help="Fabric size: N (N x N) or NXxNY.",
-                                 rich_help_panel=EXPERIMENT_PANEL),
-    out: str = typer.Option(None, "--out", help="Output folder (HDF5 + PNG); default runs/cut-<time>.",
-                            rich_help_panel=OUTPUT_PANEL),
-    json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object.",
-                                  rich_help_panel=OUTPUT_PANEL),
-    overwrite: bool = typer.Option(False, "--overwrite", rich_help_panel=OUTPUT_PANEL,
-                                   help="Replace the earlier run in --out (its files, renders "
+    stitches: str = typer.Option("42", "--stitches", help="Fabric size: N (N x N) or NXxNY.", rich_help_panel=EXPERIMENT_PANEL),
+    out: str = typer.Option(None, "--out", help="Output folder (HDF5 + PNG); default runs/cut-<time>.", rich_help_panel=OUTPUT_PANEL),
+    json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object.", rich_help_panel=OUTPUT_PANEL),
+    overwrite: bool = typer.Option(False, "--overwrite", rich_help_panel=OUTPUT_PANEL, help="Replace the earlier run in --out (its files, renders "
                                    "and movies are removed once this run is written)."),
     options: dict = None,
 ) -> None:
@@ -398,12 +394,43 @@ def _check_sweep_options(executor: str, scheduler: str | None, workers: int | No
         fail(f"--max-jobs: must be >= 1, got {max_jobs}")
 
 
+def _sweep_backend(executor: str, scheduler: str | None, cluster: str | None):
+    """(executor, scheduler): with --cluster, Dask on the batch cluster its file describes (a ClusterConfig)."""
+    if cluster is None:
+        return executor, scheduler
+    if scheduler:
+        fail("--cluster: not with --scheduler (the cluster brings its own)")
+    from knitlad.cluster import load_cluster
+    from knitlad.sweep import SweepError
+
+    try:
+        return "dask", load_cluster(cluster)
+    except SweepError as e:
+        fail(str(e))
+
+
+def _list_jobs(cfg, jobs, scheduler) -> None:
+    """--dry-run: each job's id and swept values, and a batch cluster's worker script."""
+    from knitlad.sweep import SweepError
+
+    for job in jobs:
+        typer.echo(f"{job.id}  " + " ".join(f"{k}={job.params[k]}" for k in cfg.sweep.axes))
+    typer.echo(f"{len(jobs)} jobs")
+    if scheduler is not None and not isinstance(scheduler, str):
+        try:
+            typer.echo(f"each of {scheduler.jobs} workers is submitted as:\n{scheduler.job_script()}")
+        except SweepError as e:
+            fail(str(e))
+
+
 @app.command()
 def sweep(
     config: str = typer.Argument(..., help="Sweep config (YAML); see configs/ and knitlad.sweep."),
     out: str = typer.Option(None, "--out", help="Output folder; default runs/<config name>."),
     executor: str = typer.Option("pool", "--executor", help="pool (processes on this machine) or dask."),
     scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address (default: a local cluster)."),
+    cluster: str = typer.Option(None, "--cluster", help="A batch cluster to start for the sweep (YAML: kind, jobs, "
+                                "options of dask-jobqueue; configs/cluster/); implies --executor dask."),
     workers: int = typer.Option(None, "--workers", help="Parallel jobs (default: all cores), one Numba thread each."),
     force: bool = typer.Option(False, "--force", help="Rerun jobs that already have a result."),
     retry_failed: bool = typer.Option(False, "--retry-failed", help="Rerun jobs recorded as failed."),
@@ -424,6 +451,7 @@ def sweep(
 
     from knitlad.sweep import SweepError, load_sweep
 
+    executor, scheduler = _sweep_backend(executor, scheduler, cluster)
     _check_sweep_options(executor, scheduler, workers, max_jobs)
     try:
         cfg, jobs = load_sweep(config, max_jobs=max_jobs)
@@ -431,14 +459,12 @@ def sweep(
         fail(str(e))
     out_dir = Path(out) if out else Path("runs") / Path(config).stem
     if dry_run:
-        for job in jobs:
-            typer.echo(f"{job.id}  " + " ".join(f"{k}={job.params[k]}" for k in cfg.sweep.axes))
-        typer.echo(f"{len(jobs)} jobs")
+        _list_jobs(cfg, jobs, scheduler)
         return
     from knitlad.io.folders import FolderError, FolderLock, writable_folder
     from knitlad.runner import SchedulerError, connect, run_sweep
 
-    if scheduler:
+    if isinstance(scheduler, str):
         try:
             connect(scheduler).close()  # before anything starts: an unreachable scheduler is one line
         except SchedulerError as e:
@@ -447,12 +473,12 @@ def sweep(
         FolderLock(writable_folder(out_dir)).check_free()
     except FolderError as e:
         fail(f"--out {e}")
-    typer.echo(f"{len(jobs)} jobs -> {out_dir} ({executor})", err=True)
+    typer.echo(f"{len(jobs)} jobs -> {out_dir} ({executor}{f', cluster {cluster}' if cluster else ''})", err=True)
     _say_if_compiling()
     try:
         outcome = run_sweep(jobs, out_dir, executor=executor, workers=workers, scheduler=scheduler, force=force,
                             retry_failed=retry_failed, config_text=Path(config).read_text(), rerun_stale=rerun_stale)
-    except (FolderError, SchedulerError) as e:
+    except (FolderError, SchedulerError, SweepError) as e:
         fail(str(e))
     summary = out_dir / "summary.csv"
     if outcome.interrupted:

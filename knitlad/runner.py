@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Callable
 
 from knitlad import __version__
+from knitlad.cluster import ClusterConfig
 from knitlad.io.atomic import atomic_path
 from knitlad.io.folders import FolderLock, lock_holds, writable_folder
 from knitlad.io.hdf5 import read_attrs, verify_datasets, write_record
@@ -508,7 +509,8 @@ def connect(scheduler: str):
 
 def _run_dask(todo: list[Job], jobs_dir: Path, workers: int | None, scheduler: str | None, runner: Runner, finish,
               token: str) -> None:
-    """The same jobs on a Dask cluster at ``scheduler`` (or a local one). ``DIR`` must be on a
+    """The same jobs on a Dask cluster at ``scheduler``, a batch cluster it describes (a
+    :class:`~knitlad.cluster.ClusterConfig`), or a local one. ``DIR`` must be on a
     file system the workers share (as on a Slurm cluster with dask-jobqueue). On Ctrl-C the
     tasks are cancelled and the folder's lock released: a task still running writes nothing."""
     from distributed import Client, LocalCluster, as_completed
@@ -516,7 +518,10 @@ def _run_dask(todo: list[Job], jobs_dir: Path, workers: int | None, scheduler: s
     if len(todo) > 1 and runner is run_job:
         compile_kernels()  # the workers then load Numba's on-disk cache
     cluster = None
-    if scheduler:
+    if isinstance(scheduler, ClusterConfig):  # a batch cluster started for this sweep (knitlad.cluster)
+        cluster = scheduler.start()
+        client = Client(cluster)
+    elif scheduler:
         client = connect(scheduler)
     else:
         n = max(1, min(workers or os.cpu_count() or 1, len(todo)))

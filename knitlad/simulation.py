@@ -127,7 +127,95 @@ def check_open_chains(model, implicit_axial: bool) -> bool:
     return True
 
 
-class Simulation:
+class SupportControl:
+    """Supports changed during a run, without rebuilding (mixed into :class:`Simulation`): each change
+    is a new model (``replace_model``), so a model is still never changed in place."""
+
+    def _nodes(self, nodes) -> np.ndarray:
+        idx = np.atleast_1d(np.asarray(nodes, dtype=np.int64))
+        n = self.model.n_nodes
+        if idx.size and (idx.min() < -n or idx.max() >= n):
+            raise IndexError(f"node out of range for a scene of {n} nodes")
+        return idx % n
+
+    def nodes_of(self, yarn: int, nodes=None) -> np.ndarray:
+        """Global indices of ``nodes`` of ``yarn`` (all of them by default; negative counts from its end)."""
+        start, stop = int(self.model.yarn_start[yarn]), int(self.model.yarn_start[yarn + 1])
+        local = np.arange(stop - start) if nodes is None else np.atleast_1d(np.asarray(nodes, dtype=np.int64))
+        if local.size and (local.min() < start - stop or local.max() >= stop - start):
+            raise IndexError(f"node out of range for yarn {yarn} of {stop - start} nodes")
+        return start + local % (stop - start)
+
+    def hold(self, nodes, velocity_m_s=(0.0, 0.0, 0.0)) -> None:
+        """Hold ``nodes`` (global indices, :meth:`nodes_of`) from the next step on, moving at ``velocity_m_s``
+        (one 3-vector, or one per node); held nodes already held get the new velocity."""
+        idx = self._nodes(nodes)
+        v = np.broadcast_to(np.asarray(velocity_m_s, dtype=float) / units.VELOCITY, (idx.size, 3))
+        held, v_prescribed = self.model.held.copy(), self.model.v_prescribed.copy()
+        held[idx], v_prescribed[idx] = True, v
+        self.replace_model(held=held, v_prescribed=v_prescribed)
+        self.state.v[idx] = v
+
+    def release(self, nodes) -> None:
+        """Let ``nodes`` go from the next step on: they keep their prescribed velocity as their own."""
+        idx = self._nodes(nodes)
+        held, v_prescribed = self.model.held.copy(), self.model.v_prescribed.copy()
+        held[idx] = False
+        v_prescribed[idx] = 0.0
+        self.replace_model(held=held, v_prescribed=v_prescribed)
+
+    def move_held(self, nodes, to_m=None, by_m=None) -> None:
+        """Put held ``nodes`` at positions ``to_m`` [m] or shift them by ``by_m`` [m] (one 3-vector or one
+        per node), for displacement-controlled statics: move, then :meth:`relax`. The forces of the old
+        positions stay until the next evaluation (a step or a relaxation), as a jump in a real test would;
+        the contact list is rebuilt at the next evaluation."""
+        idx = self._nodes(nodes)
+        if (to_m is None) == (by_m is None):
+            raise ValueError("give exactly one of to_m and by_m")
+        if not self.model.held[idx].all():
+            raise ValueError("move_held moves held nodes only: hold() them first")
+        x = self.state.x
+        if to_m is not None:
+            x[idx] = np.broadcast_to(np.asarray(to_m, dtype=float) / units.LENGTH, (idx.size, 3))
+        else:
+            x[idx] += np.broadcast_to(np.asarray(by_m, dtype=float) / units.LENGTH, (idx.size, 3))
+        self.contacts.status[STALE] = 1
+
+
+class ContactReadout:
+    """What the contact saw, read from a :class:`Simulation`'s buffers (mixed into it): totals, each
+    touching pair, the deepest overlap, the pairs between two yarns."""
+
+    def contact_stats(self) -> ContactStats:
+        """At the last force evaluation: touching pairs, largest overlap [m], sum of normal forces [N], sliding pairs, candidate pairs."""
+        return ContactStats.of(self.contacts)
+
+    def contact_pairs(self) -> ContactPairs:
+        """Each touching pair at the last force evaluation: edges, yarns, contact point [m], normal and
+        friction force on the first edge [N], overlap [m], sliding flag (arrays, one row per pair)."""
+        m = self.model
+        return ContactPairs.of(self.contacts, self.state.x, m.edge_a, m.edge_b, m.edge_shift)
+
+    def peak_overlap_m(self, reset: bool = False) -> float:
+        """Largest overlap of two yarns [m] at any step since the last reset (``reset``: start a new window)."""
+        peak = float(self.contacts.stats[PEAK_OVERLAP] * units.LENGTH)
+        if reset:
+            self.contacts.stats[PEAK_OVERLAP] = 0.0
+        return peak
+
+    def touching_pairs(self, yarn_a: int, yarn_b: int) -> int:
+        """Pairs of edges of yarns ``yarn_a`` and ``yarn_b`` touching now (images along a yarn's own period are it)."""
+        return self.touching_pairs_of_edges(self.contacts.edge_yarn == yarn_a, self.contacts.edge_yarn == yarn_b)
+
+    def touching_pairs_of_edges(self, in_a: np.ndarray, in_b: np.ndarray) -> int:
+        """Pairs of an edge of ``in_a`` and one of ``in_b`` (boolean masks over the edges) touching now."""
+        if self.contact_model is None:
+            return 0
+        m, c = self.model, self.fresh_contacts()
+        return int(touching_pairs_among(self.state.x, m.edge_a, m.edge_b, m.edge_shift, c, in_a, in_b))
+
+
+class Simulation(SupportControl, ContactReadout):
     """Explicit dynamics and FIRE statics of a rod scene.
 
     Parameters
@@ -219,57 +307,6 @@ class Simulation:
         """Replace model arrays of the same shapes (e.g. a periodic cell's shifts) from the next step on."""
         self.rods = self.rods.replace_model(**arrays)
 
-    # ------------------------------------------------------------------ constraints during a run
-    def _nodes(self, nodes) -> np.ndarray:
-        idx = np.atleast_1d(np.asarray(nodes, dtype=np.int64))
-        n = self.model.n_nodes
-        if idx.size and (idx.min() < -n or idx.max() >= n):
-            raise IndexError(f"node out of range for a scene of {n} nodes")
-        return idx % n
-
-    def nodes_of(self, yarn: int, nodes=None) -> np.ndarray:
-        """Global indices of ``nodes`` of ``yarn`` (all of them by default; negative counts from its end)."""
-        start, stop = int(self.model.yarn_start[yarn]), int(self.model.yarn_start[yarn + 1])
-        local = np.arange(stop - start) if nodes is None else np.atleast_1d(np.asarray(nodes, dtype=np.int64))
-        if local.size and (local.min() < start - stop or local.max() >= stop - start):
-            raise IndexError(f"node out of range for yarn {yarn} of {stop - start} nodes")
-        return start + local % (stop - start)
-
-    def hold(self, nodes, velocity_m_s=(0.0, 0.0, 0.0)) -> None:
-        """Hold ``nodes`` (global indices, :meth:`nodes_of`) from the next step on, moving at ``velocity_m_s``
-        (one 3-vector, or one per node); held nodes already held get the new velocity."""
-        idx = self._nodes(nodes)
-        v = np.broadcast_to(np.asarray(velocity_m_s, dtype=float) / units.VELOCITY, (idx.size, 3))
-        held, v_prescribed = self.model.held.copy(), self.model.v_prescribed.copy()
-        held[idx], v_prescribed[idx] = True, v
-        self.replace_model(held=held, v_prescribed=v_prescribed)
-        self.state.v[idx] = v
-
-    def release(self, nodes) -> None:
-        """Let ``nodes`` go from the next step on: they keep their prescribed velocity as their own."""
-        idx = self._nodes(nodes)
-        held, v_prescribed = self.model.held.copy(), self.model.v_prescribed.copy()
-        held[idx] = False
-        v_prescribed[idx] = 0.0
-        self.replace_model(held=held, v_prescribed=v_prescribed)
-
-    def move_held(self, nodes, to_m=None, by_m=None) -> None:
-        """Put held ``nodes`` at positions ``to_m`` [m] or shift them by ``by_m`` [m] (one 3-vector or one
-        per node), for displacement-controlled statics: move, then :meth:`relax`. The forces of the old
-        positions stay until the next evaluation (a step or a relaxation), as a jump in a real test would;
-        the contact list is rebuilt at the next evaluation."""
-        idx = self._nodes(nodes)
-        if (to_m is None) == (by_m is None):
-            raise ValueError("give exactly one of to_m and by_m")
-        if not self.model.held[idx].all():
-            raise ValueError("move_held moves held nodes only: hold() them first")
-        x = self.state.x
-        if to_m is not None:
-            x[idx] = np.broadcast_to(np.asarray(to_m, dtype=float) / units.LENGTH, (idx.size, 3))
-        else:
-            x[idx] += np.broadcast_to(np.asarray(by_m, dtype=float) / units.LENGTH, (idx.size, 3))
-        self.contacts.status[STALE] = 1
-
     def set_external_forces(self, forces_N) -> None:
         """Replace the constant external forces [N], (n, 3) or one 3-vector for all, from now on (a new model).
 
@@ -284,23 +321,6 @@ class Simulation:
     def friction(self) -> float:
         return float(self.contacts.params.mu) if self.contact_model is not None else 0.0
 
-    def contact_stats(self) -> ContactStats:
-        """At the last force evaluation: touching pairs, largest overlap [m], sum of normal forces [N], sliding pairs, candidate pairs."""
-        return ContactStats.of(self.contacts)
-
-    def contact_pairs(self) -> ContactPairs:
-        """Each touching pair at the last force evaluation: edges, yarns, contact point [m], normal and
-        friction force on the first edge [N], overlap [m], sliding flag (arrays, one row per pair)."""
-        m = self.model
-        return ContactPairs.of(self.contacts, self.state.x, m.edge_a, m.edge_b, m.edge_shift)
-
-    def peak_overlap_m(self, reset: bool = False) -> float:
-        """Largest overlap of two yarns [m] at any step since the last reset (``reset``: start a new window)."""
-        peak = float(self.contacts.stats[PEAK_OVERLAP] * units.LENGTH)
-        if reset:
-            self.contacts.stats[PEAK_OVERLAP] = 0.0
-        return peak
-
     def fresh_contacts(self) -> Contacts:
         """The contact buffers with a candidate list valid at the current positions."""
         m, s = self.model, self.state
@@ -310,17 +330,6 @@ class Simulation:
         while not refresh_contacts(s.x, m.edge_a, m.edge_b, m.edge_shift, self.contacts):
             self._grow_contacts()
         return self.contacts
-
-    def touching_pairs(self, yarn_a: int, yarn_b: int) -> int:
-        """Pairs of edges of yarns ``yarn_a`` and ``yarn_b`` touching now (images along a yarn's own period are it)."""
-        return self.touching_pairs_of_edges(self.contacts.edge_yarn == yarn_a, self.contacts.edge_yarn == yarn_b)
-
-    def touching_pairs_of_edges(self, in_a: np.ndarray, in_b: np.ndarray) -> int:
-        """Pairs of an edge of ``in_a`` and one of ``in_b`` (boolean masks over the edges) touching now."""
-        if self.contact_model is None:
-            return 0
-        m, c = self.model, self.fresh_contacts()
-        return int(touching_pairs_among(self.state.x, m.edge_a, m.edge_b, m.edge_shift, c, in_a, in_b))
 
     # ------------------------------------------------------------------ dynamics
     @property

@@ -174,6 +174,31 @@ def test_dask_on_a_local_cluster_gives_the_same_summary_as_the_pool(smoke, tmp_p
     pd.testing.assert_frame_equal(pool, dask)
 
 
+def test_a_batch_cluster_file_runs_the_sweep_through_dask_jobqueue(smoke, tmp_path):
+    """--cluster configs/cluster/local.yaml: dask-jobqueue's cluster with its workers as local processes (the
+    path a Slurm cluster takes, but for the batch system): the same summary as the pool."""
+    pytest.importorskip("dask_jobqueue")
+    p = knitlad("sweep", "configs/smoke.yaml", "--out", str(tmp_path), "--cluster", "configs/cluster/local.yaml")
+    assert p.returncode == 0, p.stderr
+    pool = read_summary(smoke).drop(columns=list(TIMING_COLUMNS))
+    cluster = read_summary(tmp_path).drop(columns=list(TIMING_COLUMNS))
+    pd.testing.assert_frame_equal(pool, cluster)
+
+
+def test_the_slurm_example_prints_its_batch_script_and_bad_cluster_files_are_one_line(tmp_path):
+    pytest.importorskip("dask_jobqueue")
+    p = knitlad("sweep", "configs/smoke.yaml", "--cluster", "configs/cluster/slurm.yaml", "--dry-run")
+    assert p.returncode == 0, p.stderr
+    assert "#SBATCH -p normal" in p.stdout and "#SBATCH -t 08:00:00" in p.stdout and "dask_worker" in p.stdout
+    bad = tmp_path / "bad.yaml"
+    for text, says in (("kind: slurmm\njobs: 2\n", "kind"), ("kind: slurm\njobs: 0\n", "jobs"),
+                       ("kind: slurm\njobs: 2\nqueue: x\n", "queue"),
+                       ("kind: slurm\njobs: 2\noptions: {no_such_option: 1}\n", "cannot start a slurm cluster")):
+        bad.write_text(text)
+        p = knitlad("sweep", "configs/smoke.yaml", "--cluster", str(bad), "--dry-run")
+        assert p.returncode == 2 and says in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+
+
 def test_plot_draws_the_summary_figures_and_the_diagrams(smoke):
     p = knitlad("plot", str(smoke))
     assert p.returncode == 0, p.stderr
