@@ -7,6 +7,7 @@ arguments speak SI; the state itself is in internal units (:mod:`knitlad.units`)
 from __future__ import annotations
 
 import math
+import os
 import time
 from contextlib import contextmanager
 from typing import Callable
@@ -59,44 +60,78 @@ def numba_threads(n: int):
         numba.set_num_threads(before)
 
 
+def idle_cpu_ticks(cpus: tuple[int, ...]) -> tuple[int, int] | None:
+    """(idle, total) clock ticks so far of the processors ``cpus``, from /proc/stat (Linux); None elsewhere."""
+    try:
+        with open("/proc/stat") as f:
+            lines = f.read().splitlines()
+    except OSError:
+        return None
+    idle = total = 0
+    wanted = {f"cpu{c}" for c in cpus}
+    for line in lines:
+        fields = line.split()
+        if fields and fields[0] in wanted:
+            ticks = [int(v) for v in fields[1:]]
+            idle += ticks[3] + (ticks[4] if len(ticks) > 4 else 0)  # idle and iowait
+            total += sum(ticks[:8])
+    return (idle, total) if total else None
+
+
 class ThreadGovernor:
     """Chooses, as a run goes, between the Numba threads it was given and one thread: whichever steps faster.
 
-    A parallel step meets its threads at barriers several times; when another process holds
-    one of two cores, each barrier waits for a descheduled thread and a 16 x 16 run went from
-    5.45 s to 48 s (2026-12-03). The governor times every chunk of steps and, now and then, a
-    probe chunk at the other count; it keeps the faster, and probes more rarely each time the
-    choice holds (after 2 chunks at first, then 4, 8, ... up to 256, and at least 20 times as many
-    chunks as the probe was slower, so that probing costs 5 % at most). Results do not change: every
-    kernel gives the same bits on any number of threads (the contact pairs are evaluated in blocks
-    fixed when the buffers are made, and summed in pair order), and a probe is a whole chunk, so
-    the chunks (whose fused half-kicks round differently from two halves) fall where they would.
+    A parallel step meets its threads at barriers several times; when another process holds one of
+    two cores, each barrier waits for a descheduled thread: a 16 x 16 run went from 5.45 s to 48 s,
+    and a chunk of an 8 x 8 run from 0.045 s on one thread to 15 s on two (2026-12-03). So a run
+    starts on one thread and tries its threads only when the processors it may use were idle
+    for at least half a core per extra thread during the last chunk (/proc/stat; where that cannot be
+    read, it tries anyway). It times every chunk, keeps the faster count, and tries again more
+    rarely each time the choice holds (after 1 chunk, then 2, 4, ... 256, and at least 20 times
+    as many chunks as the probe was slower, so that probing costs 5 % at most; a chunk twice as slow
+    as the one before it, as when another process starts, tries the other count next). Results do not
+    change: every kernel gives the same bits on any number of threads (the contact pairs are
+    evaluated in blocks fixed when the buffers are made, and summed in pair order), and a probe is
+    a whole chunk, so the chunks (whose fused half-kicks round differently from two halves) fall
+    where they would.
     """
 
-    FIRST_INTERVAL, LAST_INTERVAL = 2, 256
+    FIRST_INTERVAL, LAST_INTERVAL = 1, 256
 
     def __init__(self) -> None:
         self.seconds_per_step: dict[int, float] = {}
-        self.current: int | None = None
+        self.current = 1
         self.interval = self.FIRST_INTERVAL
         self.until_probe = self.FIRST_INTERVAL
+        self.idle_cores: float | None = None  # idle processors during the last chunk (None: unknown)
+        self.cpus = tuple(sorted(os.sched_getaffinity(0))) if hasattr(os, "sched_getaffinity") else ()
+        self._ticks = None
 
     def plan(self, allowed: int) -> int:
         """The number of threads for the next chunk, ``allowed`` at most."""
+        self._ticks = idle_cpu_ticks(self.cpus) if allowed > 1 else None
         if allowed <= 1:
             return 1
-        if self.current is None or self.current > allowed:
-            self.current = allowed
+        self.current = min(self.current, allowed)
         if self.until_probe > 0 or not self.seconds_per_step:
             return self.current
-        return 1 if self.current > 1 else allowed
+        if self.current > 1:
+            return 1
+        room = self.idle_cores is None or self.idle_cores >= 0.5 * (allowed - 1)
+        return allowed if room else 1
 
     def record(self, threads: int, steps: int, seconds: float) -> None:
         if steps <= 0:
             return
+        ticks = idle_cpu_ticks(self.cpus) if self._ticks is not None else None
+        if ticks is not None and ticks[1] > self._ticks[1]:
+            self.idle_cores = len(self.cpus) * (ticks[0] - self._ticks[0]) / (ticks[1] - self._ticks[1])
+        before = self.seconds_per_step.get(threads)
         self.seconds_per_step[threads] = seconds / steps
-        if self.current is None or threads == self.current:  # a chunk at the chosen count, not a probe
+        if threads == self.current:  # a chunk at the chosen count, or a probe the machine had no room for
             self.until_probe -= 1
+            if before is not None and seconds / steps > 2.0 * before:  # the machine got busy: look again now
+                self.until_probe, self.interval = 0, self.FIRST_INTERVAL
             return
         ratio = self.seconds_per_step[threads] / self.seconds_per_step[self.current]
         if ratio < 0.9:

@@ -219,27 +219,44 @@ def test_held_nodes_change_velocity_and_are_released_mid_run():
         sim.nodes_of(0, [11])
 
 
-def test_the_thread_governor_keeps_the_faster_count_and_probes_ever_more_rarely():
-    from knitlad.simulation import ThreadGovernor
-
-    g = ThreadGovernor()
-    assert g.plan(1) == 1  # one thread allowed: nothing to choose
+def _governed(g, chunks: int, seconds_per_step, idle=None) -> list[int]:
+    """Threads the governor chose for each chunk of 500 steps, the machine's speed given per count."""
     seen = []
-    for _ in range(40):  # two threads ten times slower than one (a loaded machine)
+    for k in range(chunks):
         threads = g.plan(2)
         seen.append(threads)
-        g.record(threads, 500, 500 * (1e-3 if threads == 2 else 1e-4))
-    assert seen[:2] == [2] * 2 and seen[2] == 1 and set(seen[3:]) == {1, 2} and g.current == 1
-    assert seen[3:].count(2) == 1  # a probe ten times slower waits 200 chunks for the next
-    g = ThreadGovernor()
-    for _ in range(2000):  # two threads twice as fast: kept, probed after 2, 4, ... 256 chunks
-        threads = g.plan(2)
-        g.record(threads, 500, 500 * (5e-4 if threads == 1 else 2.5e-4))
-    assert g.current == 2 and g.interval == ThreadGovernor.LAST_INTERVAL
+        g.record(threads, 500, 500 * seconds_per_step(k, threads))
+        if idle is not None:
+            g.idle_cores = idle
+    return seen
+
+
+def test_the_thread_governor_keeps_the_faster_count_and_tries_two_only_where_a_core_is_free():
+    from knitlad.simulation import ThreadGovernor
+
+    def governor():
+        g = ThreadGovernor()
+        g.cpus = ()  # no /proc/stat reading: the test sets the idle cores
+        return g
+
+    assert governor().plan(1) == 1  # one thread allowed: nothing to choose
+    # a loaded machine with no idle core: two threads are never tried
+    assert set(_governed(governor(), 100, lambda k, n: 1e-3 if n == 2 else 1e-4, idle=0.1)) == {1}
+    # idle unknown, two threads ten times slower: tried once after the first chunk, then rarely
+    seen = _governed(governor(), 40, lambda k, n: 1e-3 if n == 2 else 1e-4)
+    assert seen[:3] == [1, 2, 1] and seen.count(2) == 1
+    # a quiet machine, two threads twice as fast: taken after one chunk and kept, probed ever more rarely
+    g = governor()
+    seen = _governed(g, 2000, lambda k, n: 2.5e-4 if n == 2 else 5e-4, idle=1.0)
+    assert seen[:3] == [1, 2, 2] and g.current == 2 and g.interval == ThreadGovernor.LAST_INTERVAL
+    # then another process takes a core: two threads become ten times slower, one thread is back next chunk
+    seen = _governed(g, 3, lambda k, n: 2.5e-3 if n == 2 else 5e-4, idle=0.0)
+    assert seen == [2, 1, 1] and g.current == 1
 
 
 def test_switching_thread_counts_mid_run_changes_no_bit():
     """The governor may change the count every chunk: the positions are those of a one-thread run."""
+    counts = []
     from knitlad.contact import ContactModel
     from knitlad.scenes.weave import plain_weave
     from knitlad.simulation import numba_threads
@@ -250,8 +267,11 @@ def test_switching_thread_counts_mid_run_changes_no_bit():
         sim = kl.Simulation(rods, contact=ContactModel(stiffness=1e3, friction=0.4), guard_every=50)
         if probe_often:
             sim.threads.FIRST_INTERVAL = sim.threads.until_probe = sim.threads.LAST_INTERVAL = 1
+            sim.threads.cpus = ()  # tries two threads whatever the machine's load
         with numba_threads(threads):
-            sim.step(1500)
+            sim.step(600)
+        counts.extend(sim.threads.seconds_per_step)
         return sim.state.x.copy()
 
     np.testing.assert_array_equal(run(2, probe_often=True), run(1, probe_often=False))
+    assert set(counts) == {1, 2}  # both counts ran
