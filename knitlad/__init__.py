@@ -31,6 +31,8 @@ _EXPERIMENT = {
     "run_ladder": "knitlad.protocol",
     "read_stretched_knit": "knitlad.io.hdf5",
     "write_stretched_knit": "knitlad.io.hdf5",
+    "TrajectoryRecorder": "knitlad.observers",
+    "write_trajectory": "knitlad.io.hdf5",
 }
 
 __all__ = [

@@ -182,3 +182,28 @@ class TimeLimit:
 
     def check(self, t: float, undone: np.ndarray) -> str | None:
         return "max_time_s reached" if t >= self.max_time_s else None
+
+
+class TrajectoryRecorder:
+    """An observer of one's own scene: call it with the simulation (or pass it as ``Simulation.run``'s
+    ``observe``) and it keeps positions [m], velocities [m/s], each node's contact state (0 free,
+    1 touching, 2 sliding) and the time [s], as float32 frames; ``knitlad.write_trajectory`` writes them."""
+
+    def __init__(self) -> None:
+        self.positions: list[np.ndarray] = []
+        self.velocities: list[np.ndarray] = []
+        self.contact: list[np.ndarray] = []
+        self.times: list[float] = []
+        self.edges: np.ndarray | None = None
+        self.yarn_start: np.ndarray | None = None
+        self.node_yarn: np.ndarray | None = None
+
+    def __call__(self, sim) -> None:
+        m = sim.model
+        if self.edges is None:
+            self.edges = np.column_stack([m.edge_a, m.edge_b]).astype(np.int64)
+            self.yarn_start, self.node_yarn = m.yarn_start.copy(), m.node_yarn.copy()
+        self.positions.append(sim.positions_m().astype(np.float32))
+        self.velocities.append((sim.state.v * VELOCITY).astype(np.float32))
+        self.contact.append(node_contact_state(sim) if sim.has_contact else np.zeros(m.n_nodes, dtype=np.uint8))
+        self.times.append(sim.time_s)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from knitlad.observers import TOP_ROWS_HELD, Arrested, EdgeReached
 
@@ -69,3 +70,30 @@ def test_the_progress_of_a_ladder_is_how_far_its_front_has_gone():
     undone[cut:, 3] = True  # up to the last free course: the ladder is at the edge
     fronts.observe(2e-4, None, undone)
     assert fronts.reach(n_y) == 1.0
+
+
+def test_a_scene_of_one_s_own_writes_a_trajectory_that_reads_back_with_units_and_an_xdmf(tmp_path):
+    """The rod demo's cantilever let go: frames as recorded, units, checksums, the fields and the XDMF."""
+    import h5py
+
+    import knitlad as kl
+    from knitlad.io.hdf5 import verify_datasets
+
+    s = np.linspace(0.0, 0.02, 21)
+    scene = kl.Scene(kl.NYLON)
+    rod = scene.add_yarn(np.column_stack([s, 0 * s, 0 * s]), start=np.column_stack([s, 1e-3 * (s / 0.02) ** 2, 0 * s]))
+    scene.hold(rod, [0, 1])
+    sim = kl.Simulation(scene.build())
+    recorder = kl.TrajectoryRecorder()
+    sim.run(2e-3, observe=recorder, observe_every_s=5e-4)
+    path = kl.write_trajectory(tmp_path / "mine.h5", recorder)
+    verify_datasets(path)
+    with h5py.File(path) as f:
+        n = len(recorder.times)
+        assert n >= 4 and f["frames/positions"].shape == (n, 21, 3) and f["frames/positions"].attrs["unit"] == "m"
+        np.testing.assert_allclose(f["frames/positions"][-1], sim.positions_m(), atol=1e-9)
+        assert f["frames/time"][-1] == pytest.approx(sim.time_s) and np.all(np.diff(f["frames/time"][()]) > 0)
+        assert f["fields/curvature"].shape == (n, 21) and f.attrs["scale_B_N_m2"] == kl.NYLON.bending_stiffness
+    assert "/frames/positions" in (tmp_path / "mine.xdmf").read_text()
+    with pytest.raises(ValueError, match="no frame recorded"):
+        kl.write_trajectory(tmp_path / "none.h5", kl.TrajectoryRecorder())

@@ -208,6 +208,39 @@ RUN_UNITS = {
 }
 
 
+def write_trajectory(path: str | Path, recorder, material=None, compression: str | None = "gzip",
+                     xdmf: bool = True) -> Path:
+    """The frames of a :class:`knitlad.observers.TrajectoryRecorder` as a run file is written (``/frames``,
+    ``/fields``, ``/topology``; ``node_course`` holds each node's yarn), with units, checksums, the code's
+    identity and the material's scales; with ``xdmf`` the XDMF beside it for ParaView. Returns ``path``."""
+    from knitlad.units import Material
+
+    if not recorder.positions:
+        raise ValueError("no frame recorded: call the recorder (or pass it as observe=) first")
+    path = Path(path)
+    frames = np.stack(recorder.positions)
+    with atomic_hdf5(path) as f:
+        _write_run_attrs(f, {"kind": "trajectory of one's own scene"}, material or Material())
+        g = f.create_group("frames")
+        checksummed_dataset(g, "positions", frames, compression)
+        checksummed_dataset(g, "velocities", np.stack(recorder.velocities), compression)
+        checksummed_dataset(g, "contact", np.stack(recorder.contact), compression)
+        checksummed_dataset(g, "time", np.array(recorder.times))
+        _node_fields(f.create_group("fields"), frames, recorder.edges, compression)
+        g = f.create_group("topology")
+        checksummed_dataset(g, "edges", recorder.edges)
+        checksummed_dataset(g, "yarn_start", recorder.yarn_start)
+        checksummed_dataset(g, "node_course", recorder.node_yarn)
+        for name, unit in RUN_UNITS.items():
+            if name in f:
+                f[name].attrs["unit"] = unit
+    if xdmf:
+        from knitlad.render import write_xdmf
+
+        write_xdmf(path)
+    return path
+
+
 def write_record(path: str | Path, attrs: dict) -> Path:
     """A file holding attributes only (a failed sweep job: its config, status and error), atomically."""
     path = Path(path)
