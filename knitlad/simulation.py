@@ -120,6 +120,21 @@ class ThreadGovernor:
         room = self.idle_cores is None or self.idle_cores >= 0.5 * (allowed - 1)
         return allowed if room else 1
 
+    def for_one_call(self, allowed: int) -> int:
+        """Threads for a kernel call that cannot be split (a relaxation): the count the chunks chose, or
+        before any chunk, one thread when the load average says the other processors are taken."""
+        if allowed <= 1:
+            return 1
+        if self.seconds_per_step:
+            return min(self.current, allowed)
+        try:
+            busy = os.getloadavg()[0]
+        except (AttributeError, OSError):
+            return allowed
+        cores = len(self.cpus) or os.cpu_count() or 1
+        # the load counts this process too (about one while it runs): room for the others' threads?
+        return allowed if busy <= cores - allowed + 1.5 else 1
+
     def record(self, threads: int, steps: int, seconds: float) -> None:
         if steps <= 0:
             return
@@ -443,14 +458,19 @@ class Simulation(SupportControl, ContactReadout):
         """
         ftol = force_tol_N / units.FORCE
         ttol = (torque_tol_Nm if torque_tol_Nm is not None else force_tol_N * 1e-3) / (units.FORCE * units.LENGTH)
-        while True:
-            steps, fmax, tmax = fire_relax(
-                self.model, self.state, self.work, self.contacts, 0.5 * self.dt, self.dt, int(max_steps), ftol, ttol,
-                self.twist_mode, self.has_contact,
-            )
-            if steps >= 0:
-                break
-            self._grow_contacts()
+        allowed = numba.get_num_threads()
+        numba.set_num_threads(self.threads.for_one_call(allowed))  # one kernel call: chosen once, up front
+        try:
+            while True:
+                steps, fmax, tmax = fire_relax(
+                    self.model, self.state, self.work, self.contacts, 0.5 * self.dt, self.dt, int(max_steps), ftol,
+                    ttol, self.twist_mode, self.has_contact,
+                )
+                if steps >= 0:
+                    break
+                self._grow_contacts()
+        finally:
+            numba.set_num_threads(allowed)
         self._guard()
         self.compute_forces()
         return {

@@ -275,3 +275,18 @@ def test_switching_thread_counts_mid_run_changes_no_bit():
 
     np.testing.assert_array_equal(run(2, probe_often=True), run(1, probe_often=False))
     assert set(counts) == {1, 2}  # both counts ran
+
+
+def test_a_relaxation_takes_the_chunks_choice_or_one_thread_when_the_load_says_the_cores_are_taken(monkeypatch):
+    import os
+
+    from knitlad.simulation import ThreadGovernor
+
+    g = ThreadGovernor()
+    g.cpus = (0, 1)
+    monkeypatch.setattr(os, "getloadavg", lambda: (1.1, 1.0, 1.0))  # this process alone
+    assert g.for_one_call(2) == 2 and g.for_one_call(1) == 1
+    monkeypatch.setattr(os, "getloadavg", lambda: (2.2, 2.0, 2.0))  # and another one
+    assert g.for_one_call(2) == 1
+    g.seconds_per_step, g.current = {1: 1e-4, 2: 5e-5}, 2  # the chunks measured: their choice rules
+    assert g.for_one_call(2) == 2
