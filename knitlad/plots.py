@@ -203,8 +203,9 @@ def summary_plots(df, out_dir: str | Path) -> list[Path]:
             f = np.array([0.0, float(np.nanmax(ok["fx_ini"]))])
             ax.plot(f, EXPERIMENTS_VELOCITY_SLOPE * f, "k--", lw=0.8, label="experiments, 0.1 f_x")
         if column == "n_lad_over_ny":
-            for level in DAMAGE_CLASSES:  # the paper's damage classes
-                ax.axhline(level, color="0.6", ls=":", lw=0.7)
+            for k, level in enumerate(DAMAGE_CLASSES):  # the paper's damage classes, said in the legend
+                ax.axhline(level, color="0.6", ls=":", lw=0.7,
+                           label="paper's damage classes (Fig. 3e): 0.2, 1, 2" if k == 0 else None)
         if column == "fx_fin":
             lim = float(np.nanmax(ok["fx_ini"])) if len(ok) else 1.0
             ax.plot([0, lim], [0, lim], "k:", lw=0.8, label="f_x^fin = f_x^ini")
