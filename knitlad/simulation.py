@@ -320,9 +320,21 @@ class Simulation(SupportControl, ContactReadout):
         the dashpots see the state's velocities, or with ``predicted`` the step's prediction."""
         if not predicted:
             self.work.v_damp[:], self.work.omega_damp[:] = self.state.v, self.state.omega
-        while not compute_forces(self.model, self.state, self.work, self.contacts, self.twist_mode, self.has_contact,
-                                 self.drag, self.dt, self.axial_mode, self.dashpot_mode):
-            self._grow_contacts()
+        with self._unsplit_call():
+            while not compute_forces(self.model, self.state, self.work, self.contacts, self.twist_mode,
+                                     self.has_contact, self.drag, self.dt, self.axial_mode, self.dashpot_mode):
+                self._grow_contacts()
+
+    @contextmanager
+    def _unsplit_call(self):
+        """Numba threads for one kernel call that the governor cannot time in chunks (a force evaluation,
+        a relaxation): :meth:`ThreadGovernor.for_one_call`."""
+        allowed = numba.get_num_threads()
+        numba.set_num_threads(self.threads.for_one_call(allowed))
+        try:
+            yield
+        finally:
+            numba.set_num_threads(allowed)
 
     def set_friction(self, mu: float) -> None:
         """Change the Coulomb coefficient from the next step on (the paper: 0 while stretching, then 0.4)."""
@@ -458,9 +470,7 @@ class Simulation(SupportControl, ContactReadout):
         """
         ftol = force_tol_N / units.FORCE
         ttol = (torque_tol_Nm if torque_tol_Nm is not None else force_tol_N * 1e-3) / (units.FORCE * units.LENGTH)
-        allowed = numba.get_num_threads()
-        numba.set_num_threads(self.threads.for_one_call(allowed))  # one kernel call: chosen once, up front
-        try:
+        with self._unsplit_call():
             while True:
                 steps, fmax, tmax = fire_relax(
                     self.model, self.state, self.work, self.contacts, 0.5 * self.dt, self.dt, int(max_steps), ftol,
@@ -469,8 +479,6 @@ class Simulation(SupportControl, ContactReadout):
                 if steps >= 0:
                     break
                 self._grow_contacts()
-        finally:
-            numba.set_num_threads(allowed)
         self._guard()
         self.compute_forces()
         return {
