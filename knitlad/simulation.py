@@ -109,10 +109,12 @@ class ThreadGovernor:
 
     def plan(self, allowed: int) -> int:
         """The number of threads for the next chunk, ``allowed`` at most."""
-        self._ticks = idle_cpu_ticks(self.cpus) if allowed > 1 else None
         if allowed <= 1:
+            self._ticks = None
             return 1
         self.current = min(self.current, allowed)
+        # the idle processors matter only before a try of more threads: read /proc/stat for that chunk alone
+        self._ticks = idle_cpu_ticks(self.cpus) if self.current == 1 and self.until_probe <= 1 else None
         if self.until_probe > 0 or not self.seconds_per_step:
             return self.current
         if self.current > 1:
