@@ -160,6 +160,8 @@ class Contacts(NamedTuple):
     stats: np.ndarray  # (N_STATS,) slots TOUCHING ... PEAK_OVERLAP of knitlad.kernels.contact
     threads: np.ndarray  # (1,) blocks the broad phase and the pair forces are split into (Numba threads)
     pair_results: np.ndarray  # (cap, PAIR_RESULTS) scratch of contact_forces
+    gap_ref: np.ndarray  # (cap,) each pair's gap at the list's first evaluation (a lower bound at its rebuild)
+    edge_moved: np.ndarray  # (ne,) each edge's largest end displacement since the rebuild (scratch)
 
 
 def edge_topology(m: RodModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -291,7 +293,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         keys=np.zeros(cap, dtype=np.int64),
         slip=np.zeros((cap, 3)),
         n_pairs=np.zeros(1, dtype=np.int64),
-        status=np.array([1, 0], dtype=np.int64),
+        status=np.array([1, 0, 0], dtype=np.int64),  # STALE, PAIRS_NEEDED, GAPS_KNOWN
         x_ref=rods.state.x.copy(),
         edge_radius=edge_radius,
         edge_prev=edge_prev,
@@ -307,6 +309,8 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         stats=np.zeros(N_STATS),
         threads=np.array([numba.get_num_threads()], dtype=np.int64),
         pair_results=np.zeros((cap, PAIR_RESULTS)),
+        gap_ref=np.zeros(cap),
+        edge_moved=np.zeros(ne),
     )
     if previous is not None:
         m = int(previous.n_pairs[0])

@@ -17,7 +17,7 @@ import numpy as np
 
 from knitlad import units
 from knitlad.contact import ContactModel, ContactPairs, Contacts, ContactStats, contact_time_step, make_contacts
-from knitlad.kernels.contact import PAIRS_NEEDED, PEAK_OVERLAP, STALE, refresh_contacts, touching_pairs_among
+from knitlad.kernels.contact import GAPS_KNOWN, PAIRS_NEEDED, PEAK_OVERLAP, STALE, refresh_contacts, touching_pairs_among
 from knitlad.kernels.integrate import (
     AXIAL_EXPLICIT,
     AXIAL_IMPLICIT,
@@ -370,6 +370,8 @@ class Simulation(SupportControl, ContactReadout):
     def replace_model(self, **arrays) -> None:
         """Replace model arrays of the same shapes (e.g. a periodic cell's shifts) from the next step on."""
         self.rods = self.rods.replace_model(**arrays)
+        if "edge_shift" in arrays:  # closing edges moved without their nodes: the pairs' stored gaps no longer bound
+            self.contacts.status[GAPS_KNOWN] = 0
 
     def set_external_forces(self, forces_N) -> None:
         """Replace the constant external forces [N], (n, 3) or one 3-vector for all, from now on (a new model).

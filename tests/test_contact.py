@@ -351,3 +351,26 @@ def test_per_contact_friction_is_at_the_coulomb_limit_where_a_pair_slides():
     assert np.all(ft <= mu * fn * (1 + 1e-9))
     assert np.all(np.abs(np.sum(pairs.friction_N * pairs.normal_N, axis=1)) <= 1e-9 * fn * fn)
     assert np.all(pairs.friction_N[pairs.sliding, 0] < 0)  # friction on the dragged yarn opposes its motion
+
+
+def test_skipping_pairs_whose_stored_gap_rules_them_out_changes_no_bit():
+    """The narrow phase skips candidate pairs whose gap at the list's rebuild exceeds their edges'
+    displacements since: a shaken, pressed weave with friction steps to the same bits as with every
+    pair tested at every evaluation (the stored gaps forgotten before each step)."""
+    from knitlad.kernels.contact import GAPS_KNOWN
+
+    def shaken(forget_gaps: bool) -> np.ndarray:
+        rods = pressed_weave()
+        rng = np.random.default_rng(3)
+        rods.state.v[:] = rng.normal(scale=0.2, size=rods.state.v.shape)  # m/s: pairs close and open
+        sim = kl.Simulation(rods, contact=ContactModel(stiffness=1e3, friction=0.4))
+        known = 0
+        for _ in range(400):
+            if forget_gaps:
+                sim.contacts.status[GAPS_KNOWN] = 0
+            sim.step(1)
+            known += int(sim.contacts.status[GAPS_KNOWN])
+        assert known == 400  # the gaps were known after every evaluation (the skip was on when not forgotten)
+        return sim.state.x.copy()
+
+    np.testing.assert_array_equal(shaken(False), shaken(True))

@@ -56,7 +56,12 @@ TOUCHING, MAX_OVERLAP, NORMAL_FORCE_SUM, SLIDING_PAIRS, PEAK_OVERLAP = range(5)
 N_STATS = 5  # PEAK_OVERLAP is the deepest overlap since the caller last zeroed it
 # slots of Contacts.status: STALE = 1 when the candidate list must be rebuilt at the next
 # evaluation (set at start and on overflow); PAIRS_NEEDED = the pairs the last overflowing build found
-STALE, PAIRS_NEEDED = range(2)
+STALE, PAIRS_NEEDED, GAPS_KNOWN = range(3)
+N_STATUS = 3  # GAPS_KNOWN = 1 once the narrow phase after a rebuild has stored each pair's gap (Contacts.gap_ref)
+# modes of counted_overlaps: every pair; every pair, storing its gap; pairs the stored gaps cannot rule out
+ALL_PAIRS_PLAIN, ALL_PAIRS_RECORD_GAPS, SKIP_BY_GAPS = range(3)
+# a pair is skipped only when its gap exceeds its edges' displacements by more than this [mm], far above round-off
+GAP_MARGIN = 1e-9
 # columns of the per-pair results of :func:`pair_contact_forces`
 FORCE_X, FORCE_Y, FORCE_Z, S_PAIR, T_PAIR, OVERLAP, NORMAL, SLIDING, TORQUE_I, TORQUE_J = range(10)
 PAIR_RESULTS = 10
@@ -118,7 +123,8 @@ def segment_distance(x, edge_a, edge_b, edge_shift, i, j):
 
 
 @njit(**NUMBA_OPTS)
-def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out):
+def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out,
+                     mode, gap_ref, edge_moved):
     """Narrow phase of the pairs p in [lo, hi): overlap, s, t into ``out[p, OVERLAP]``, ``out[p, S_PAIR]``,
     ``out[p, T_PAIR]``. The overlap is 0 when apart or, with ``union`` counting, when the contact
     belongs to a neighbouring edge (else every touching pair counts: ``all_pairs``).
@@ -130,12 +136,24 @@ def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge
 
     The rule is written out in this loop, not in a helper: as a helper over the arrays (compiled
     or inlined) it made the narrow phase 4 to 7 x slower (measured 2026-12-02, 42 x 42 knit).
+
+    ``mode`` ALL_PAIRS_RECORD_GAPS also stores each pair's gap (axis distance less the two radii)
+    in ``gap_ref``; SKIP_BY_GAPS writes an overlap of 0 without a distance test for a pair whose
+    stored gap exceeds the largest displacements of its two edges since (``edge_moved``): every
+    point of a segment moves by at most its ends' largest displacement, so the axes' distance
+    shrinks by at most the sum and the pair is still apart. The forces are the same to the bit;
+    the parameters s, t of a skipped pair are left as they were (nothing reads them when apart).
     """
     for p in range(lo, hi):
         i = pairs[p, 0]
         j = pairs[p, 1]
+        if mode == SKIP_BY_GAPS and gap_ref[p] > edge_moved[i] + edge_moved[j] + GAP_MARGIN:
+            out[p, OVERLAP] = 0.0
+            continue
         dist, s, t = segment_distance(x, edge_a, edge_b, edge_shift, i, j)
         overlap = edge_radius[i] + edge_radius[j] - dist
+        if mode == ALL_PAIRS_RECORD_GAPS:  # the gap at the rebuild's positions, at least (a bound if moved since)
+            gap_ref[p] = -overlap - edge_moved[i] - edge_moved[j]
         if union and overlap > 0.0:
             if s <= 0.0:
                 owned = edge_prev[i] < 0
@@ -338,9 +356,10 @@ MIN_PAIRS_PER_THREAD = 1000
 @njit(**NUMBA_OPTS)
 def pair_contact_forces(
     lo, hi, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
-    edge_prev, edge_next, union, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
+    edge_prev, edge_next, union, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out, mode, gap_ref, edge_moved,
 ):
-    """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``.
+    """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``
+    (the narrow phase in ``mode``, :func:`counted_overlaps`).
 
     The buffers and parameters of :class:`knitlad.contact.Contacts`, passed one by one:
     Numba's parallel regions (:func:`_pair_contact_forces_in_blocks`) take no named tuple.
@@ -360,7 +379,8 @@ def pair_contact_forces(
     of the step, :func:`knitlad.kernels.integrate.predict_velocities`), the slip on the half-step
     ``v``, ``omega``; else both on ``v``, ``omega``.
     """
-    counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out)
+    counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out,
+                     mode, gap_ref, edge_moved)
     for p in range(lo, hi):
         i = pairs[p, 0]
         j = pairs[p, 1]
@@ -489,14 +509,25 @@ def pair_contact_forces(
 @njit(**PARALLEL_OPTS)
 def _pair_contact_forces_in_blocks(
     n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
-    edge_prev, edge_next, union, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out,
+    edge_prev, edge_next, union, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out, mode, gap_ref, edge_moved,
 ):
     for blk in prange(n_blocks):
         pair_contact_forces(
             blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, omega, v_damp, omega_damp, predicted,
             spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, slip, k_n,
-            damping_n, k_t, damping_t, mu, dt, out,
+            damping_n, k_t, damping_t, mu, dt, out, mode, gap_ref, edge_moved,
         )
+
+
+@njit(**PARALLEL_OPTS)
+def edge_displacements(x, x_ref, edge_a, edge_b, out):
+    """Largest displacement of each edge's two ends since ``x_ref`` (the last rebuild) into ``out``."""
+    for k in prange(edge_a.shape[0]):
+        a = edge_a[k]
+        b = edge_b[k]
+        da = (x[a, 0] - x_ref[a, 0]) ** 2 + (x[a, 1] - x_ref[a, 1]) ** 2 + (x[a, 2] - x_ref[a, 2]) ** 2
+        db = (x[b, 0] - x_ref[b, 0]) ** 2 + (x[b, 1] - x_ref[b, 1]) ** 2 + (x[b, 2] - x_ref[b, 2]) ** 2
+        out[k] = math.sqrt(max(da, db))
 
 
 @njit(**NUMBA_OPTS)
@@ -517,18 +548,23 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
     n_pairs = c.n_pairs[0]
     n_blocks = min(c.threads[0], n_pairs // MIN_PAIRS_PER_THREAD)
     p = c.params
+    # most candidate pairs stay apart between two rebuilds: after the first evaluation of a list, a pair
+    # its stored gap rules out skips the distance test (counted_overlaps, SKIP_BY_GAPS)
+    mode = SKIP_BY_GAPS if c.status[GAPS_KNOWN] == 1 else ALL_PAIRS_RECORD_GAPS
+    edge_displacements(x, c.x_ref, edge_a, edge_b, c.edge_moved)
     if n_blocks > 1:
         _pair_contact_forces_in_blocks(
             n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
             c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, p.k_n, p.damping_n, p.k_t, p.damping_t,
-            p.mu, dt, c.pair_results,
+            p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved,
         )
     else:
         pair_contact_forces(
             0, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
             c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, p.k_n, p.damping_n, p.k_t, p.damping_t,
-            p.mu, dt, c.pair_results,
+            p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved,
         )
+    c.status[GAPS_KNOWN] = 1
     pairs, pair_results, stats = c.pairs, c.pair_results, c.stats
     n_touch = 0
     max_overlap = 0.0
@@ -585,7 +621,7 @@ def contact_energy(x, edge_a, edge_b, edge_shift, c, pairs, slip):
     n_pairs = pairs.shape[0]
     narrow = np.empty((n_pairs, PAIR_RESULTS))
     counted_overlaps(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, c.union, pairs, 0, n_pairs,
-                     narrow)
+                     narrow, ALL_PAIRS_PLAIN, c.gap_ref, c.edge_moved)
     total = 0.0
     for p in range(n_pairs):
         overlap = narrow[p, OVERLAP]
@@ -636,6 +672,7 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
     c.n_pairs[0] = n
     c.x_ref[:] = x
     c.status[STALE] = 0
+    c.status[GAPS_KNOWN] = 0
     return True
 
 
@@ -646,7 +683,7 @@ def touching_pairs_among(x, edge_a, edge_b, edge_shift, c, in_a, in_b):
     n_pairs = c.n_pairs[0]
     narrow = np.empty((n_pairs, PAIR_RESULTS))
     counted_overlaps(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, 0,
-                     n_pairs, narrow)
+                     n_pairs, narrow, ALL_PAIRS_PLAIN, c.gap_ref, c.edge_moved)
     n = 0
     for p in range(n_pairs):
         i = c.pairs[p, 0]
