@@ -137,6 +137,17 @@ class ThreadGovernor:
         # the load counts this process too (about one while it runs): room for the others' threads?
         return allowed if busy <= cores - allowed + 1.5 else 1
 
+    @contextmanager
+    def one_call(self):
+        """Numba threads for one kernel call that cannot be timed in chunks (a force evaluation, a
+        relaxation): :meth:`for_one_call`, then the count as it was."""
+        allowed = numba.get_num_threads()
+        numba.set_num_threads(self.for_one_call(allowed))
+        try:
+            yield
+        finally:
+            numba.set_num_threads(allowed)
+
     def record(self, threads: int, steps: int, seconds: float) -> None:
         if steps <= 0:
             return
@@ -322,21 +333,10 @@ class Simulation(SupportControl, ContactReadout):
         the dashpots see the state's velocities, or with ``predicted`` the step's prediction."""
         if not predicted:
             self.work.v_damp[:], self.work.omega_damp[:] = self.state.v, self.state.omega
-        with self._unsplit_call():
+        with self.threads.one_call():
             while not compute_forces(self.model, self.state, self.work, self.contacts, self.twist_mode,
                                      self.has_contact, self.drag, self.dt, self.axial_mode, self.dashpot_mode):
                 self._grow_contacts()
-
-    @contextmanager
-    def _unsplit_call(self):
-        """Numba threads for one kernel call that the governor cannot time in chunks (a force evaluation,
-        a relaxation): :meth:`ThreadGovernor.for_one_call`."""
-        allowed = numba.get_num_threads()
-        numba.set_num_threads(self.threads.for_one_call(allowed))
-        try:
-            yield
-        finally:
-            numba.set_num_threads(allowed)
 
     def set_friction(self, mu: float) -> None:
         """Change the Coulomb coefficient from the next step on (the paper: 0 while stretching, then 0.4)."""
@@ -474,7 +474,7 @@ class Simulation(SupportControl, ContactReadout):
         """
         ftol = force_tol_N / units.FORCE
         ttol = (torque_tol_Nm if torque_tol_Nm is not None else force_tol_N * 1e-3) / (units.FORCE * units.LENGTH)
-        with self._unsplit_call():
+        with self.threads.one_call():
             while True:
                 steps, fmax, tmax = fire_relax(
                     self.model, self.state, self.work, self.contacts, 0.5 * self.dt, self.dt, int(max_steps), ftol,
