@@ -165,24 +165,24 @@ def test_a_sweep_renders_its_ladder_jobs_on_request(smoke):
         assert len(list((smoke / "renders" / job).glob("render_front_*.png"))) == 5
 
 
+def _same_summary_as_the_pool(smoke, out, *options):
+    """The smoke sweep run with ``options`` into ``out`` gives the pool's summary (timings and code aside)."""
+    p = knitlad("sweep", "configs/smoke.yaml", "--out", str(out), *options)
+    assert p.returncode == 0, p.stderr
+    ignored = [*TIMING_COLUMNS, "knitlad_code"]
+    pd.testing.assert_frame_equal(read_summary(smoke).drop(columns=ignored), read_summary(out).drop(columns=ignored))
+
+
 def test_dask_on_a_local_cluster_gives_the_same_summary_as_the_pool(smoke, tmp_path):
     pytest.importorskip("distributed")
-    p = knitlad("sweep", "configs/smoke.yaml", "--out", str(tmp_path), "--executor", "dask")
-    assert p.returncode == 0, p.stderr
-    pool = read_summary(smoke).drop(columns=[*TIMING_COLUMNS, "knitlad_code"])
-    dask = read_summary(tmp_path).drop(columns=[*TIMING_COLUMNS, "knitlad_code"])
-    pd.testing.assert_frame_equal(pool, dask)
+    _same_summary_as_the_pool(smoke, tmp_path, "--executor", "dask")
 
 
 def test_a_batch_cluster_file_runs_the_sweep_through_dask_jobqueue(smoke, tmp_path):
     """--cluster configs/cluster/local.yaml: dask-jobqueue's cluster with its workers as local processes (the
     path a Slurm cluster takes, but for the batch system): the same summary as the pool."""
     pytest.importorskip("dask_jobqueue")
-    p = knitlad("sweep", "configs/smoke.yaml", "--out", str(tmp_path), "--cluster", "configs/cluster/local.yaml")
-    assert p.returncode == 0, p.stderr
-    pool = read_summary(smoke).drop(columns=[*TIMING_COLUMNS, "knitlad_code"])
-    cluster = read_summary(tmp_path).drop(columns=[*TIMING_COLUMNS, "knitlad_code"])
-    pd.testing.assert_frame_equal(pool, cluster)
+    _same_summary_as_the_pool(smoke, tmp_path, "--cluster", "configs/cluster/local.yaml")
 
 
 def test_the_slurm_example_prints_its_batch_script_and_bad_cluster_files_are_one_line(tmp_path):
