@@ -190,9 +190,7 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
         g.attrs["cut_node"] = result.cut_node
         if result.cell_centres is not None:
             checksummed_dataset(f.require_group("cells"), "centres", result.cell_centres)
-        for name, unit in RUN_UNITS.items():
-            if name in f:
-                f[name].attrs["unit"] = unit
+        _mark_units(f)
     return path
 
 
@@ -231,14 +229,19 @@ def write_trajectory(path: str | Path, recorder, material=None, compression: str
         checksummed_dataset(g, "edges", recorder.edges)
         checksummed_dataset(g, "yarn_start", recorder.yarn_start)
         checksummed_dataset(g, "node_course", recorder.node_yarn)
-        for name, unit in RUN_UNITS.items():
-            if name in f:
-                f[name].attrs["unit"] = unit
+        _mark_units(f)
     if xdmf:
         from knitlad.render import write_xdmf
 
         write_xdmf(path)
     return path
+
+
+def _mark_units(f: h5py.File) -> None:
+    """Each dataset of a run file gets its unit (RUN_UNITS) as the attribute "unit"."""
+    for name, unit in RUN_UNITS.items():
+        if name in f:
+            f[name].attrs["unit"] = unit
 
 
 def write_record(path: str | Path, attrs: dict) -> Path:
