@@ -92,32 +92,46 @@ def scales() -> None:
 
 
 class _StageProgress:
-    """A progress line per stage on stderr (redrawn in place on a terminal)."""
+    """A progress line per stage of a run on stderr (:class:`~knitlad.progress.ProgressLine`): the stretch's
+    share of its target, then the ladder's reach or its time limit, whichever is further."""
 
     def __init__(self) -> None:
-        self.stage = None
-        self.tty = sys.stderr.isatty()
-        self.last = -1
-        self.t0 = time.perf_counter()
+        self.stage, self.line = None, None
 
     def __call__(self, stage: str, fraction: float) -> None:
-        pct = int(100 * min(max(fraction, 0.0), 1.0))
+        from knitlad.progress import ProgressLine
+
         if stage != self.stage:
-            if self.stage is not None:
-                sys.stderr.write("\n" if self.tty else "")
-            self.stage, self.last, self.t0 = stage, -1, time.perf_counter()
-        if pct == self.last or (not self.tty and pct % 25 and pct != 100):
-            return
-        self.last = pct
-        bar = "#" * (pct // 5) + "." * (20 - pct // 5)
-        line = f"{stage:10s} [{bar}] {pct:3d}%  {time.perf_counter() - self.t0:6.1f} s"
-        sys.stderr.write(("\r" + line) if self.tty else line + "\n")
-        sys.stderr.flush()
+            self.close(finished=True)  # the next stage starts when the last one is done
+            self.stage, self.line = stage, ProgressLine(f"{stage:10s}", 1.0, "%")
+        self.line.update(fraction)
+
+    def close(self, finished: bool = False) -> None:
+        """End the line; ``finished``: the stage ended as it should (a ladder stopping early is done)."""
+        if self.line is not None:
+            if finished:
+                self.line.update(1.0)
+            self.line.close()
+        self.stage, self.line = None, None
+
+
+class _CountProgress:
+    """A progress line over a count known once the work starts (frames of a movie, images of a render)."""
+
+    def __init__(self, label: str, unit: str) -> None:
+        self.label, self.unit, self.line = label, unit, None
+
+    def __call__(self, done: int, total: int) -> None:
+        from knitlad.progress import ProgressLine
+
+        if self.line is None:
+            self.line = ProgressLine(self.label, total, self.unit)
+        self.line.update(done)
 
     def close(self) -> None:
-        if self.tty and self.stage is not None:
-            sys.stderr.write("\n")
-        self.stage = None
+        if self.line is not None:
+            self.line.close()
+            self.line = None
 
 
 def _option_type(annotation):
@@ -245,7 +259,7 @@ def cut(
     except typer.Exit:
         nothing_written()
         raise
-    progress.close()
+    progress.close(finished=True)
     summary = result.summary()
     _remove(earlier)  # the earlier run's renders and movies would not match this one
     try:
@@ -552,9 +566,11 @@ def _sweep_table(folder):
 @app.command()
 def plot(
     folder: str = typer.Argument(..., help="A sweep folder (with summary.csv) or a run folder (with ladder.h5)."),
-    diagrams: bool = typer.Option(True, "--diagrams/--no-diagrams", help="Also draw each job's spatio-temporal diagram."),
+    diagrams: bool = typer.Option(True, "--diagrams/--no-diagrams", help="Also draw each job's spatio-temporal diagram "
+                                  "(named by the parameters that vary between the jobs)."),
+    fmt: str = typer.Option("png", "--format", help="Figure format: png, pdf or svg."),
 ) -> None:
-    """PNG figures of a sweep (n_lad/n_y, f_x^fin and v_lad/c_b against f_x^ini, each job's diagrams)
+    """Figures of a sweep (n_lad/n_y, f_x^fin and v_lad/c_b against f_x^ini, each job's diagrams)
     or of one run (its cell and midline diagrams and renders).
 
     A sweep's summary is checked against the job files first; what is missing or wrong is
@@ -562,15 +578,21 @@ def plot(
     """
     from pathlib import Path
 
-    from knitlad.plots import column_midline_diagram, spatio_temporal_from_file, summary_plots, tension_history_plot
+    from knitlad.plots import (FORMATS, column_midline_diagram, job_figure_names, spatio_temporal_from_file,
+                               summary_plots, tension_history_plot)
 
+    if fmt not in FORMATS:
+        fail(f"--format: one of {', '.join(FORMATS)}, got {fmt!r}")
     if (Path(folder) / "ladder.h5").is_file():
         from knitlad.render import render_run
 
         h5 = _run_file(folder)
-        paths = [spatio_temporal_from_file(h5, Path(folder) / "spatio_temporal.png"),
-                 column_midline_diagram(h5, Path(folder) / "midline_diagram.png"),
-                 tension_history_plot(h5, Path(folder) / "tension_history.png"), *render_run(h5, Path(folder) / "render")]
+        line = _CountProgress("render", "images")
+        paths = [spatio_temporal_from_file(h5, Path(folder) / f"spatio_temporal.{fmt}"),
+                 column_midline_diagram(h5, Path(folder) / f"midline_diagram.{fmt}"),
+                 tension_history_plot(h5, Path(folder) / f"tension_history.{fmt}"),
+                 *render_run(h5, Path(folder) / "render", progress=line)]
+        line.close()
         typer.echo(f"wrote {len(paths)} figures in {folder}")
         return
 
@@ -586,12 +608,14 @@ def plot(
                        f"({', '.join(codes)}; this one is {code_identity()}): knitlad sweep --rerun-stale makes "
                        "them again with this one", err=True)
     fig_dir = Path(folder) / "plots"
-    paths = summary_plots(df, fig_dir)
+    paths = summary_plots(df, fig_dir, fmt)
     if diagrams:
         ladders = (df["status"] == "ok") & (df["scene"] == "ladder")
+        names = job_figure_names(df[ladders])
         for job in df.loc[ladders, "job_id"]:
             try:
-                paths.append(spatio_temporal_from_file(Path(folder) / "jobs" / f"{job}.h5", fig_dir / f"{job}.png"))
+                paths.append(spatio_temporal_from_file(Path(folder) / "jobs" / f"{job}.h5",
+                                                       fig_dir / f"{names[job]}.{fmt}"))
             except (OSError, KeyError, ValueError) as e:
                 problems.append(f"job {job}: no diagram ({type(e).__name__}: {str(e).splitlines()[0]})")
     typer.echo(f"wrote {len(paths)} figures in {fig_dir}")
@@ -747,7 +771,8 @@ def _run_file(run: str):
 
 @app.command()
 def render(
-    run: str = typer.Argument(..., help="A run folder written by knitlad cut (or its ladder.h5)."),
+    run: str = typer.Argument(..., help="A run folder written by knitlad cut (or its ladder.h5), or the trajectory "
+                             "file of a scene of one's own (knitlad.write_trajectory)."),
     at_ms: list[float] = typer.Option(None, "--at-ms", help="Instants after the cut \\[ms] (repeat); default: just "
                                       "after the cut, then four evenly spaced instants of the ladder."),
     view: list[str] = typer.Option(None, "--view", help="front (the x-y plane) and/or oblique (repeat); default both."),
@@ -762,20 +787,24 @@ def render(
         fail(f"--view: front or oblique, got {', '.join(views)}")
     if width < 64:
         fail(f"--width: at least 64, got {width}")
+    line = _CountProgress("render", "images")
     try:
         paths = render_run(h5, h5.parent / "render", [t * 1e-3 for t in at_ms] if at_ms else None, views,
-                           (width, width * 3 // 4))
+                           (width, width * 3 // 4), progress=line)
     except ValueError as e:
         fail(str(e))
     except OSError as e:  # a full disk: what was written whole stays, the rest is said
+        line.close()
         typer.echo(f"knitlad: render stopped: {e}", err=True)
         raise typer.Exit(1)
+    line.close()
     typer.echo(f"wrote {len(paths)} images in {h5.parent / 'render'}")
 
 
 @app.command()
 def movie(
-    run: str = typer.Argument(..., help="A run folder written by knitlad cut (or its ladder.h5)."),
+    run: str = typer.Argument(..., help="A run folder written by knitlad cut (or its ladder.h5), or the trajectory "
+                             "file of a scene of one's own (knitlad.write_trajectory)."),
     gif: bool = typer.Option(False, "--gif", help="An animated GIF instead of an MP4."),
     fps: int = typer.Option(12, "--fps", help="Frames per second of the movie."),
     width: int = typer.Option(960, "--width", help="Frame width \\[pixels]; height 3/4 of it."),
@@ -786,13 +815,17 @@ def movie(
     h5 = _run_file(run)
     if fps < 1 or width < 64:
         fail("--fps must be >= 1 and --width >= 64")
+    line = _CountProgress("movie", "frames")
     try:
-        path = make_movie(h5, h5.with_suffix(".gif" if gif else ".mp4"), fps=fps, size=(width, width * 3 // 4))
+        path = make_movie(h5, h5.with_suffix(".gif" if gif else ".mp4"), fps=fps, size=(width, width * 3 // 4),
+                          progress=line)
     except ValueError as e:
         fail(str(e))
     except OSError as e:  # a full disk: the movie is not renamed into place
+        line.close()
         typer.echo(f"knitlad: movie not written: {e}", err=True)
         raise typer.Exit(1)
+    line.close()
     typer.echo(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB)")
 
 

@@ -22,9 +22,26 @@ def _pyplot():
     return plt
 
 
+FORMATS = ("png", "pdf", "svg")  # what `knitlad plot --format` writes
+PNG_DPI = 200
+
+# the paper's symbols, rendered (matplotlib's mathtext), for the columns of a summary table
+SYMBOL = {
+    "fx": r"$f_x$", "fx_ini": r"$f_x^{\mathrm{ini}}$", "fx_fin": r"$f_x^{\mathrm{fin}}$",
+    "n_lad_over_ny": r"$n_{\mathrm{lad}}/n_y$", "v_lad_over_cb": r"$v_{\mathrm{lad}}/c_b$", "mu": r"$\mu$",
+    "lx": r"$l_x/l_0$", "ly": r"$l_y/l_0$", "natural_curvature": r"$K$", "resolution": "nodes per stitch",
+}
+
+
+def symbol(column: str) -> str:
+    """The rendered symbol of a summary column (the column's name if it has none)."""
+    return SYMBOL.get(column, column)
+
+
 def _save(fig, path: Path) -> Path:
+    """Write ``fig`` to ``path`` in the format its suffix names (PNG at PNG_DPI), atomically."""
     with atomic_path(path, suffix=path.suffix) as tmp:
-        fig.savefig(tmp)
+        fig.savefig(tmp, format=path.suffix.lstrip(".") or "png", dpi=PNG_DPI)
     _pyplot().close(fig)
     return path
 
@@ -34,7 +51,7 @@ def draw_spatio_temporal(times_s, front_up, front_down, column_history, cut_row:
     plt = _pyplot()
     path = Path(path)
     t_ms = np.asarray(times_s) * 1e3
-    fig, ax = plt.subplots(figsize=(5, 3.5), dpi=120)
+    fig, ax = plt.subplots(figsize=(5, 3.5))
     if len(column_history):
         cells = np.asarray(column_history, dtype=float).T
         ax.imshow(cells, origin="lower", aspect="auto", cmap="Greys", vmin=0, vmax=1.5,
@@ -51,7 +68,8 @@ def draw_spatio_temporal(times_s, front_up, front_down, column_history, cut_row:
 
 
 def _title(fx_ini: float, v: float) -> str:
-    return f"f_x^ini = {fx_ini:.2f}, v_lad/c_b = {v:.3f}" if np.isfinite(v) else f"f_x^ini = {fx_ini:.2f}"
+    ini = f"{symbol('fx_ini')} = {fx_ini:.2f}"
+    return f"{ini}, {symbol('v_lad_over_cb')} = {v:.3f}" if np.isfinite(v) else ini
 
 
 def spatio_temporal_diagram(result, path: str | Path) -> Path:
@@ -91,12 +109,12 @@ def column_midline_diagram(h5_path: str | Path, path: str | Path) -> Path:
     x_mid = centres[0, column, 0]
     l_x = float(attrs["box_lx_over_l0"]) * float(attrs["scale_l0_m"])
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(5, 3.5), dpi=120)
+    fig, ax = plt.subplots(figsize=(5, 3.5))
     for k in range(len(t_ms)):
         near = np.abs(x[k, :, 0] - x_mid) < 0.04 * l_x
         ax.plot(np.full(near.sum(), t_ms[k]), 1e3 * x[k, near, 1], "k.", ms=1.2)
     ax.set_xlabel("time since the cut [ms]")
-    ax.set_ylabel("y of the yarn on the column's middle line [mm]")
+    ax.set_ylabel("yarn's $y$ on the column's mid-line [mm]")  # short: a longer one was clipped
     ax.set_title(_title(float(attrs["fx_ini"]), float(attrs["v_lad_over_cb"])) + f", column {column}", fontsize=9)
     fig.tight_layout()
     return _save(fig, Path(path))
@@ -111,17 +129,25 @@ def tension_history_plot(h5_path: str | Path, path: str | Path) -> Path:
         steps, box, fx_stretch = (f[f"stretch/{k}"][()] for k in ("relax_steps", "box_lx_over_l0", "fx"))
         t_ms, fx = f["series/time"][()] * 1e3, f["series/fx"][()]
     plt = _pyplot()
-    fig, (left, right) = plt.subplots(1, 2, figsize=(7.5, 3.2), dpi=120, sharey=True,
+    fig, (left, right) = plt.subplots(1, 2, figsize=(7.5, 3.2), sharey=True,
                                       gridspec_kw={"width_ratios": [1, 1.3]})
-    left.plot(steps / 1e3, fx_stretch, "k.-", ms=2, lw=0.6)
-    left.set_xlabel("stretch at mu = 0: FIRE steps [1e3]")
-    left.set_ylabel("f_x")
-    twin = left.twiny()
-    twin.set_xlim(box.min(), box.max()) if box.size and box.max() > box.min() else None
-    twin.set_xlabel("box l_x/l0", fontsize=8)
+    left.set_ylabel(symbol("fx"))
+    if steps.size and steps.max() > steps.min():  # a stretch of the whole knit: its relaxed readings
+        left.plot(steps / 1e3, fx_stretch, "k.-", ms=2, lw=0.6)
+        left.set_xlabel(r"stretch at $\mu$ = 0: FIRE steps [$10^3$]")
+        if box.max() > box.min():
+            twin = left.twiny()
+            twin.set_xlim(box.min(), box.max())
+            twin.set_xlabel(f"box {symbol('lx')}", fontsize=8)
+    else:  # stretched as one periodised stitch and tiled: no history of the knit's own to draw
+        left.plot([0.0], [fx_stretch[-1] if fx_stretch.size else np.nan], "ko", ms=4)
+        left.set_xticks([])
+        left.set_xlabel("stretch at $\\mu$ = 0")
+        left.text(0.5, 0.06, f"one periodised stitch stretched\nand tiled: no FIRE history\n{symbol('lx')} = "
+                  f"{box[-1] if box.size else np.nan:.3f}", transform=left.transAxes, ha="center", fontsize=8)
     right.plot(t_ms, fx, "tab:red", lw=1.0)
     right.set_xlabel("time since the cut [ms]")
-    right.axhline(fx_stretch[-1] if fx_stretch.size else np.nan, color="k", ls=":", lw=0.7, label="f_x^ini")
+    right.axhline(fx_stretch[-1] if fx_stretch.size else np.nan, color="k", ls=":", lw=0.7, label=symbol("fx_ini"))
     right.legend(fontsize=7)
     fig.tight_layout()
     return _save(fig, Path(path))
@@ -132,26 +158,27 @@ EXPERIMENTS_VELOCITY_SLOPE = 0.1  # the experiments' v_lad/c_b ~ 0.1 f_x^ini (pa
 DAMAGE_CLASSES = (0.2, 1.0, 2.0)  # the paper's classes of n_lad/n_y (Fig. 3e): < 0.2, 0.2-1, 1-2, >= 2
 
 SUMMARY_PLOTS = {
-    # file name: (y column, y label, paper figure)
-    "damage_vs_fx.png": ("n_lad_over_ny", "n_lad / n_y", "Fig. 3e"),
-    "fx_fin_vs_fx_ini.png": ("fx_fin", "f_x^fin", "Fig. 3f"),
-    "velocity_vs_fx.png": ("v_lad_over_cb", "v_lad / c_b", "Fig. 5a"),
+    # file stem: (y column, paper figure)
+    "damage_vs_fx": ("n_lad_over_ny", "Fig. 3e"),
+    "fx_fin_vs_fx_ini": ("fx_fin", "Fig. 3f"),
+    "velocity_vs_fx": ("v_lad_over_cb", "Fig. 5a"),
 }
 
 
 def loop_velocity_plot(df, path: str | Path) -> Path:
     """Single-loop sweeps (paper Fig. 5c): v_lad/c_b against f_x, one series per mu, and 0.34 sqrt(f_x)."""
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(4.5, 3.4), dpi=120)
+    fig, ax = plt.subplots(figsize=(4.5, 3.4))
     for mu, g in df.groupby("mu", sort=True):
         g = g.sort_values("fx")
         released = g["released"].astype(bool)
-        line, = ax.plot(g["fx"][released], g["v_lad_over_cb"][released], "o-", ms=4, label=f"mu = {mu}")
+        line, = ax.plot(g["fx"][released], g["v_lad_over_cb"][released], "o-", ms=4, label=f"{symbol('mu')} = {mu}")
         if (~released).any():  # still hooked at the end of the run: v_lad = 0, not part of the curve
             ax.plot(g["fx"][~released], 0 * g["fx"][~released], "x", color=line.get_color())
     f = np.linspace(0, float(df["fx"].max()), 100)
-    ax.plot(f, 0.34 * np.sqrt(f), "k--", lw=0.8, label="0.34 sqrt(f_x) (paper, mu = 0)")
-    return _labelled(fig, ax, "f_x", "v_lad / c_b", "single loop: v_lad/c_b against f_x (paper Fig. 5c)", path)
+    ax.plot(f, 0.34 * np.sqrt(f), "k--", lw=0.8, label=r"$0.34\sqrt{f_x}$ (paper, $\mu$ = 0)")
+    return _labelled(fig, ax, symbol("fx"), symbol("v_lad_over_cb"),
+                     f"single loop: {symbol('v_lad_over_cb')} against {symbol('fx')} (paper Fig. 5c)", path)
 
 
 def _labelled(fig, ax, xlabel: str, ylabel: str, title: str, path: str | Path) -> Path:
@@ -168,21 +195,21 @@ def _labelled(fig, ax, xlabel: str, ylabel: str, title: str, path: str | Path) -
 def zero_tension_curve_plot(df, d_over_l0: float, path: str | Path) -> Path:
     """The f_x = 0 curve of the periodised stitch: l_y/l0 against l_x/l0 (f_x > 0 to its right)."""
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(4.2, 3.6), dpi=120)
-    ax.plot(df["lx_over_l0_at_fx0"], df["ly_over_l0"], "k-o", ms=3, label=f"f_x = 0, d/l0 = {d_over_l0:.4g}")
-    return _labelled(fig, ax, "l_x / l0", "l_y / l0", "periodised stitch: f_x > 0 right of the curve", path)
+    fig, ax = plt.subplots(figsize=(4.2, 3.6))
+    ax.plot(df["lx_over_l0_at_fx0"], df["ly_over_l0"], "k-o", ms=3, label=f"$f_x$ = 0, $d/l_0$ = {d_over_l0:.4g}")
+    return _labelled(fig, ax, symbol("lx"), symbol("ly"), "periodised stitch: $f_x$ > 0 right of the curve", path)
 
 
-def summary_plots(df, out_dir: str | Path) -> list[Path]:
-    """One PNG per entry of SUMMARY_PLOTS (laddering jobs: one series per (l_y/l0, mu) pair),
-    and the single-loop velocity plot for loop jobs."""
+def summary_plots(df, out_dir: str | Path, fmt: str = "png") -> list[Path]:
+    """One figure per entry of SUMMARY_PLOTS (laddering jobs: one series per value of the swept
+    l_y/l0, mu, resolution and K), and the single-loop velocity plot for loop jobs; ``fmt``: one of FORMATS."""
     plt = _pyplot()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     ok = df[df["status"] == "ok"]
     paths = []
     if "scene" in ok and (ok["scene"] == "loop").any():
-        paths.append(loop_velocity_plot(ok[ok["scene"] == "loop"], out / "loop_velocity_vs_fx.png"))
+        paths.append(loop_velocity_plot(ok[ok["scene"] == "loop"], out / f"loop_velocity_vs_fx.{fmt}"))
         ok = ok[ok["scene"] != "loop"]
     if "scene" in ok:
         ok = ok[ok["scene"] == "ladder"]  # stitch sweeps: the table says it all
@@ -190,24 +217,43 @@ def summary_plots(df, out_dir: str | Path) -> list[Path]:
         return paths
     keys = [k for k in ("ly", "mu", "resolution", "natural_curvature") if k in ok and ok[k].nunique() > 1] or [None]
     groups = ok.groupby(keys if keys != [None] else (lambda _: ""), sort=True)
-    for name, (column, label, figure) in SUMMARY_PLOTS.items():
-        fig, ax = plt.subplots(figsize=(4.5, 3.4), dpi=120)
+    x = symbol("fx_ini")
+    for stem, (column, figure) in SUMMARY_PLOTS.items():
+        fig, ax = plt.subplots(figsize=(4.5, 3.4))
         for key, g in groups:
             g = g.sort_values("fx_ini")
             key = key if isinstance(key, tuple) else (key,)
-            legend = ", ".join(f"{k} = {v}" for k, v in zip(keys, key) if k is not None) or "knitlad"
+            legend = ", ".join(f"{symbol(k)} = {v}" for k, v in zip(keys, key) if k is not None) or "knitlad"
             ax.plot(g["fx_ini"], g[column], "o-", ms=4, label=legend)
         if column == "v_lad_over_cb":
             px, py = zip(*PAPER_DER_VELOCITY)
-            ax.plot(px, py, "k+", ms=8, label="paper, DER 42 x 42")
+            ax.plot(px, py, "k+", ms=8, label=r"paper, DER 42 $\times$ 42")
             f = np.array([0.0, float(np.nanmax(ok["fx_ini"]))])
-            ax.plot(f, EXPERIMENTS_VELOCITY_SLOPE * f, "k--", lw=0.8, label="experiments, 0.1 f_x")
+            ax.plot(f, EXPERIMENTS_VELOCITY_SLOPE * f, "k--", lw=0.8, label=f"experiments, 0.1 {x}")
         if column == "n_lad_over_ny":
             for k, level in enumerate(DAMAGE_CLASSES):  # the paper's damage classes, said in the legend
                 ax.axhline(level, color="0.6", ls=":", lw=0.7,
                            label="paper's damage classes (Fig. 3e): 0.2, 1, 2" if k == 0 else None)
         if column == "fx_fin":
             lim = float(np.nanmax(ok["fx_ini"])) if len(ok) else 1.0
-            ax.plot([0, lim], [0, lim], "k:", lw=0.8, label="f_x^fin = f_x^ini")
-        paths.append(_labelled(fig, ax, "f_x^ini", label, f"{label} against f_x^ini (paper {figure})", out / name))
+            ax.plot([0, lim], [0, lim], "k:", lw=0.8, label=f"{symbol('fx_fin')} = {x}")
+        label = symbol(column)
+        paths.append(_labelled(fig, ax, x, label, f"{label} against {x} (paper {figure})", out / f"{stem}.{fmt}"))
     return paths
+
+
+def job_figure_names(df) -> dict[str, str]:
+    """A file stem per job of a sweep table, from the parameters that vary between its jobs
+    (``natural_curvature=1_mu=0.2_fx=3``); the job id is added where two jobs would share a stem."""
+    params = [c for c in df.columns[: list(df.columns).index("status")] if c not in ("job_id", "scene")]
+    varying = [c for c in params if df[c].astype(str).nunique() > 1]
+
+    def value(v) -> str:
+        return f"{v:g}" if isinstance(v, (int, float, np.number)) and not isinstance(v, bool) else str(v)
+
+    stems = {row.job_id: "_".join(f"{c}={value(getattr(row, c))}" for c in varying) or row.job_id
+             for row in df.itertuples()}
+    counts = {}
+    for stem in stems.values():
+        counts[stem] = counts.get(stem, 0) + 1
+    return {job: (stem if counts[stem] == 1 else f"{stem}_{job}") for job, stem in stems.items()}

@@ -1,7 +1,7 @@
 """The scenes a sweep can run: each names its config, its runner and its summary columns once.
 
-A runner takes the validated config of one job, the job's output options and the
-sweep's folder, runs it, and returns its summary (a dict of scalars) and a writer
+A runner takes the validated config of one job, the job's output options, the
+sweep's folder and a progress callback ``progress(stage, fraction)`` (or None), runs it, and returns its summary (a dict of scalars) and a writer
 ``write(path, record)`` of its file (``record``: the sweep's job attributes: id,
 status, config).
 To add a scene: a pydantic config in :mod:`knitlad.config`, a runner here, one entry.
@@ -23,7 +23,7 @@ from knitlad.config import CutConfig, LoopConfig, StitchConfig
 @dataclass(frozen=True)
 class Scene:
     config: type[BaseModel]
-    run: Callable  # (config, output options, sweep folder) -> (summary, write)
+    run: Callable  # (config, output options, sweep folder, progress) -> (summary, write)
     summary_keys: tuple[str, ...]  # the results a sweep's summary table shows, in order
     description: str
     shared_work: Callable | None = None  # config -> key of work that jobs with the same key share
@@ -36,7 +36,7 @@ def stretch_of(cfg: CutConfig) -> str:
     return stretch_key(cfg.stretch_settings())
 
 
-def run_ladder_job(cfg: CutConfig, output, folder: Path | None = None):
+def run_ladder_job(cfg: CutConfig, output, folder: Path | None = None, progress=None):
     """The laddering experiment (`knitlad cut`); its file holds the frames and series (:mod:`knitlad.io.hdf5`).
 
     The stretched knit is kept in ``folder/stretched`` and reused by the jobs that share
@@ -50,12 +50,12 @@ def run_ladder_job(cfg: CutConfig, output, folder: Path | None = None):
     require_memory(cfg.memory_estimate_bytes(), f"a {cfg.n_x} x {cfg.n_y} knit at {cfg.resolution} nodes per stitch")
     t0 = time.perf_counter()
     if folder is None:
-        knit, reused = stretch(cfg.stretch_settings()), False
+        knit, reused = stretch(cfg.stretch_settings(), progress), False
     else:
-        knit, reused = cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch)
+        knit, reused = cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch, progress)
     if reused:  # the stretch cost this job only the reading
         knit = dataclasses.replace(knit, wall_s=time.perf_counter() - t0)
-    result = analyse(propagate(cut(knit, cfg.dynamics_settings())))
+    result = analyse(propagate(cut(knit, cfg.dynamics_settings()), progress=progress))
     if not output.frames:
         result.frames, result.frame_times_s = [], []
     compression = None if output.compression == "none" else output.compression
@@ -81,13 +81,13 @@ def _attributes_only(result):
     return summary, write
 
 
-def run_loop_job(cfg: LoopConfig, output, folder: Path | None = None):
+def run_loop_job(cfg: LoopConfig, output, folder: Path | None = None, progress=None):
     from knitlad.periodic_loop import run_single_loop
 
     return _attributes_only(run_single_loop(cfg.settings()))
 
 
-def run_stitch_job(cfg: StitchConfig, output, folder: Path | None = None):
+def run_stitch_job(cfg: StitchConfig, output, folder: Path | None = None, progress=None):
     from knitlad.stitch_model import StitchRun
 
     return _attributes_only(StitchRun(cfg.settings()).run())

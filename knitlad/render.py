@@ -1,4 +1,5 @@
-"""Pictures of a laddering run from its ``ladder.h5``: renders, a movie and a ParaView file.
+"""Pictures of a laddering run from its ``ladder.h5`` (or of one's own scene, from its trajectory file):
+renders, a movie and a ParaView file.
 
 * :func:`render_run`: the fabric at chosen instants (default: the knit just cut, then
   four evenly spaced instants of the ladder, as in the paper's figures), yarns drawn as
@@ -17,6 +18,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import h5py
 import numpy as np
@@ -30,7 +32,8 @@ LADDERED_COLOUR = (0.85, 0.15, 0.15)
 
 @dataclass
 class Run:
-    """What a picture needs from a run file (SI units)."""
+    """What a picture needs from a run file (SI units): a laddering run, or the trajectory of one's own
+    scene (:func:`knitlad.io.hdf5.write_trajectory`: no cells, each yarn its own colour)."""
 
     path: Path
     positions: h5py.Dataset  # (n_frames, n, 3) [m]
@@ -43,10 +46,19 @@ class Run:
     diameter: float
     l_x: float
     l_y: float
+    knit: bool = True  # a laddering run (cells, courses, a cut), else a scene of one's own
 
     @staticmethod
     def open(path: str | Path) -> tuple["Run", h5py.File]:
+        from knitlad.io.hdf5 import is_trajectory
+
         f = h5py.File(path, "r")
+        if is_trajectory(f) and "positions" in f.get("frames", {}):
+            n = f["frames/positions"].shape[0]
+            run = Run(Path(path), f["frames/positions"], f["frames/time"][()], np.zeros((n, 0, 0), dtype=bool),
+                      f["topology/edges"][()], f["topology/node_course"][()], -1, np.zeros((0, 0, 2)),
+                      float(f.attrs["scale_d_m"]), 0.0, 0.0, knit=False)
+            return run, f
         if "frames" not in f or "laddered" not in f["frames"]:
             f.close()
             raise ValueError(f"{path}: no frames to draw (the run was written without them, or by an older knitlad)")
@@ -61,6 +73,12 @@ class Run:
 
     def frame_at(self, t: float) -> int:
         return int(np.argmin(np.abs(self.times_s - t)))
+
+    def label(self, k: int, since: str = " after the cut") -> str:
+        """The caption of frame ``k``: its time, and for a laddering run the cells undone."""
+        if not self.knit:
+            return f"t = {self.times_s[k] * 1e3:.3f} ms"
+        return f"t = {self.times_s[k] * 1e3:.3f} ms{since}, {int(self.laddered[k].sum())} cells undone"
 
 
 def _quiet_vtk() -> None:
@@ -99,14 +117,15 @@ def _fabric_actor(run: Run, x: np.ndarray, window: np.ndarray | None):
     points.SetData(numpy_to_vtk(np.ascontiguousarray(x, dtype=np.float64), deep=True))
     cells = np.column_stack([np.full(len(edges), 2), edges]).astype(np.int64).ravel()
     lines = vtkCellArray()
-    lines.SetCells(len(edges), numpy_to_vtkIdTypeArray(cells, deep=True))
+    lines.ImportLegacyFormat(numpy_to_vtkIdTypeArray(cells, deep=True))  # (2, i, j) per edge
     poly = vtkPolyData()
     poly.SetPoints(points)
     poly.SetLines(lines)
     course = run.node_course
     colours = COURSE_COLOURS[np.mod(course, len(COURSE_COLOURS))]
-    colours[(course < 0) | (course >= run.cell_centres.shape[0])] = 0.6  # the held edge courses: grey
-    colours[course == run.cut_course] = CUT_COLOUR
+    if run.knit:
+        colours[(course < 0) | (course >= run.cell_centres.shape[0])] = 0.6  # the held edge courses: grey
+        colours[course == run.cut_course] = CUT_COLOUR
     rgb = numpy_to_vtk((255 * colours).astype(np.uint8), deep=True)
     rgb.SetName("colour")
     poly.GetPointData().SetScalars(rgb)
@@ -219,31 +238,38 @@ def whole_png(path: Path) -> None:
 
 
 def default_instants(run: Run) -> list[float]:
-    """Just after the cut (the stretched knit), then four evenly spaced instants of the ladder."""
-    t_end = float(run.times_s[-1])
-    return [0.0] + [t_end * k / 4 for k in range(1, 5)]
+    """The first frame (a laddering run: the knit just cut), then four evenly spaced instants to the last."""
+    t0, t_end = float(run.times_s[0]), float(run.times_s[-1])
+    return [t0 + (t_end - t0) * k / 4 for k in range(5)]
 
 
 def render_run(h5: str | Path, out_dir: str | Path, times_s: list[float] | None = None,
-               views: tuple[str, ...] = ("front", "oblique"), size=(1200, 900)) -> list[Path]:
-    """PNGs of the fabric at ``times_s`` [s since the cut] (default :func:`default_instants`)."""
+               views: tuple[str, ...] = ("front", "oblique"), size=(1200, 900),
+               progress: Callable[[int, int], None] | None = None) -> list[Path]:
+    """PNGs of the fabric at ``times_s`` [s since the cut] (default :func:`default_instants`).
+    ``progress(done, total)`` is called after each image."""
     run, f = Run.open(h5)
     out = Path(out_dir)
     paths = []
     try:
-        for t in times_s if times_s is not None else default_instants(run):
-            k = run.frame_at(t)
-            label = f"t = {run.times_s[k] * 1e3:.3f} ms after the cut, {int(run.laddered[k].sum())} cells undone"
+        instants = times_s if times_s is not None else default_instants(run)
+        frames = list(dict.fromkeys(run.frame_at(t) for t in instants))  # each stored frame once
+        for k in frames:
+            label = run.label(k)
             for view in views:
                 paths.append(_picture(run, k, out / f"render_{view}_{run.times_s[k] * 1e6:08.1f}us.png", view,
                                       size, label=label))
+                if progress:
+                    progress(len(paths), len(frames) * len(views))
     finally:
         f.close()
     return paths
 
 
-def movie(h5: str | Path, path: str | Path, fps: int = 12, size=(960, 720)) -> Path:
-    """Every frame of the run, front view with a time stamp, as MP4 (or GIF if ``path`` ends so)."""
+def movie(h5: str | Path, path: str | Path, fps: int = 12, size=(960, 720),
+          progress: Callable[[int, int], None] | None = None) -> Path:
+    """Every frame of the run, front view with a time stamp, as MP4 (or GIF if ``path`` ends so).
+    ``progress(done, total)`` is called after each frame."""
     import tempfile
 
     import imageio.v2 as imageio
@@ -255,9 +281,10 @@ def movie(h5: str | Path, path: str | Path, fps: int = 12, size=(960, 720)) -> P
             kwargs = dict(fps=fps, macro_block_size=8) if path.suffix == ".mp4" else dict(duration=1 / fps)
             with imageio.get_writer(out, **kwargs) as writer:
                 for k in range(len(run.times_s)):
-                    label = (f"t = {run.times_s[k] * 1e3:.3f} ms  front: {int(run.laddered[k].sum())} cells undone")
-                    frame = _picture(run, k, Path(tmp) / f"{k:05d}.png", "front", size, label=label)
+                    frame = _picture(run, k, Path(tmp) / f"{k:05d}.png", "front", size, label=run.label(k, since=""))
                     writer.append_data(imageio.imread(frame))
+                    if progress:
+                        progress(k + 1, len(run.times_s))
     finally:
         f.close()
     return path

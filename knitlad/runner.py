@@ -36,6 +36,7 @@ from knitlad.io.atomic import atomic_path
 from knitlad.io.folders import FolderLock, lock_holds, writable_folder
 from knitlad.io.hdf5 import read_attrs, verify_datasets, write_record
 from knitlad.io.summary import write_summary
+from knitlad.progress import ProgressFile, ProgressLine, job_fraction
 from knitlad.provenance import code_identity
 from knitlad.registry import SCENES
 from knitlad.sweep import Job
@@ -77,8 +78,9 @@ def run_job(job: Job, jobs_dir: str, threads: int | None = 1, token: str | None 
         numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
     path = job_path(jobs_dir, job)
     t0 = time.perf_counter()
+    progress = ProgressFile(path.with_suffix(".progress"))  # read by the sweep's progress line
     try:
-        summary, write = SCENES[job.scene].run(job.scene_config(), job.output, Path(jobs_dir).parent)
+        summary, write = SCENES[job.scene].run(job.scene_config(), job.output, Path(jobs_dir).parent, progress)
         record = _record(job, "ok", "", time.perf_counter() - t0)
     except KeyboardInterrupt:
         raise
@@ -86,6 +88,8 @@ def run_job(job: Job, jobs_dir: str, threads: int | None = 1, token: str | None 
         record = _record(job, "failed", _one_line(e), time.perf_counter() - t0)
         record["traceback"] = traceback.format_exc()
         summary, write = {}, lambda p, r: write_record(p, r)
+    finally:
+        progress.clear()
     if token is not None and not lock_holds(Path(jobs_dir).parent, token):
         return summary_row(job, None) | {"error": ABANDONED}
     try:
@@ -164,35 +168,52 @@ class SweepOutcome:
 
 
 class SweepProgress:
-    """One line on stderr: jobs done, failed, skipped and the ETA (redrawn in place on a terminal)."""
+    """The sweep's progress line on stderr (:class:`~knitlad.progress.ProgressLine`): jobs done, counting the
+    running jobs' own progress (read from their progress files in ``jobs_dir`` by a watcher thread, so
+    that the line moves inside a job of an hour), failed and skipped jobs, rate and time left."""
 
-    def __init__(self, total: int, skipped: int, stream=None) -> None:
-        self.total, self.skipped, self.done, self.failed = total, skipped, 0, 0
-        self.stream = stream or sys.stderr
-        self.tty = self.stream.isatty()
-        self.t0 = time.perf_counter()
-        self.draw()
+    WATCH_S = 1.0
+
+    def __init__(self, total: int, skipped: int, stream=None, jobs_dir: Path | None = None) -> None:
+        self.skipped, self.done, self.failed = skipped, 0, 0
+        self.line = ProgressLine("sweep", total - skipped, "jobs", stream)
+        self.jobs_dir = jobs_dir
+        self._stop = threading.Event()
+        self._watcher = None
+        self.draw(force=True)
+        if jobs_dir is not None:
+            self._watcher = threading.Thread(target=self._watch, name="knitlad-sweep-progress", daemon=True)
+            self._watcher.start()
+
+    def running(self) -> list[tuple[str, float]]:
+        """(stage, fraction of the job) of each job that reports its progress now."""
+        if self.jobs_dir is None:
+            return []
+        found = (ProgressFile.read(p) for p in sorted(Path(self.jobs_dir).glob("*.progress")))
+        return [(stage, job_fraction(stage, frac)) for stage, frac in (r for r in found if r is not None)]
 
     def update(self, status: str) -> None:
         self.done += 1
         self.failed += status != "ok"
-        self.draw()
+        self.draw(force=not self.line.tty)
 
-    def draw(self) -> None:
-        todo = self.total - self.skipped
-        elapsed = time.perf_counter() - self.t0
-        eta = elapsed / self.done * (todo - self.done) if self.done else math.nan
-        frac = self.done / todo if todo else 1.0
-        bar = "#" * int(20 * frac) + "." * (20 - int(20 * frac))
-        eta_s = f"ETA {eta:6.0f} s" if math.isfinite(eta) else "ETA      ? s"
-        line = (f"sweep [{bar}] {self.done}/{todo} jobs, {self.failed} failed"
-                f"{f', {self.skipped} already done' if self.skipped else ''}  {elapsed:6.0f} s  {eta_s}")
-        self.stream.write(("\r" + line) if self.tty else line + "\n")
-        self.stream.flush()
+    def draw(self, force: bool = False) -> None:
+        running = self.running()
+        note = f"{self.failed} failed" + (f", {self.skipped} already done" if self.skipped else "")
+        if running:
+            note += ", running: " + " ".join(f"{stage} {100 * frac:.0f}%" for stage, frac in running[:4])
+        self.line.update(self.done + sum(frac for _, frac in running), note, force=force)
+
+    def _watch(self) -> None:
+        while not self._stop.wait(self.WATCH_S):
+            self.draw()
 
     def close(self) -> None:
-        if self.tty:
-            self.stream.write("\n")
+        self._stop.set()
+        if self._watcher is not None:
+            self._watcher.join()
+        self.line.update(self.done, self.line.note.split(", running")[0])
+        self.line.close()
 
 
 def _init_worker() -> None:
@@ -335,7 +356,9 @@ def _locked_sweep(jobs, out: Path, executor, workers, scheduler, rerun: tuple[bo
                 tmp.write_text(config_text)
         todo = _sharing_first(_plan(jobs, jobs_dir, force, retry_failed, outcome, rerun_stale))
         write_summary(out, list(outcome.rows.values()))
-        bar = SweepProgress(len(jobs), outcome.skipped) if progress else None
+        for left in jobs_dir.glob("*.progress"):  # of a job killed mid-run: no job runs now
+            left.unlink(missing_ok=True)
+        bar = SweepProgress(len(jobs), outcome.skipped, jobs_dir=jobs_dir) if progress else None
         written = [time.monotonic()]
 
         def finish(job: Job, row: dict) -> None:

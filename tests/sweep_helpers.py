@@ -28,7 +28,7 @@ def fast_ladder_scene():
     """In this process, the ladder scene's runner returns at once (a summary and a writer of a record)."""
     from knitlad import registry
 
-    def instant(cfg, output, folder=None):
+    def instant(cfg, output, folder=None, progress=None):
         return {"fx_ini": 1.0}, lambda path, record: write_record(path, record)
 
     saved = registry.SCENES["ladder"]

@@ -98,7 +98,7 @@ def test_a_job_whose_file_cannot_be_written_fails_alone(tmp_path, monkeypatch):
     job = fake_jobs(tmp_path, [0.4])[0]
     (tmp_path / "jobs").mkdir()
 
-    def no_space(cfg, output, folder=None):
+    def no_space(cfg, output, folder=None, progress=None):
         def write(path, record):
             raise OSError(28, "No space left on device")
 

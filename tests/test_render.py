@@ -53,10 +53,24 @@ def test_a_movie_has_every_frame(run_folder):
 
     from knitlad.render import movie
 
-    path = movie(run_folder / "ladder.h5", run_folder / "ladder.gif", size=(160, 120))
+    seen = []
+    path = movie(run_folder / "ladder.h5", run_folder / "ladder.gif", size=(160, 120),
+                 progress=lambda done, total: seen.append((done, total)))
     with h5py.File(run_folder / "ladder.h5", "r") as f:
         n = f["frames/time"].shape[0]
     assert len(imageio.mimread(path)) == n
+    assert seen == [(k, n) for k in range(1, n + 1)]  # the progress line's count, frame by frame
+
+
+def test_movie_and_render_show_their_progress_in_a_log(run_folder):
+    """Off a terminal (a batch job's log) each prints a progress line that ends at the whole count."""
+    for command in (["movie", "--gif", "--width", "96"], ["render", "--width", "96", "--view", "front"]):
+        p = subprocess.run([sys.executable, "-m", "knitlad.cli", command[0], str(run_folder), *command[1:]],
+                           capture_output=True, text=True, cwd=ROOT)
+        assert p.returncode == 0, p.stderr
+        last = p.stderr.strip().splitlines()[-1]
+        done, total = last.split("]")[1].split()[0].split("/")
+        assert last.startswith(command[0]) and done == total and int(total) >= 5, p.stderr
 
 
 def test_paraview_opens_the_trajectory_with_its_fields(run_folder):
@@ -211,4 +225,35 @@ def test_a_render_without_a_display_prints_no_vtk_noise(run_folder, tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
     p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(folder), "--width", "160", "--view", "front"],
                        capture_output=True, text=True, cwd=ROOT, env=env)
-    assert p.returncode == 0 and p.stderr == "", p.stderr
+    noise = [line for line in p.stderr.splitlines() if not line.startswith("render [")]  # its progress line
+    assert p.returncode == 0 and not noise, p.stderr
+
+
+def test_a_scene_of_one_s_own_renders_and_films_from_its_trajectory_file(tmp_path):
+    """A cantilever let go, recorded and written by the public API, drawn by `knitlad render` and `movie`."""
+    import imageio.v2 as imageio
+
+    import knitlad as kl
+
+    s = np.linspace(0.0, 0.02, 21)
+    scene = kl.Scene(kl.NYLON)
+    rod = scene.add_yarn(np.column_stack([s, 0 * s, 0 * s]), start=np.column_stack([s, 2e-3 * (s / 0.02) ** 2, 0 * s]))
+    scene.hold(rod, [0, 1])
+    recorder = kl.TrajectoryRecorder()
+    kl.Simulation(scene.build()).run(1e-3, observe=recorder, observe_every_s=2.5e-4)
+    path = kl.write_trajectory(tmp_path / "mine.h5", recorder)
+    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(path), "--view", "front", "--width", "160"],
+                       capture_output=True, text=True, cwd=ROOT)
+    assert p.returncode == 0, p.stderr
+    pictures = sorted((tmp_path / "render").glob("render_front_*.png"))
+    # five evenly spaced instants from the first frame to the last, each frame drawn once
+    assert 3 <= len(pictures) <= 5
+    assert [f"{t * 1e6:08.1f}us" in q.name for t, q in zip(recorder.times[::len(recorder.times) - 1],
+                                                          pictures[::len(pictures) - 1])] == [True, True]
+    first, last = (imageio.imread(q)[..., :3].astype(int) for q in (pictures[0], pictures[-1]))
+    assert (first < 200).any(axis=2).mean() > 0.002  # the rod is drawn
+    assert np.abs(first - last).sum() > 0  # and it moved
+    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "movie", str(path), "--gif", "--width", "96"],
+                       capture_output=True, text=True, cwd=ROOT)
+    assert p.returncode == 0, p.stderr
+    assert len(imageio.mimread(tmp_path / "mine.gif")) == len(recorder.times)

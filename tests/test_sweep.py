@@ -205,6 +205,24 @@ def test_plot_draws_the_summary_figures_and_the_diagrams(smoke):
     for name in ("damage_vs_fx.png", "fx_fin_vs_fx_ini.png", "velocity_vs_fx.png"):
         assert (smoke / "plots" / name).stat().st_size > 1000
     assert len(list((smoke / "plots").glob("*.png"))) == 3 + len(read_summary(smoke))
+    # the smoke sweep varies lx and mu: each job's diagram is named by them
+    assert (smoke / "plots" / "lx=0.36_mu=0.4.png").is_file() and (smoke / "plots" / "lx=0.38_mu=0.png").is_file()
+
+
+def test_plot_writes_the_format_asked_and_refuses_an_unknown_one(smoke, tmp_path):
+    p = knitlad("plot", str(smoke), "--format", "svg", "--no-diagrams")
+    assert p.returncode == 0, p.stderr
+    assert (smoke / "plots" / "damage_vs_fx.svg").read_text().lstrip().startswith("<?xml")
+    p = knitlad("plot", str(smoke), "--format", "bmp")
+    assert p.returncode == 2 and "--format" in p.stderr and len(p.stderr.strip().splitlines()) == 1
+
+
+def test_job_figures_are_named_by_what_varies_and_told_apart_by_id_when_that_is_not_enough():
+    from knitlad.plots import job_figure_names
+
+    df = pd.DataFrame({"job_id": ["a1", "b2", "c3"], "scene": "ladder", "n_x": 16, "mu": [0.4, 0.4, 0.0],
+                       "fx": [2.0, 2.0, 4.5], "status": "ok", "fx_ini": [2.01, 1.99, 4.49]})
+    assert job_figure_names(df) == {"a1": "mu=0.4_fx=2_a1", "b2": "mu=0.4_fx=2_b2", "c3": "mu=0_fx=4.5"}
 
 
 # ------------------------------------------------------------------ failures

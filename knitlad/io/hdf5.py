@@ -112,6 +112,17 @@ class RunFileError(ValueError):
 RUN_ATTRIBUTES = ("settings_json", "scale_l0_m", "scale_d_m", "box_lx_over_l0", "ly_over_l0")
 RUN_DATASETS = ("frames/positions", "frames/time", "frames/laddered", "topology/edges", "topology/node_course",
                 "cells/centres", "series/time", "series/fx")
+TRAJECTORY_KIND = "trajectory of one's own scene"  # settings_json of a write_trajectory file
+TRAJECTORY_ATTRIBUTES = ("settings_json", "scale_d_m")
+TRAJECTORY_DATASETS = ("frames/positions", "frames/time", "topology/edges", "topology/node_course")
+
+
+def is_trajectory(f: h5py.File) -> bool:
+    """Whether an open run file is a trajectory of one's own scene (:func:`write_trajectory`), not a laddering run."""
+    try:
+        return json.loads(f.attrs.get("settings_json", "{}")).get("kind") == TRAJECTORY_KIND
+    except (ValueError, AttributeError):
+        return False
 
 
 def check_run_file(path: str | Path) -> None:
@@ -125,11 +136,13 @@ def check_run_file(path: str | Path) -> None:
             else "not a readable HDF5 file (truncated or damaged)"
         raise RunFileError(f"{path}: {reason}") from None
     with h5py.File(path, "r") as f:
-        missing = [a for a in RUN_ATTRIBUTES if a not in f.attrs] + [d for d in RUN_DATASETS if d not in f]
+        own = is_trajectory(f)
+        attributes, datasets = (TRAJECTORY_ATTRIBUTES, TRAJECTORY_DATASETS) if own else (RUN_ATTRIBUTES, RUN_DATASETS)
+        missing = [a for a in attributes if a not in f.attrs] + [d for d in datasets if d not in f]
         if missing:
             raise RunFileError(f"{path}: no {', '.join(missing)} (written without frames, by an older knitlad, or "
                                "damaged)")
-        counts = {name: f[f"frames/{name}"].shape[0] for name in ("positions", "time", "laddered")}
+        counts = {name: f[f"frames/{name}"].shape[0] for name in ("positions", "time", "laddered")[:2 if own else 3]}
         if counts["positions"] == 0:
             raise RunFileError(f"{path}: no frame to draw")
         if len(set(counts.values())) > 1:
@@ -218,7 +231,7 @@ def write_trajectory(path: str | Path, recorder, material=None, compression: str
     path = Path(path)
     frames = np.stack(recorder.positions)
     with atomic_hdf5(path) as f:
-        _write_run_attrs(f, {"kind": "trajectory of one's own scene"}, material or Material())
+        _write_run_attrs(f, {"kind": TRAJECTORY_KIND}, material or Material())
         g = f.create_group("frames")
         checksummed_dataset(g, "positions", frames, compression)
         checksummed_dataset(g, "velocities", np.stack(recorder.velocities), compression)
