@@ -70,3 +70,18 @@ def remember_shape(rods: Rods, K: float, hinges: np.ndarray, material: Material)
     reference = mean_squared_curvature(kappa[hinges], lengths[hinges], material)
     alpha = np.sqrt(K / reference) if reference > 0 else 0.0
     return rods.replace_model(kappa_bar=alpha * kappa, twist_bar=rods.state.ref_twist.copy())
+
+
+def flattened_curvature(points: np.ndarray) -> np.ndarray:
+    """Curvature [1/length of ``points``] at the interior vertices of an open polyline laid flat: projected
+    on its best-fitting plane (the two leading principal axes), as the paper measured its thread, on a
+    photograph of it lying on a plane (appendix "Natural curvature"). Discrete curvature of the 2-D
+    outline: the turning angle at a vertex over the Voronoi length of its two edges, signed (left +)."""
+    x = np.asarray(points, dtype=float)
+    centred = x - x.mean(axis=0)
+    axes = np.linalg.svd(centred, full_matrices=False)[2][:2]
+    flat = centred @ axes.T  # (n, 2) coordinates in the plane
+    e = np.diff(flat, axis=0)
+    length = np.hypot(e[:, 0], e[:, 1])
+    turn = np.arctan2(e[:-1, 0] * e[1:, 1] - e[:-1, 1] * e[1:, 0], np.sum(e[:-1] * e[1:], axis=1))
+    return turn / (0.5 * (length[:-1] + length[1:]))

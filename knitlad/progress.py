@@ -83,7 +83,8 @@ class ProgressLine:
             amount = f"{100 * frac:3.0f}%"
             speed = ""
         else:
-            amount = f"{self.done:g}/{self.total:g} {self.unit}".rstrip()
+            done = f"{self.done:g}" if float(self.done).is_integer() else f"{self.done:.1f}"  # a sweep counts parts of jobs
+            amount = f"{done}/{self.total:g} {self.unit}".rstrip()
             speed = f"  {rate:.2g} {self.unit}/s" if rate > 0 and self.unit else ""  # rate is NaN early on
         note = f"  {self.note}" if self.note else ""
         return (f"{self.label} [{'#' * filled}{'.' * (WIDTH - filled)}] {amount}{speed}"

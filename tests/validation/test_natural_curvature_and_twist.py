@@ -119,3 +119,21 @@ def test_a_course_freed_of_the_knit_relaxes_to_the_natural_curvature_it_was_give
     assert sim.relax(force_tol_N=1e-7, max_steps=400_000)["converged"]
     assert mean_squared_curvature(sim.state.x) == pytest.approx(K, rel=0.02)
     assert stretched > 1.5 * K
+
+
+def test_a_tilted_planar_arc_laid_flat_keeps_its_curvature_and_an_ellipse_its_vertex_curvatures():
+    """flattened_curvature: a circle of radius R drawn in a tilted plane reads 1/R at every vertex (its
+    own plane is the best fit); an ellipse (a, b) reads a/b^2 at the ends of its major axis, b/a^2 at
+    the minor, to the discretisation's second order."""
+    from knitlad.natural_curvature import flattened_curvature
+
+    R = 2e-3
+    arc = circle(R, 200, arc=1.5 * math.pi, closed=False)
+    tilt = np.array([[1, 0, 0], [0, math.cos(0.7), -math.sin(0.7)], [0, math.sin(0.7), math.cos(0.7)]])
+    k = flattened_curvature(arc @ tilt.T + [1e-3, -2e-3, 5e-4])
+    np.testing.assert_allclose(np.abs(k), 1 / R, rtol=1e-4)
+    a, b, n = 3.0, 1.0, 4000
+    phi = np.linspace(0, 2 * math.pi, n + 1)
+    k = np.abs(flattened_curvature(np.column_stack([a * np.cos(phi), b * np.sin(phi), 0 * phi])))
+    assert k[n // 2 - 1] == pytest.approx(a / b**2, rel=1e-4)  # vertex n/2: phi = pi
+    assert k[n // 4 - 1] == pytest.approx(b / a**2, rel=1e-4)  # vertex n/4: phi = pi/2

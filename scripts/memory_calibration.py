@@ -1,0 +1,80 @@
+"""The memory K as the paper measured it: a course freed of the knit, laid flat, its outline's curvature.
+
+    python scripts/memory_calibration.py [--K 0.05 0.25 1] [--preset fast] [--csv FILE]
+
+The paper (appendix "Natural curvature") pulls a thread out of the fabric, photographs it lying on a
+plane and reads (kbar/kappa0)^2 along its outline: about 1 on average, about 3.5 at most over four
+stitches. Here, for each K (knitlad's mean of (kappa_bar/kappa0)^2 over the yarn, `--natural-curvature`):
+a 4 x 4 knit with that memory is stretched to f_x^ini 4, a middle course is freed of its holds and of
+contact and relaxed (FIRE, twist on), and its relaxed shape is read three ways: the 3-D mean of
+(kappa/kappa0)^2 (which should give K back), and the outline laid flat on its best plane
+(knitlad.natural_curvature.flattened_curvature): mean and maximum of (kappa/kappa0)^2, the maximum as
+the paper's "at most over four stitches" (the course spans four). Prints a markdown table.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+import pandas as pd
+
+import knitlad as kl
+from knitlad.config import CutConfig
+from knitlad.kernels.elastic import edge_vectors
+from knitlad.natural_curvature import flattened_curvature, voronoi_lengths
+from knitlad.protocol import stretch
+from knitlad.simulation import Simulation
+
+
+def freed_course(K: float, preset: str, fx: float = 4.0):
+    """(the relaxed course's node positions [internal], hinge (kappa/kappa0)^2 in 3-D, kappa0 [1/internal])."""
+    cfg = CutConfig(n_x=4, n_y=4, fx=fx, natural_curvature=K, preset=preset)
+    knit = stretch(cfg.stretch_settings())
+    rods, material = knit.knit.rods, cfg.stretch_settings().material
+    m = rods.model
+    course = knit.knit.courses[1]
+    hinges = np.flatnonzero(m.node_yarn[m.edge_a[m.hinge_e1]] == course)
+    free = rods.copy().replace_model(held=np.zeros_like(m.held), v_prescribed=np.zeros_like(m.v_prescribed))
+    sim = Simulation(free, contact=None)
+    if not sim.relax(force_tol_N=1e-7, max_steps=600_000)["converged"]:
+        raise RuntimeError(f"K = {K}: the freed course did not relax")
+    x = sim.state.x
+    e, elen = np.zeros((m.edge_a.size, 3)), np.zeros(m.edge_a.size)
+    edge_vectors(x, m.edge_a, m.edge_b, m.edge_shift, e, elen)
+    t0 = e[m.hinge_e0[hinges]] / elen[m.hinge_e0[hinges], None]
+    t1 = e[m.hinge_e1[hinges]] / elen[m.hinge_e1[hinges], None]
+    kb = 2 * np.linalg.norm(np.cross(t0, t1), axis=1) / (1 + np.sum(t0 * t1, axis=1))
+    kappa0 = material.kappa0 * kl.units.LENGTH
+    k3 = (kb / (voronoi_lengths(rods)[hinges] * kappa0)) ** 2
+    nodes = np.flatnonzero(m.node_yarn == course)
+    return x[nodes], k3, kappa0
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--K", type=float, nargs="+", default=[0.05, 0.25, 1.0])
+    p.add_argument("--preset", default="fast")
+    p.add_argument("--csv", default=None)
+    args = p.parse_args()
+    rows = []
+    for K in args.K:
+        x, k3, kappa0 = freed_course(K, args.preset)
+        k2 = (flattened_curvature(x) / kappa0) ** 2
+        rows.append({"K": K, "mean_3d": k3.mean(), "max_3d": k3.max(), "mean_flat": k2.mean(), "max_flat": k2.max(),
+                     "max_over_mean_flat": k2.max() / k2.mean()})
+        print(f"K {K}: done", flush=True)
+    df = pd.DataFrame(rows)
+    if args.csv:
+        df.to_csv(args.csv, index=False, float_format="%.4g")
+    print(f"\n{args.preset} preset, 4 x 4 knit stretched to f_x 4, a middle course freed and relaxed:\n")
+    print("| K (knitlad) | 3-D mean (kappa/kappa0)^2 | 3-D max | laid flat: mean | laid flat: max | flat max/mean |")
+    print("|---|---|---|---|---|---|")
+    for r in df.itertuples():
+        print(f"| {r.K:g} | {r.mean_3d:.3f} | {r.max_3d:.2f} | {r.mean_flat:.3f} | {r.max_flat:.2f} | "
+              f"{r.max_over_mean_flat:.2f} |")
+    print("| paper (thread laid flat) | | | about 1 | about 3.5 | about 3.5 |")
+
+
+if __name__ == "__main__":
+    main()
