@@ -147,7 +147,7 @@ def _option_type(annotation):
 # the help's option groups: what the experiment is, how long and how it is recorded, and the rest (the model
 # and its numerics), so that a first reader finds the few settings of the physics first
 EXPERIMENT_PANEL, OUTPUT_PANEL, MODEL_PANEL = "The experiment", "Run length and output", "Model and numerics"
-EXPERIMENT_FIELDS = ("preset", "fx", "lx", "ly", "mu", "natural_curvature", "geometry", "columns")
+EXPERIMENT_FIELDS = ("preset", "fx", "lx", "ly", "mu", "natural_curvature", "memory_peak_ratio", "geometry", "columns")
 OUTPUT_FIELDS = ("max_time_ms", "arrest_ms", "observe_every_us", "frame_every_us")
 
 
@@ -298,7 +298,10 @@ def loop(
     json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
     options: dict = None,
 ) -> None:
-    """Single-loop model of the paper's Fig 5b: a loop under tension f_x lets go of the row above once the row below is removed."""
+    """Single-loop model of the paper's Fig 5b: a loop under tension f_x lets go of the row above once the row below is removed.
+
+    None of its geometries reproduces the paper's Fig 5c (docs/single_loop.md); the fabric's own v_lad against f_x and mu is in docs/paper_claims.md (knitlad sweep docs/reference/velocity24_mu.yaml).
+    """
     import json
 
     from knitlad.periodic_loop import run_single_loop

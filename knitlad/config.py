@@ -72,7 +72,7 @@ class CutConfig(_WithPreset):
         "drag_per_s", "twist", "d_over_l0", "contact_force_f0", "overlap_fraction", "contact_counting", "edge",
         "contact_damping_ratio", "stretch_damping_ratio", "stretch_increment", "steps_per_increment",
         "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor",
-        "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots")
+        "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -118,6 +118,10 @@ class CutConfig(_WithPreset):
     natural_curvature: float = Field(0.0, ge=0, le=20, description=(
         "the yarn's memory of its knitted shape: mean (kappa_bar/kappa0)^2 of its natural curvature, a "
         "fraction of the unloaded fabric's curvature (the paper measures ~1, up to 3.5) [-]; > 0 turns twist on"))
+    memory_peak_ratio: float | None = Field(None, ge=1, le=50, description=(
+        "the memory concentrated at the most bent places (the loop heads): max/mean of (kappa_bar/kappa0)^2 "
+        "over the stitch (the paper's thread: about 3.5; default: the scaled copy's own, 1.6) [-]; needs "
+        "natural_curvature > 0"))
     stretch_start: Literal["tiled", "affine"] = Field("tiled", description=(
         "how the knit reaches its stretch: tiled with the periodised stitch stretched to the target, "
         "then corrected (clamped ends; tails, and yarns too thick for the stitch, d/l0 = 1/20, affine), or affine increments of the built knit [-]"))
@@ -173,6 +177,8 @@ class CutConfig(_WithPreset):
         if self.natural_curvature > 0 and (self.stretch_start, self.edge) != ("tiled", "clamped"):
             raise ValueError("natural_curvature: set in the periodised stitch and tiled over the knit, it needs "
                              "stretch_start tiled and edge clamped")
+        if self.memory_peak_ratio is not None and self.natural_curvature == 0:
+            raise ValueError("memory_peak_ratio: shapes the memory of natural_curvature > 0; the yarn has none")
         check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
         if self.frame_every_us is not None and self.frame_every_us < self.observe_every_us:
             raise ValueError(f"frame_every_us: {self.frame_every_us:g} is shorter than observe_every_us "
@@ -198,7 +204,7 @@ class CutConfig(_WithPreset):
             nodes_per_stitch=self.resolution, contact_force_f0=self.contact_force_f0,
             overlap_fraction=self.overlap_fraction, edge=self.edge, stretch_increment=self.stretch_increment,
             steps_per_increment=self.steps_per_increment, fx_tolerance=self.fx_tolerance, start=self.stretch_start,
-            natural_curvature=self.natural_curvature,
+            natural_curvature=self.natural_curvature, memory_peak_ratio=self.memory_peak_ratio,
             material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
         )
 

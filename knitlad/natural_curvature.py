@@ -54,9 +54,16 @@ def mean_squared_curvature(kappa: np.ndarray, lengths: np.ndarray, material: Mat
     return float(np.mean(np.sum(kappa**2, axis=1) / (lengths * kappa0) ** 2))
 
 
-def remember_shape(rods: Rods, K: float, hinges: np.ndarray, material: Material) -> Rods:
+def remember_shape(rods: Rods, K: float, hinges: np.ndarray, material: Material,
+                   peak_ratio: float | None = None) -> Rods:
     """A copy of ``rods`` carrying twist whose natural curvature is alpha x its current material curvature,
     alpha set so that the mean of (kappa_bar / kappa0)^2 over ``hinges`` is ``K`` (module docstring).
+
+    ``peak_ratio``: the memory is concentrated where the shape is most bent (the loop heads), so that the
+    max over ``hinges`` of (kappa_bar/kappa0)^2 is ``peak_ratio`` times its mean (the paper's thread: about
+    3.5; the scaled copy's own ratio, about 1.6, is the least): kappa_bar_h = c w_h kappa_h with
+    w_h^2 q_h = (q_h - t)+, q_h = (|kappa_h|/(l_h kappa0))^2, t found by bisection (:func:`peaked_weights`)
+    and c setting the mean to K.
 
     Twist is switched on first (:func:`knitlad.state.with_twist`: Bishop frames along the current
     tangents, natural twist = the current reference twist), if it is not on yet.
@@ -67,9 +74,41 @@ def remember_shape(rods: Rods, K: float, hinges: np.ndarray, material: Material)
         rods = with_twist(rods, material.twisting_stiffness / material.bending_stiffness)
     kappa = material_curvature(rods)
     lengths = voronoi_lengths(rods)
+    if peak_ratio is not None:
+        kappa = kappa * peaked_weights(kappa, lengths, hinges, material, peak_ratio)[:, None]
     reference = mean_squared_curvature(kappa[hinges], lengths[hinges], material)
     alpha = np.sqrt(K / reference) if reference > 0 else 0.0
     return rods.replace_model(kappa_bar=alpha * kappa, twist_bar=rods.state.ref_twist.copy())
+
+
+def peaked_weights(kappa: np.ndarray, lengths: np.ndarray, hinges: np.ndarray, material: Material,
+                   peak_ratio: float) -> np.ndarray:
+    """Weights w_h of every hinge (see :func:`remember_shape`) for which the max over ``hinges`` of
+    w^2 q is ``peak_ratio`` times its mean: w_h^2 q_h = (q_h - t)+, the memory kept only where the shape
+    bends more than a threshold t, in proportion to the excess (t by bisection; t = 0 is the scaled copy).
+    ValueError if the shape's own ratio exceeds ``peak_ratio``, or if the hinges sharing its maximum allow
+    no more (symmetric maxima: the ratio tends to the hinges over those sharing the maximum)."""
+    kappa0 = material.kappa0 * units.LENGTH
+    q = np.sum(kappa**2, axis=1) / (lengths * kappa0) ** 2
+    qh = q[hinges]
+
+    def ratio(t: float) -> float:
+        excess = np.maximum(qh - t, 0.0)
+        return float(excess.max() / excess.mean())
+
+    if ratio(0.0) > peak_ratio:
+        raise ValueError(f"peak_ratio {peak_ratio:g} is below the shape's own max/mean of "
+                         f"(kappa/kappa0)^2, {ratio(0.0):.3g}")
+    low, high = 0.0, float(qh.max())
+    reach = ratio(high * (1 - 1e-9))
+    if reach < peak_ratio:
+        raise ValueError(f"peak_ratio {peak_ratio:g} is out of reach of {len(hinges)} hinges ({reach:.3g} at "
+                         "most): a finer resolution reaches more")
+    for _ in range(80):  # ratio(t) rises with t: bisection to round-off
+        mid = 0.5 * (low + high)
+        low, high = (mid, high) if ratio(mid) < peak_ratio else (low, mid)
+    excess = np.maximum(q - 0.5 * (low + high), 0.0)
+    return np.sqrt(np.divide(excess, q, out=np.zeros_like(q), where=q > 0))
 
 
 def flattened_curvature(points: np.ndarray) -> np.ndarray:

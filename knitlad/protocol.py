@@ -110,6 +110,7 @@ class StretchSettings:
     natural_curvature: float  # K = mean (kappa_bar/kappa0)^2 the yarn remembers (0: straight at rest)
     material: Material
     sagitta_radius_d: float = 0.0  # the contact's sagitta correction, in d (0: none; knitlad.contact)
+    memory_peak_ratio: float | None = None  # max/mean of (kappa_bar/kappa0)^2 (None: the scaled copy's own)
 
     def __post_init__(self) -> None:
         if (self.lx_over_l0 is None) == (self.fx_target is None):
@@ -464,7 +465,10 @@ def remember_unloaded_shape(cell: StitchRun, s: StretchSettings) -> None:
     stretch_to(cell, unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material, s.sagitta_radius_d), s.ly_over_l0,
                s.stretch_increment, min_increments=0)
     cell.settle()
-    cell.remember_shape(s.natural_curvature)
+    try:
+        cell.remember_shape(s.natural_curvature, s.memory_peak_ratio)
+    except ValueError as e:  # a peak the stitch's hinges cannot give: the settings ask the impossible
+        raise InfeasibleRun(f"memory_peak_ratio: {e}") from None
     cell.settle()
 
 

@@ -117,11 +117,12 @@ class StitchRun:
     def tension(self) -> float:
         return self.tensions()[0]
 
-    def remember_shape(self, K: float) -> None:
+    def remember_shape(self, K: float, peak_ratio: float | None = None) -> None:
         """From here on the yarn carries twist and remembers its current shape: its natural curvature is
-        the fraction of the current curvature whose mean (kappa_bar/kappa0)^2 is ``K``
+        the fraction of the current curvature whose mean (kappa_bar/kappa0)^2 is ``K``, concentrated at the
+        most bent hinges to a max/mean of ``peak_ratio`` if given
         (:func:`knitlad.natural_curvature.remember_shape`)."""
-        rods = remember_shape(self.sim.rods, K, self.cell.real_hinges, self.s.material)
+        rods = remember_shape(self.sim.rods, K, self.cell.real_hinges, self.s.material, peak_ratio)
         self.cell.rods = rods
         self.sim = Simulation(rods, contact=self.sim.contact_model)
 

@@ -137,3 +137,34 @@ def test_a_tilted_planar_arc_laid_flat_keeps_its_curvature_and_an_ellipse_its_ve
     k = np.abs(flattened_curvature(np.column_stack([a * np.cos(phi), b * np.sin(phi), 0 * phi])))
     assert k[n // 2 - 1] == pytest.approx(a / b**2, rel=1e-4)  # vertex n/2: phi = pi
     assert k[n // 4 - 1] == pytest.approx(b / a**2, rel=1e-4)  # vertex n/4: phi = pi/2
+
+
+@pytest.mark.parametrize("peak_ratio", [None, 3.5])
+def test_a_remembered_shape_has_the_mean_asked_and_a_concentrated_one_the_peak_asked(peak_ratio):
+    """remember_shape on an open elliptical arc (curvature varying 1.7-fold): the natural curvature's mean
+    (kappa_bar/kappa0)^2 is K; the scaled copy keeps the shape's own max/mean; the memory concentrated at
+    the most bent hinges reaches the max/mean asked, the paper's 3.5, still with mean K, and its largest
+    natural curvature sits where the arc is most bent."""
+    from knitlad.natural_curvature import mean_squared_curvature, remember_shape, voronoi_lengths
+
+    phi = np.linspace(0.1, 2.9, 120)
+    scene = kl.Scene(kl.NYLON)
+    scene.add_yarn(np.column_stack([3e-3 * np.cos(phi), 2.5e-3 * np.sin(phi), 0 * phi]))
+    rods = scene.build()
+    hinges = np.arange(rods.model.hinge_e0.size)
+    K = 1.0
+    own = remember_shape(rods, K, hinges, kl.NYLON)
+    rods = remember_shape(rods, K, hinges, kl.NYLON, peak_ratio)
+    lengths = voronoi_lengths(rods)
+    kappa0 = kl.NYLON.kappa0 * kl.units.LENGTH
+    q = np.sum(rods.model.kappa_bar**2, axis=1) / (lengths * kappa0) ** 2
+    q_own = np.sum(own.model.kappa_bar**2, axis=1) / (lengths * kappa0) ** 2
+    assert mean_squared_curvature(rods.model.kappa_bar, lengths, kl.NYLON) == pytest.approx(K, rel=1e-9)
+    if peak_ratio is None:
+        np.testing.assert_allclose(q, q_own, rtol=1e-12)
+    else:
+        assert q.max() / q.mean() == pytest.approx(peak_ratio, rel=1e-6)
+        assert q_own.max() / q_own.mean() < 0.8 * peak_ratio
+        assert np.argmax(q) == np.argmax(q_own)
+    with pytest.raises(ValueError, match="below the shape's own"):
+        remember_shape(rods, K, hinges, kl.NYLON, 1.01)

@@ -49,3 +49,23 @@ def test_a_vanishing_natural_curvature_ladders_like_the_straight_yarn():
     curvature's, not the path's."""
     r = ladder(fx=1.0, natural_curvature=1e-4)
     assert r.n_lad >= 2 * NO_LADDER_CELLS
+
+
+@pytest.mark.slow
+def test_without_friction_the_threshold_is_about_the_memory_and_friction_raises_it():
+    """The paper's B kbar^2 argument, f_x^thr = K, tested at mu = 0 on the fabric (docs/paper_claims.md),
+    default preset (48 nodes per stitch; its threshold brackets within 1 of the fast preset's): K = 1
+    holds at f_x^ini 0.5 (2 cells measured) and ladders at 2 (25 cells), so f_x^thr(mu = 0) lies between
+    K/2 and 2K. The same stretched knit at 2, cut with mu = 0.4, holds (its bracket: 5 to 6): friction
+    raises the threshold, paired on one stretch."""
+    from knitlad.protocol import analyse, cut, propagate, stretch
+
+    def cells(fx, mus):
+        cfg = CutConfig(n_x=16, n_y=16, twist=True, max_time_ms=10, fx=fx, natural_curvature=1.0)
+        with numba_threads(1):
+            knit = stretch(cfg.stretch_settings())
+            return [analyse(propagate(cut(knit, cfg.replace(mu=mu).dynamics_settings()))).n_lad for mu in mus]
+
+    assert cells(0.5, [0.0])[0] < NO_LADDER_CELLS
+    frictionless, frictional = cells(2.0, [0.0, 0.4])
+    assert frictionless >= 2 * NO_LADDER_CELLS and frictional < NO_LADDER_CELLS
