@@ -187,12 +187,15 @@ class TimeLimit:
 class TrajectoryRecorder:
     """An observer of one's own scene: call it with the simulation (or pass it as ``Simulation.run``'s
     ``observe``) and it keeps positions [m], velocities [m/s], each node's contact state (0 free,
-    1 touching, 2 sliding) and the time [s], as float32 frames; ``knitlad.write_trajectory`` writes them."""
+    1 touching, 2 sliding), the touching pairs (``Simulation.contact_pairs``: points [m], normal and
+    friction forces [N], sliding) and the time [s], as float32 frames; ``knitlad.write_trajectory``
+    writes them."""
 
     def __init__(self) -> None:
         self.positions: list[np.ndarray] = []
         self.velocities: list[np.ndarray] = []
         self.contact: list[np.ndarray] = []
+        self.pairs: list = []  # one ContactPairs per frame (none without contact)
         self.times: list[float] = []
         self.edges: np.ndarray | None = None
         self.yarn_start: np.ndarray | None = None
@@ -206,4 +209,6 @@ class TrajectoryRecorder:
         self.positions.append(sim.positions_m().astype(np.float32))
         self.velocities.append((sim.state.v * VELOCITY).astype(np.float32))
         self.contact.append(node_contact_state(sim) if sim.has_contact else np.zeros(m.n_nodes, dtype=np.uint8))
+        if sim.has_contact:
+            self.pairs.append(sim.contact_pairs())
         self.times.append(sim.time_s)

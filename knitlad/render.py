@@ -290,10 +290,58 @@ def movie(h5: str | Path, path: str | Path, fps: int = 12, size=(960, 720),
     return path
 
 
+def _contact_points_xdmf(h5: Path) -> str:
+    """A second temporal collection, "contacts": each frame's touching pairs as points with their normal and
+    friction forces [N] and sliding flag (``/contacts`` of a trajectory file; "" if it has none). A frame
+    without a touching pair shows one point at the origin with zero force (XDMF has no empty grid)."""
+    with h5py.File(h5, "r") as f:
+        if "contacts" not in f:
+            return ""
+        offsets = f["contacts/offsets"][()]
+        times = f["frames/time"][()]
+    name, total = h5.name, int(offsets[-1])
+    if total == 0:
+        return ""
+    grids = []
+    for k, t in enumerate(times):
+        start, count = int(offsets[k]), int(offsets[k + 1] - offsets[k])
+        if count == 0:
+            start, count = 0, 0
+        slab = lambda path, cols: (  # noqa: E731 - the rows of frame k in a concatenated dataset
+            f'<DataItem ItemType="HyperSlab" Dimensions="{max(count, 1)}{f" {cols}" if cols > 1 else ""}" '
+            f'Type="HyperSlab"><DataItem Dimensions="3 {2 if cols > 1 else 1}" Format="XML">'
+            f'{start}{" 0" if cols > 1 else ""} 1{" 1" if cols > 1 else ""} {max(count, 1)}'
+            f'{f" {cols}" if cols > 1 else ""}</DataItem><DataItem Dimensions="{total}'
+            f'{f" {cols}" if cols > 1 else ""}" NumberType="{"Float" if cols > 1 else "UChar"}" '
+            f'Precision="{4 if cols > 1 else 1}" Format="HDF">{name}:{path}</DataItem></DataItem>')
+        if count == 0:  # nothing touches: one point at the origin, zero force
+            geometry = '<DataItem Dimensions="1 3" Format="XML">0 0 0</DataItem>'
+            zero3 = '<DataItem Dimensions="1 3" Format="XML">0 0 0</DataItem>'
+            attrs = (f'<Attribute Name="normal_force" Center="Node" AttributeType="Vector">{zero3}</Attribute>'
+                     f'<Attribute Name="friction_force" Center="Node" AttributeType="Vector">{zero3}</Attribute>'
+                     '<Attribute Name="sliding" Center="Node" AttributeType="Scalar">'
+                     '<DataItem Dimensions="1" Format="XML">0</DataItem></Attribute>')
+        else:
+            geometry = slab("/contacts/points", 3)
+            attrs = (f'<Attribute Name="normal_force" Center="Node" AttributeType="Vector">'
+                     f'{slab("/contacts/normal_force", 3)}</Attribute>'
+                     f'<Attribute Name="friction_force" Center="Node" AttributeType="Vector">'
+                     f'{slab("/contacts/friction_force", 3)}</Attribute>'
+                     f'<Attribute Name="sliding" Center="Node" AttributeType="Scalar">{slab("/contacts/sliding", 1)}'
+                     '</Attribute>')
+        grids.append(f'<Grid Name="c{k}" GridType="Uniform"><Time Value="{t:.9g}"/>'
+                     f'<Topology TopologyType="Polyvertex" NumberOfElements="{max(count, 1)}" NodesPerElement="1"/>'
+                     f'<Geometry GeometryType="XYZ">{geometry}</Geometry>{attrs}</Grid>')
+    return '<Grid Name="contacts" GridType="Collection" CollectionType="Temporal">' + "".join(grids) + "</Grid>"
+
+
 def write_xdmf(h5: str | Path) -> Path:
     """``ladder.xdmf`` beside ``h5``: a temporal collection of line meshes over the frames, with
     per-node course, velocity [m/s], axial strain, curvature [1/m] (``/fields`` of ``h5``) and contact
-    state (0 free, 1 touching, 2 sliding)."""
+    state (0 free, 1 touching, 2 sliding); for a trajectory of one's own scene, named "yarns", and its
+    touching pairs as a second collection, "contacts"."""
+    from knitlad.io.hdf5 import is_trajectory
+
     h5 = Path(h5)
     with h5py.File(h5, "r") as f:
         if "fields" not in f:
@@ -302,6 +350,7 @@ def write_xdmf(h5: str | Path) -> Path:
         edges = f["topology/edges"][()]
         times = f["frames/time"][()]
         has_contact = "contact" in f["frames"]
+        grid_name = "yarns" if is_trajectory(f) else "ladder"
     name = h5.name
     steps = []
 
@@ -334,8 +383,9 @@ def write_xdmf(h5: str | Path) -> Path:
             f'</Attribute>'
             f'<Attribute Name="curvature" Center="Node" AttributeType="Scalar">{item("/fields/curvature", 1)}'
             f'</Attribute>{contact(k)}</Grid>')
-    text = ('<?xml version="1.0" ?>\n<Xdmf Version="2.0"><Domain><Grid Name="ladder" GridType="Collection" '
-            'CollectionType="Temporal">' + "".join(steps) + "</Grid></Domain></Xdmf>\n")
+    text = (f'<?xml version="1.0" ?>\n<Xdmf Version="2.0"><Domain><Grid Name="{grid_name}" GridType="Collection" '
+            'CollectionType="Temporal">' + "".join(steps) + "</Grid>" + _contact_points_xdmf(h5) +
+            "</Domain></Xdmf>\n")
     xdmf = h5.with_suffix(".xdmf")
     with atomic_path(xdmf) as tmp:
         tmp.write_text(text)

@@ -257,3 +257,42 @@ def test_a_scene_of_one_s_own_renders_and_films_from_its_trajectory_file(tmp_pat
                        capture_output=True, text=True, cwd=ROOT)
     assert p.returncode == 0, p.stderr
     assert len(imageio.mimread(tmp_path / "mine.gif")) == len(recorder.times)
+
+
+def test_the_contact_pairs_of_one_s_own_scene_open_in_paraview_as_points_with_their_forces(tmp_path):
+    """A yarn dragged over two crossing yarns (examples/coulomb_slide.py's scene), recorded: VTK's XDMF reader
+    gives, beside the yarns, a "contacts" grid per frame whose points are the touching pairs' contact points
+    and whose normal and friction forces are the ones Simulation.contact_pairs gave at that frame."""
+    import vtk
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    import knitlad as kl
+
+    d = kl.NYLON.diameter
+    t = np.linspace(-10 * d, 10 * d, 21)
+    scene = kl.Scene(kl.NYLON)
+    dragged = scene.add_yarn(np.column_stack([t, 0 * t, np.full_like(t, 0.8 * d)]))
+    scene.hold(dragged, range(t.size), velocity=(1.0, 0.0, 0.0))
+    for x0 in (-3 * d, 3 * d):
+        scene.hold(scene.add_yarn(np.column_stack([np.full_like(t, x0), t, 0 * t])), range(t.size))
+    sim = kl.Simulation(scene.build(), contact=kl.ContactModel(stiffness=1e3, friction=0.4), dt_s=1e-6)
+    recorder = kl.TrajectoryRecorder()
+    sim.run(4e-5, observe=recorder, observe_every_s=1e-5)
+    path = kl.write_trajectory(tmp_path / "slide.h5", recorder)
+    reader = vtk.vtkXdmfReader()
+    reader.SetFileName(str(path.with_suffix(".xdmf")))
+    reader.UpdateInformation()
+    k = len(recorder.times) - 1
+    reader.UpdateTimeStep(recorder.times[k])
+    blocks = reader.GetOutputDataObject(0)
+    names = [blocks.GetMetaData(i).Get(vtk.vtkCompositeDataSet.NAME()) for i in range(blocks.GetNumberOfBlocks())]
+    contacts = blocks.GetBlock(names.index("contacts"))
+    pairs = recorder.pairs[k]
+    assert contacts.GetNumberOfPoints() == len(pairs.overlap_m) == 2
+    np.testing.assert_allclose(vtk_to_numpy(contacts.GetPoints().GetData()), pairs.points_m, rtol=1e-6)
+    data = contacts.GetPointData()
+    np.testing.assert_allclose(vtk_to_numpy(data.GetArray("normal_force")), pairs.normal_N, rtol=1e-5)
+    np.testing.assert_allclose(vtk_to_numpy(data.GetArray("friction_force")), pairs.friction_N, rtol=1e-5)
+    assert vtk_to_numpy(data.GetArray("sliding")).tolist() == pairs.sliding.astype(int).tolist()
+    yarns = blocks.GetBlock(names.index("yarns"))
+    assert yarns.GetNumberOfPoints() == 63

@@ -20,6 +20,12 @@ A laddering run (``ladder.h5``, a sweep's ``jobs/<id>.h5``)::
     /cells/centres      (n_y, n_x, 2) x, y of each cell at the cut [m]
     /topology/yarn_start, edges (ne, 2), node_course (n,): -1 and n_y for the held courses; attr cut_node
 
+A trajectory of one's own scene (:func:`write_trajectory`) has ``/frames`` (no ``laddered``),
+``/fields``, ``/topology`` (``node_course``: each node's yarn) and, with contact, the touching pairs:
+    /contacts/offsets   (n_frames + 1,): frame k's pairs are rows offsets[k]:offsets[k + 1]
+    /contacts/points, normal_force, friction_force   (n_pairs, 3) float32 [m], [N], [N] (on the first edge)
+    /contacts/sliding   (n_pairs,) uint8: 1 at the Coulomb limit
+
 A stretched knit (:class:`knitlad.protocol.StretchedKnit`, ``stretched.h5``): its scalars
 and settings as attributes, ``/model/*`` and ``/state/*`` (the arrays of
 :class:`knitlad.state.RodModel` and :class:`~knitlad.state.RodState`, internal units)
@@ -215,7 +221,8 @@ RUN_UNITS = {
     "series/front_up": "stitches", "series/front_down": "stitches", "series/fx": "f0",
     "series/laddering_column_cells": "1", "stretch/relax_steps": "1", "stretch/box_lx_over_l0": "l0",
     "stretch/fx": "f0", "final/laddered": "1", "cells/centres": "m", "topology/yarn_start": "1",
-    "topology/edges": "1", "topology/node_course": "1",
+    "topology/edges": "1", "topology/node_course": "1", "contacts/offsets": "1", "contacts/points": "m",
+    "contacts/normal_force": "N", "contacts/friction_force": "N", "contacts/sliding": "1",
 }
 
 
@@ -242,12 +249,24 @@ def write_trajectory(path: str | Path, recorder, material=None, compression: str
         checksummed_dataset(g, "edges", recorder.edges)
         checksummed_dataset(g, "yarn_start", recorder.yarn_start)
         checksummed_dataset(g, "node_course", recorder.node_yarn)
+        if recorder.pairs:
+            _contact_pairs(f.create_group("contacts"), recorder.pairs)
         _mark_units(f)
     if xdmf:
         from knitlad.render import write_xdmf
 
         write_xdmf(path)
     return path
+
+
+def _contact_pairs(g: h5py.Group, frames: list) -> None:
+    """The touching pairs of every frame, concatenated: frame k's rows are offsets[k]:offsets[k + 1]."""
+    counts = [len(p.overlap_m) for p in frames]
+    checksummed_dataset(g, "offsets", np.concatenate([[0], np.cumsum(counts)]).astype(np.int64))
+    for name, column in (("points", "points_m"), ("normal_force", "normal_N"), ("friction_force", "friction_N")):
+        rows = [getattr(p, column).astype(np.float32) for p in frames]
+        checksummed_dataset(g, name, np.concatenate(rows) if sum(counts) else np.zeros((0, 3), np.float32))
+    checksummed_dataset(g, "sliding", np.concatenate([p.sliding.astype(np.uint8) for p in frames]))
 
 
 def _mark_units(f: h5py.File) -> None:
