@@ -28,8 +28,13 @@ class _WithPreset(BaseModel):
 
     def replace(self, **changes):
         """A copy with ``changes``, validated as a new config is (``model_copy(update=...)`` skips validation:
-        ``mu=-1`` would pass)."""
-        return type(self).model_validate({**self.model_dump(), **changes})
+        ``mu=-1`` would pass). A new ``preset`` brings its own settings in place of the old preset's (a
+        setting that differs from the old preset's value was given, and stays)."""
+        data = self.model_dump()
+        if "preset" in changes and changes["preset"] != self.preset:
+            old = self.PRESETS.get(self.preset, {})
+            data = {k: v for k, v in data.items() if not (k in old and v == old[k] and k not in changes)}
+        return type(self).model_validate({**data, **changes})
 
     @model_validator(mode="before")
     @classmethod

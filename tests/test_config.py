@@ -1,0 +1,53 @@
+"""knitlad.config: the one declaration of each setting, its checks and its presets."""
+
+from __future__ import annotations
+
+import pytest
+from pydantic import ValidationError
+
+from knitlad.config import CutConfig, one_line
+from knitlad.presets import LADDER_PRESETS
+
+
+def test_a_preset_fills_what_is_not_given_and_a_given_value_wins():
+    cfg = CutConfig(fx=4.0, preset="accurate")
+    assert cfg.resolution == LADDER_PRESETS["accurate"]["resolution"]
+    assert CutConfig(fx=4.0, preset="accurate", resolution=64).resolution == 64
+
+
+def test_replace_validates_as_a_new_config_does():
+    cfg = CutConfig(fx=4.0)
+    assert cfg.replace(mu=0.8).mu == 0.8
+    with pytest.raises(ValidationError) as info:
+        cfg.replace(mu=-1.0)
+    assert one_line(info.value).startswith("mu:")
+
+
+@pytest.mark.parametrize("fields, says", [
+    ({"fx": 4.0, "lx": 0.38}, "not both"),
+    ({}, "give fx"),
+    ({"fx": 4.0, "natural_curvature": 1.0, "twist": False}, "carries twist"),
+    ({"fx": 4.0, "memory_peak_ratio": 3.5}, "memory_peak_ratio"),
+    ({"fx": 4.0, "memory_peak_ratio": 0.5, "natural_curvature": 1.0}, "memory_peak_ratio"),
+    ({"fx": 4.0, "no_such_field": 1}, "no_such_field"),
+])
+def test_a_bad_config_is_one_line_naming_what_is_wrong(fields, says):
+    with pytest.raises(ValidationError) as info:
+        CutConfig(**fields)
+    line = one_line(info.value)
+    assert says in line and "\n" not in line
+
+
+def test_natural_curvature_turns_twist_on_and_reaches_the_stretch_with_its_shape():
+    cfg = CutConfig(fx=4.0, natural_curvature=1.0, memory_peak_ratio=3.5)
+    s = cfg.stretch_settings()
+    assert cfg.twist and s.natural_curvature == 1.0 and s.memory_peak_ratio == 3.5
+    assert cfg.dynamics_settings().mu == cfg.mu
+
+
+def test_replacing_the_preset_brings_its_settings_and_keeps_those_given():
+    cfg = CutConfig(fx=4.0, dt_safety=0.2)
+    fast = cfg.replace(preset="fast")
+    assert fast.resolution == LADDER_PRESETS["fast"]["resolution"] != cfg.resolution
+    assert fast.dt_safety == 0.2
+    assert fast.replace(preset="default").model_dump() == cfg.model_dump()
