@@ -51,7 +51,7 @@ LAYERS = {
     5: ("protocol", "stitch_model", "loop_model", "periodic_loop", "demo"),
     6: ("config",),
     7: ("io", "plots", "render", "registry"),
-    8: ("sweep", "cluster", "runner"),
+    8: ("sweep", "cluster", "runner", "ensemble"),
     9: ("cli", "__main__"),
 }
 

@@ -54,7 +54,7 @@ def test_the_tiled_stretch_relaxes_only_what_the_edges_change():
 
 def test_dashpot_and_drag_settings_reach_the_knit_and_the_laddering_dynamics():
     """The dissipation of the dynamics after the cut is set from the dynamics' settings alone (the
-    damping study and scripts/energy_drift.py switch it off this way)."""
+    damping study and scripts/energy_drift.py at commit 56421cd switch it off this way)."""
     cfg = config(n_x=4, n_y=4, resolution=16, lx=0.30, contact_damping_ratio=0.0, stretch_damping_ratio=0.0,
                  drag_per_s=3e3)
     box = KnitBox(cfg.stretch_settings())

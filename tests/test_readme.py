@@ -17,7 +17,7 @@ def test_readme_python_example_runs(capsys):
 
 
 def test_readme_pictures_come_from_its_demo_command():
-    """The pictures showed another run (f_x^ini 16.95, 1.5 ms) than the demo makes (scripts/readme_pictures.py)."""
+    """The pictures showed another run (f_x^ini 16.95, 1.5 ms) than the demo makes (scripts/paper/readme_pictures.py)."""
     root = pathlib.Path(__file__).parents[1]
     text = (root / "README.md").read_text()
     record = json.loads((root / "docs" / "readme_pictures.json").read_text())

@@ -343,3 +343,12 @@ def test_job_files_of_another_code_are_kept_counted_and_rerun_on_request(tmp_pat
     again = run_sweep(jobs, tmp_path / "out", workers=1, runner=fake_runner, progress=False, rerun_stale=True)
     assert again.ran == 2 and not again.stale
     assert "0.1.0+older" not in set(read_summary(tmp_path / "out")["knitlad_code"])
+
+
+def test_every_example_and_reference_sweep_config_validates():
+    """configs/*.yaml (the examples) and docs/reference/*.yaml (the studies' sweeps) load and expand."""
+    paths = sorted((ROOT / "configs").glob("*.yaml")) + sorted((ROOT / "docs" / "reference").glob("*.yaml"))
+    assert len(paths) >= 15
+    for path in paths:
+        _, jobs = load_sweep(path)
+        assert jobs, path

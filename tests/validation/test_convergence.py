@@ -1,7 +1,7 @@
 """The presets against the converged reference (docs/accuracy.md, docs/reference/).
 
 The reference of the periodised stitch is the model itself at up to 280 nodes per stitch
-(``scripts/reference_stitch.py`` wrote ``docs/reference/stitch.csv``; its uncertainty there is
+(``scripts/paper/reference_stitch.py`` wrote ``docs/reference/stitch.csv``; its uncertainty there is
 the change from the next finer resolutions, under 1 % for f_x > 1). A test here recomputes one
 of its rows, so that the stored table cannot drift from the code, and pins the default preset's
 error against it. The laddering velocity's convergence in the time step is a slow test.

@@ -56,7 +56,7 @@ def test_a_weak_global_drag_slows_the_ladder_at_low_tension_only():
 def test_the_friction_couple_slows_the_ladder_at_moderate_tension():
     """docs/accuracy.md, "Twist and the friction couple": with twist on, friction also turns
     the yarns. On 16 x 16 knits of the tiled stretch (five per tension, targets 0.5 % apart, each
-    laddered twist-free and with twist from one stretch, scripts/twist_ensemble.py, 2026-12-03) the
+    laddered twist-free and with twist from one stretch, scripts/twist_ensemble.py at commit 56421cd, 2026-12-03) the
     paired change of v_lad was -13.5 +- 1.6 % (standard error) at f_x^ini 4, each knit between -9.4
     and -18.4 %, and -0.8 +- 2.1 % at 1.58, where the five changes scattered from -6.1 to +5.0 %.
     Here the knit at 4: more than 7 % slower with twist, outside that scatter of a null effect."""

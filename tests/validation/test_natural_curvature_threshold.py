@@ -1,4 +1,4 @@
-"""The laddering threshold that natural curvature gives (slow; configs/threshold16.yaml, scripts/threshold.py).
+"""The laddering threshold that natural curvature gives (slow; configs/threshold16.yaml, scripts/paper/threshold.py).
 
 "Does not ladder": fewer undone cells than 0.1 n_y of the paper's 42 x 42 knit (4.2 cells),
 counted in cells so that it carries over to 16 x 16, where the cut alone undoes 1 to 2.

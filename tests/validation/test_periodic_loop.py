@@ -1,7 +1,7 @@
 """The single loop in rows periodic along the course (knitlad.periodic_loop): what the periodised
 geometry does, and the paper's claims it does not reproduce (strict expected failures).
 
-Measured (2026-12-02, scripts/loop_table.py, docs/single_loop.md): with one stitch per period and
+Measured (2026-12-02, scripts/paper/loop_table.py, docs/single_loop.md): with one stitch per period and
 the rows free in y, the loop row does not open; pulled up by the upper row's legs it climbs
 bodily toward the held top row while the period widens by half, and contact ends late (mu = 0:
 v_lad 36-51 % below 0.34 sqrt(f_x)). Held in y at its sinkers, or as one loop of a strip whose

@@ -1,6 +1,6 @@
 """The laddering threshold f_x^thr(K) from sweeps over natural curvature K and f_x^ini.
 
-    python scripts/threshold.py runs/threshold16 [runs/threshold16_mu0 ...] [--png docs/threshold16.png]
+    python scripts/paper/threshold.py runs/threshold16 [runs/threshold16_mu0 ...] [--png docs/threshold16.png]
 
 Reads each sweep's summary (``knitlad sweep configs/threshold16.yaml``). A run "does not
 ladder" when its damage is below 0.1 n_y on the paper's 42 x 42 knit, 4.2 cells: counted in

@@ -1,6 +1,6 @@
 """The memory K as the paper measured it: a course freed of the knit, laid flat, its outline's curvature.
 
-    python scripts/memory_calibration.py [--K 0.05 0.25 1] [--preset fast] [--csv FILE]
+    python scripts/paper/memory_calibration.py [--K 0.05 0.25 1] [--preset fast] [--csv FILE]
 
 The paper (appendix "Natural curvature") pulls a thread out of the fabric, photographs it lying on a
 plane and reads (kbar/kappa0)^2 along its outline: about 1 on average, about 3.5 at most over four

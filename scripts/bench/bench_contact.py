@@ -6,7 +6,7 @@ segments, the touching pairs, the time per step with the neighbour list reused,
 the time of one neighbour-list rebuild, node-steps/s with contact on and off,
 and the time per step per segment (flat = linear scaling).
 
-    python scripts/bench_contact.py [--sizes 8 16 32 64] [--steps 200]
+    python scripts/bench/bench_contact.py [--sizes 8 16 32 64] [--steps 200]
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ Both codes run on one thread in the same process. PyElastica is not a knitlad
 dependency: when ``import elastica`` fails, the script makes its own
 environment ``.venv-pyelastica`` (pyelastica + this checkout) and reruns there.
 
-    python scripts/bench_pyelastica.py [--elements 1000 3000 10000] [--time-ms 2]
+    python scripts/bench/bench_pyelastica.py [--elements 1000 3000 10000] [--time-ms 2]
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """Refactoring check: the positions of a 16 x 16 ladder after 3,000 steps past the cut, to the bit.
 
-    python scripts/bitwise_check.py --save runs/bitwise.npz      # before a change
-    python scripts/bitwise_check.py --compare runs/bitwise.npz   # after it: identical, or where it differs
-    python scripts/bitwise_check.py --twist --save runs/bitwise_twist.npz   # the yarns carrying twist
+    python scripts/bench/bitwise_check.py --save runs/bitwise.npz      # before a change
+    python scripts/bench/bitwise_check.py --compare runs/bitwise.npz   # after it: identical, or where it differs
+    python scripts/bench/bitwise_check.py --twist --save runs/bitwise_twist.npz   # the yarns carrying twist
 
 The knit is stretched to f_x^ini = 8 by force control (preset fast: 24 nodes per stitch), cut, and
 stepped 3,000 times. A change that only moves code must leave every position and

@@ -1,6 +1,6 @@
 """The paper's DER points: `knitlad cut` at f_x^ini = 1.58, 4, 8, 13.6, 15.67 (l_y/l0 = 0.25).
 
-    python scripts/ladder_tensions.py [--stitches 42] [--preset default] [--fx 1.58 4 8 13.6 15.67]
+    python scripts/paper/ladder_tensions.py [--stitches 42] [--preset default] [--fx 1.58 4 8 13.6 15.67]
                                       [--twist] [--cut-args="--twist-inertia-factor 4"]
 
 Prints a table beside the paper's values (DER, 42 x 42, mu = 0.4: v_lad/c_b =

@@ -1,6 +1,6 @@
 """Laddering velocity against friction on the fabric: the paper's Eq. 2 and Fig. 5c, from knits instead of a loop.
 
-    python scripts/velocity_friction.py runs/velocity24_mu [--png docs/velocity_friction.png] [--csv FILE]
+    python scripts/paper/velocity_friction.py runs/velocity24_mu [--png docs/velocity_friction.png] [--csv FILE]
 
 Reads a sweep over (mu, f_x^ini) of straight-yarn knits (``docs/reference/velocity24_mu.yaml``). Per mu:
 * the front's velocity v_lad/c_b (the summary's fit of the front against time) and, from the laddering

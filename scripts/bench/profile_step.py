@@ -1,6 +1,6 @@
 """Profile: where one laddering step's time goes, part by part.
 
-    python scripts/profile_step.py [--fx 13.6] [--stitches 42] [--preset default]
+    python scripts/bench/profile_step.py [--fx 13.6] [--stitches 42] [--preset default]
                                    [--twist on] [--threads 2] [--warm-steps 2000]
                                    [--implicit-axial]
 

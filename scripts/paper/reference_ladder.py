@@ -1,13 +1,13 @@
 """The converged reference of the laddering knit: observables against the resolution, over ensembles of knits.
 
 For each target tension f_x^ini and each resolution (nodes per stitch), an ensemble of
-knits (force-control targets 0.5 % apart, as in scripts/ensemble.py) is stretched and
+knits (force-control targets 0.5 % apart, as in knitlad/ensemble.py) is stretched and
 cut with the default dynamics. Every observable is kept per run: f_x^ini, the measured
 l_x/l0 at that tension, v_lad/c_b, n_lad/n_y, f_x^fin, the last f_x sample, the step
 count and the wall time. One Numba thread per run (run two of these at once on two cores,
 never one run on two threads beside another).
 
-    python scripts/reference_ladder.py [--size 16] [--tensions 1.58 4 13.6] [--resolutions 24 48 96]
+    python scripts/paper/reference_ladder.py [--size 16] [--tensions 1.58 4 13.6] [--resolutions 24 48 96]
                                        [--members 3] [--out docs/reference]
 
 Writes ``<out>/ladder<size>.csv`` after every run (resumable: finished runs are skipped).
@@ -17,9 +17,7 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
-from pathlib import Path
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
@@ -28,8 +26,7 @@ from knitlad.observers import Interpenetration  # noqa: E402
 from knitlad.protocol import analyse, cut, propagate, stretch  # noqa: E402
 from knitlad.simulation import SimulationBlowUp  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).parent))
-from ensemble import resumed_rows, save_rows, target_offsets  # noqa: E402
+from knitlad.ensemble import resumed_rows, save_rows, target_offsets  # noqa: E402
 
 
 KEY = ("fx_nominal", "resolution", "member", "variant")  # one row per run: merged with other writers of the file

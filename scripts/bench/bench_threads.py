@@ -1,7 +1,7 @@
 """Benchmark: laddering steps per second against Numba's threading layer and thread count,
 on a quiet machine and with a second process busy on one core.
 
-    python scripts/bench_threads.py [--stitches 16] [--preset default] [--steps 3000]
+    python scripts/bench/bench_threads.py [--stitches 16] [--preset default] [--steps 3000]
                                     [--layers omp workqueue] [--threads 1 2] [--repeats 3]
 
 Each measurement is a fresh process (a threading layer is chosen once per process): it

@@ -1,6 +1,6 @@
 """Remake the README's two pictures from the README's own demo command.
 
-    python scripts/readme_pictures.py
+    python scripts/paper/readme_pictures.py
 
 Runs the demo (the README's first command, without its install part) into runs/readme_demo,
 renders its front view at the last stored frame, copies that render to docs/render_front.png and

@@ -1,12 +1,12 @@
 """Benchmark: `knitlad cut` on a full knit, per preset and with twist off and on.
 
-    python scripts/bench_cut.py [--fx 13.6] [--stitches 42] [--presets default accurate]
+    python scripts/bench/bench_cut.py [--fx 13.6] [--stitches 42] [--presets default accurate]
                                 [--twist off on] [--axial explicit implicit] [--threads 2]
                                 [--load quiet loaded]
 
 For each run: wall time per stage (stretch, cut + propagate), steps, node-steps/s of
 the dynamics, and that rate over the rate of a lean stretch + bend kernel (one
-straight-at-rest rod, ``scripts/bench_rod.py``) timed in the same process on one
+straight-at-rest rod, ``scripts/bench/bench_rod.py``) timed in the same process on one
 thread, so the figures compare across machines. The first run of a fresh clone
 also pays Numba's compilation (printed apart: a warm-up run on a 6 x 6 knit first).
 """

@@ -1,6 +1,6 @@
 """Speed of the reduced models (goals: one single-loop run < 10 s, one stitch relaxation < 5 s).
 
-    python scripts/bench_reduced.py [--repeat 3]
+    python scripts/bench/bench_reduced.py [--repeat 3]
 
 Compiles first (not timed), then times `knitlad loop` runs (f_x = 4 and 16, mu = 0.4) and
 `knitlad stitch` relaxations (l_x/l0 = 0.30, 0.35, 0.40 at l_y/l0 = 0.25), in this process.

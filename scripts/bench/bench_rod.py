@@ -4,7 +4,7 @@ A straight-at-rest Nylon rod of N nodes, bent into a gentle arc so every kernel
 does real work, advanced with velocity Verlet on one Numba thread.
 Prints node-steps/s; the issue's goal is >= 3e7 per core.
 
-    python scripts/bench_rod.py [--nodes 50000] [--steps 2000]
+    python scripts/bench/bench_rod.py [--nodes 50000] [--steps 2000]
 """
 
 from __future__ import annotations

@@ -29,7 +29,7 @@ in the resolution is the slope of log(error) against log(nodes per stitch) over
 the points coarser than the finest.
 Writes ``<out>/convergence.csv`` and prints tables (markdown).
 
-    python scripts/convergence.py [--out docs/convergence] [--size 16] [--parts stitch loop knit scatter damping counting]
+    python scripts/paper/convergence.py [--out docs/convergence] [--size 16] [--parts stitch loop knit scatter damping counting]
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The single-loop model's velocity table (paper, Fig. 5c): v_lad/c_b against f_x for mu = 0, 0.4, 0.8.
 
-    python scripts/loop_table.py [--geometry tails|periodic|periodic-sinkers|strip] [--columns 8]
+    python scripts/paper/loop_table.py [--geometry tails|periodic|periodic-sinkers|strip] [--columns 8]
                                  [--fx 1 2 4 8 12 16 20] [--mu 0 0.4 0.8] [--max-time-ms 1]
 
 ``tails`` is ``knitlad loop`` (:mod:`knitlad.loop_model`); the others are the rows

@@ -2,10 +2,10 @@
 
 For each l_y of ``--ly`` and each l_x of its grid, the periodised stitch (``knitlad stitch``)
 is relaxed at every resolution of ``--resolutions``. From these rows
-``scripts/reference_tables.py`` derives f_x at fixed geometry, l_x at fixed f_x and the
+``scripts/paper/reference_tables.py`` derives f_x at fixed geometry, l_x at fixed f_x and the
 f_x = 0 curve, each with its observed order. One Numba thread.
 
-    python scripts/reference_stitch.py [--ly 0.25 0.30 0.20] [--resolutions 24 36 48 64 96 140 200 280]
+    python scripts/paper/reference_stitch.py [--ly 0.25 0.30 0.20] [--resolutions 24 36 48 64 96 140 200 280]
                                        [--out docs/reference]
 
 Writes ``<out>/stitch.csv`` after every point (resumable: finished points are skipped).
@@ -17,17 +17,14 @@ import argparse
 import os
 
 import numpy as np
-import sys
 import time
-from pathlib import Path
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 from knitlad.config import StitchConfig  # noqa: E402
 from knitlad.stitch_model import StitchRun  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).parent))
-from ensemble import resumed_rows, save_rows  # noqa: E402
+from knitlad.ensemble import resumed_rows, save_rows  # noqa: E402
 
 # l_x/l0 grids: dense near the f_x = 0 width of each l_y, sparser above it
 GRIDS = {

@@ -1,4 +1,4 @@
-"""What the ensemble studies of scripts/ share: their options, the targets of an ensemble, a resumable CSV.
+"""Paired ensembles: the options of an ensemble study, the targets of its members, a resumable CSV.
 
 An ensemble samples one ladder's run-to-run scatter: force-control targets a fraction of a
 percent apart (:func:`target_offsets`), each knit stretched once and laddered under each

@@ -1,8 +1,8 @@
 """The tables of docs/accuracy.md from the reference runs: converged values, orders, and each preset's error.
 
-Reads ``<ref>/stitch.csv`` (scripts/reference_stitch.py, the model without the sagitta
+Reads ``<ref>/stitch.csv`` (scripts/paper/reference_stitch.py, the model without the sagitta
 correction at 24 to 280 nodes per stitch), ``<ref>/stitch_sagitta.csv`` (the same with it)
-and ``<ref>/ladder16.csv`` (scripts/reference_ladder.py), and prints markdown:
+and ``<ref>/ladder16.csv`` (scripts/paper/reference_ladder.py), and prints markdown:
 
 * the periodised stitch's f_x at fixed (l_x, l_y) against the resolution, the reference
   (the finest resolution; its uncertainty the last increment), the observed order p of the
@@ -11,7 +11,7 @@ and ``<ref>/ladder16.csv`` (scripts/reference_ladder.py), and prints markdown:
 * the laddering knit (16 x 16): ensemble means with their standard errors, per resolution
   and variant, and each preset's difference from the finest plain resolution.
 
-    python scripts/reference_tables.py [--ref docs/reference]
+    python scripts/paper/reference_tables.py [--ref docs/reference]
 """
 
 from __future__ import annotations
