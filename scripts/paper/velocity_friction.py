@@ -92,23 +92,25 @@ def main() -> None:
     for r in df.itertuples():
         print(f"| {r.mu:g} | {r.fx_ini:.2f} | {r.n_lad:.0f} | {bool(r.reached_edge)} | {r.v_lad_over_cb:.3f} | "
               f"{r.tau_ms:.3f} | {r.ly_over_tau_cb:.3f} | {r.fx_fin:.2f} |")
-    print("\n| mu | fit v = a f^b: a | b +- se | v at f_x = 4 (fit) | 0.34 sqrt(f_x) at 4 |")
-    print("|---|---|---|---|---|")
-    fits = {}
+    print("\n| mu | v from | fit v = a f^b: a | b +- se | v at f_x = 4 (fit) | 0.34 sqrt(f_x) at 4 |")
+    print("|---|---|---|---|---|---|")
     for mu, g in df.groupby("mu"):
-        g = g[np.isfinite(g.v_lad_over_cb) & (g.v_lad_over_cb > 0)]
-        if len(g) < 2:
-            continue
-        a, b, se = power_law(g.fx_ini.to_numpy(), g.v_lad_over_cb.to_numpy())
-        fits[mu] = (a, b)
-        print(f"| {mu:g} | {a:.3f} | {b:.2f} +- {se:.2f} | {a * 4 ** b:.3f} | {PAPER_INERTIAL * 2:.3f} |")
-    if {0.4, 0.8} <= set(df.mu):
-        print("\n| f_x (nominal) | v(mu 0.4)/v(mu 0.8) | Eq. 2: sqrt(2) = 1.41 |")
-        print("|---|---|---|")
-        for fx, g in df.groupby("fx"):
-            v = g.set_index("mu").v_lad_over_cb
-            if 0.4 in v and 0.8 in v:
-                print(f"| {fx:g} | {v[0.4] / v[0.8]:.2f} | 1.41 |")
+        for column, name in (("v_lad_over_cb", "front fit"), ("ly_over_tau_cb", "l_y/tau")):
+            h = g[np.isfinite(g[column]) & (g[column] > 0)]
+            if len(h) < 3:
+                continue
+            a, b, se = power_law(h.fx_ini.to_numpy(), h[column].to_numpy())
+            print(f"| {mu:g} | {name} | {a:.3f} | {b:.2f} +- {se:.2f} | {a * 4 ** b:.3f} | {PAPER_INERTIAL * 2:.3f} |")
+    print("\n| f_x (nominal) | v(mu 0)/v(mu 0.4), front / l_y/tau | v(mu 0.4)/v(mu 0.8), front / l_y/tau | "
+          "Eq. 2: v ~ mu^(-1/2): 1.41 |")
+    print("|---|---|---|---|")
+    for fx, g in df.groupby("fx"):
+        v, w = g.set_index("mu").v_lad_over_cb, g.set_index("mu").ly_over_tau_cb
+
+        def ratio(series, a, b):
+            return f"{series[a] / series[b]:.2f}" if a in series and b in series else "-"
+
+        print(f"| {fx:g} | {ratio(v, 0.0, 0.4)} / {ratio(w, 0.0, 0.4)} | {ratio(v, 0.4, 0.8)} / {ratio(w, 0.4, 0.8)} | 1.41 |")
     if args.png:
         import matplotlib
 
