@@ -8,6 +8,7 @@ names load on first use, so that ``import knitlad`` stays light.
 import importlib
 
 from knitlad.contact import ContactModel, ContactPairs, ContactStats
+from knitlad.obstacles import Cylinder, Plane
 from knitlad.simulation import Simulation, SimulationBlowUp, UnstableTimeStep
 from knitlad.state import RodModel, Rods, RodState, Scene
 from knitlad.units import NYLON, Material, Scales
@@ -39,8 +40,10 @@ __all__ = [
     "ContactModel",
     "ContactPairs",
     "ContactStats",
+    "Cylinder",
     "Material",
     "NYLON",
+    "Plane",
     "RodModel",
     "RodState",
     "Rods",

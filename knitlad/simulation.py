@@ -10,7 +10,7 @@ import math
 import os
 import time
 from contextlib import contextmanager
-from typing import Callable
+from typing import Callable, Sequence
 
 import numba
 import numpy as np
@@ -36,6 +36,7 @@ from knitlad.kernels.integrate import (
     rail_forces,
     verlet_steps,
 )
+from knitlad.obstacles import Obstacle, ObstacleReadout, obstacle_state, obstacle_time_step
 from knitlad.state import Rods, Workspace
 from knitlad.timestep import DEFAULT_SAFETY, TimeStepLimits, UnstableTimeStep, critical_time_steps
 
@@ -278,7 +279,7 @@ class ContactReadout:
         return int(touching_pairs_among(self.state.x, m.edge_a, m.edge_b, m.edge_shift, c, in_a, in_b))
 
 
-class Simulation(SupportControl, ContactReadout):
+class Simulation(SupportControl, ContactReadout, ObstacleReadout):
     """Explicit dynamics and FIRE statics of a rod scene.
 
     Parameters
@@ -295,11 +296,12 @@ class Simulation(SupportControl, ContactReadout):
     implicit_axial: the axial springs at the end of each kick (open yarns): the step set by contact and bending.
     predicted_dashpots: the dashpots act on the velocities predicted at the end of each step (second order in dt).
     (Both are modes of :mod:`knitlad.kernels.integrate`.)
+    obstacles: rigid planes and cylinders (:mod:`knitlad.obstacles`), fixed or moving.
     """
 
     def __init__(self, rods: Rods, dt_s: float | None = None, safety: float = DEFAULT_SAFETY, drag_per_s: float = 0.0,
                  guard_every: int = 500, contact: ContactModel | None = None, framed_twist: bool = False,
-                 implicit_axial: bool = False, predicted_dashpots: bool = False) -> None:
+                 implicit_axial: bool = False, predicted_dashpots: bool = False, obstacles: Sequence[Obstacle] = ()) -> None:
         if not 0.0 < safety <= 1.0:
             raise ValueError(f"safety must lie in (0, 1], got {safety}")
         self.rods = rods
@@ -310,7 +312,12 @@ class Simulation(SupportControl, ContactReadout):
         self.work = Workspace.for_model(self.model)
         self.contact_model = contact
         self.contacts: Contacts = make_contacts(rods, contact)
+        self.obstacles = obstacle_state(list(obstacles), self.model.n_nodes) if len(obstacles) else None
+        self._obstacle_args = () if self.obstacles is None else (self.obstacles,)  # none: the kernels as compiled without
         contact_limit = contact_time_step(self.model, contact, spin=self.twist, predicted=predicted_dashpots)
+        wall_limit = obstacle_time_step(self.model, list(obstacles), predicted=predicted_dashpots)
+        if math.isfinite(wall_limit):  # springs in parallel: omega^2 adds
+            contact_limit = 1.0 / math.sqrt(1.0 / contact_limit**2 + 1.0 / wall_limit**2)
         self.limits: TimeStepLimits = critical_time_steps(self.model, self.twist, contact_limit, bool(implicit_axial),
                                                           bool(predicted_dashpots))
         self.dt = self.limits.time_step(dt_s, safety)
@@ -335,7 +342,8 @@ class Simulation(SupportControl, ContactReadout):
             self.work.v_damp[:], self.work.omega_damp[:] = self.state.v, self.state.omega
         with self.threads.one_call():
             while not compute_forces(self.model, self.state, self.work, self.contacts, self.twist_mode,
-                                     self.has_contact, self.drag, self.dt, self.axial_mode, self.dashpot_mode):
+                                     self.has_contact, self.drag, self.dt, self.axial_mode, self.dashpot_mode,
+                                     *self._obstacle_args):
                 self._grow_contacts()
 
     def set_friction(self, mu: float) -> None:
@@ -423,7 +431,7 @@ class Simulation(SupportControl, ContactReadout):
             t0 = time.perf_counter()
             try:
                 done = verlet_steps(self.model, self.state, self.work, self.contacts, self.dt, chunk, self.twist_mode,
-                                    self.has_contact, self.drag, self.axial_mode, self.dashpot_mode)
+                                    self.has_contact, self.drag, self.axial_mode, self.dashpot_mode, *self._obstacle_args)
             finally:
                 numba.set_num_threads(allowed)
             self.threads.record(threads, done, time.perf_counter() - t0)
@@ -478,7 +486,7 @@ class Simulation(SupportControl, ContactReadout):
             while True:
                 steps, fmax, tmax = fire_relax(
                     self.model, self.state, self.work, self.contacts, 0.5 * self.dt, self.dt, int(max_steps), ftol,
-                    ttol, self.twist_mode, self.has_contact,
+                    ttol, self.twist_mode, self.has_contact, *self._obstacle_args,
                 )
                 if steps >= 0:
                     break

@@ -46,7 +46,7 @@ def test_no_module_calls_a_private_function_of_another():
 LAYERS = {
     1: ("kernels", "units", "measure", "stretching", "presets", "provenance", "progress"),
     2: ("state", "topology", "observers"),
-    3: ("contact", "timestep", "natural_curvature", "scenes"),
+    3: ("contact", "timestep", "natural_curvature", "scenes", "obstacles"),
     4: ("simulation",),
     5: ("protocol", "stitch_model", "loop_model", "periodic_loop", "demo"),
     6: ("config",),

@@ -24,6 +24,7 @@ from numba import njit, prange
 
 from knitlad.kernels.options import NUMBA_OPTS, PARALLEL_OPTS
 from knitlad.kernels.contact import contact_energy, contact_forces, refresh_contacts
+from knitlad.kernels.obstacles import advance_obstacles, obstacle_forces
 from knitlad.kernels.elastic import (
     bending_energy,
     bending_forces,
@@ -138,13 +139,15 @@ def complete_frames(m, s, w, twist):
 
 
 @njit(**NUMBA_OPTS)
-def compute_forces(m, s, w, c, twist, contact, drag, dt, axial=AXIAL_EXPLICIT, dashpots=DASHPOTS_HALF_STEP):
+def compute_forces(m, s, w, c, twist, contact, drag, dt, axial=AXIAL_EXPLICIT, dashpots=DASHPOTS_HALF_STEP,
+                   obstacles=None):
     """Total force on every node (``w.force``) and torque on every edge (``w.torque``).
 
     ``twist``, ``contact``, ``axial``, ``dashpots``: the modes (module docstring; with DASHPOTS_PREDICTED the
     dashpots act on ``w.v_damp``, ``w.omega_damp``, which the caller fills). ``drag`` [1/ms]: a global viscous drag
     -drag m v, used only while relaxing. ``dt``: the step over which contact slip accumulates, and
     with AXIAL_IMPLICIT the kick that follows (a full step: :func:`verlet_steps` fuses the half-kicks).
+    ``obstacles``: an :class:`~knitlad.kernels.obstacles.ObstacleState`, or None (none: compiled away).
     Returns False if the contact buffer overflowed (forces incomplete).
     """
     follow_images(s.x, s.v, m.image_node, m.image_master, m.image_shift)
@@ -164,6 +167,8 @@ def compute_forces(m, s, w, c, twist, contact, drag, dt, axial=AXIAL_EXPLICIT, d
             return False
         contact_forces(s.x, s.v, s.omega, twist, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt, w.force, w.torque,
                        v_damp, w.omega_damp if predicted else s.omega, predicted)
+    if obstacles is not None:
+        obstacle_forces(s.x, v_damp, m.mass, m.radius, m.held, obstacles, dt, w.force)
     rail_forces(m.rail_node, m.rail_axis, w.force)
     if not explicit:
         implicit_stretching_by_yarn(m, s, w, dt)  # last: its tensions balance every other force
@@ -330,7 +335,8 @@ def _drift(m, s, dt, twist):
 
 
 @njit(**NUMBA_OPTS)
-def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, drag, axial=AXIAL_EXPLICIT, dashpots=DASHPOTS_HALF_STEP):
+def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, drag, axial=AXIAL_EXPLICIT, dashpots=DASHPOTS_HALF_STEP,
+                 obstacles=None):
     """Advance ``n_steps`` of velocity Verlet (kick-drift-kick); return the steps completed.
 
     Expects ``w.force``/``w.torque`` to hold the forces of the current state
@@ -347,11 +353,13 @@ def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, drag, axial=AXIAL_EXPL
     half_kick(m, s, w, 0.5 * dt, twist)
     for step in range(n_steps):
         _drift(m, s, dt, twist)
+        if obstacles is not None:
+            advance_obstacles(obstacles, dt)
         if dashpots == DASHPOTS_PREDICTED:  # w.force still holds the last step's forces
             predict_velocities(m.held, m.mass, w.force, s.v, 0.5 * dt, w.v_damp)
             if twist:
                 predict_spins(m.theta_held, m.twist_inertia, w.torque, s.omega, 0.5 * dt, w.omega_damp)
-        if not compute_forces(m, s, w, c, twist, contact, drag, dt, axial, dashpots):
+        if not compute_forces(m, s, w, c, twist, contact, drag, dt, axial, dashpots, obstacles):
             complete_frames(m, s, w, twist)
             return step
         half_kick(m, s, w, dt if step < n_steps - 1 else 0.5 * dt, twist)
@@ -377,7 +385,7 @@ def max_free_force(m, w, twist):
 
 
 @njit(**NUMBA_OPTS)
-def fire_relax(m, s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, twist, contact):
+def fire_relax(m, s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, twist, contact, obstacles=None):
     """FIRE energy minimisation (Bitzek et al. 2006, with the FIRE 2.0 back-step of
     Guenole et al. 2020) over free node positions and free twist angles.
 
@@ -398,7 +406,7 @@ def fire_relax(m, s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, t
         for k in range(3):
             s.v[i, k] = 0.0
     s.omega[:] = 0.0
-    if not compute_forces(m, s, w, c, twist, contact, 0.0, dt):
+    if not compute_forces(m, s, w, c, twist, contact, 0.0, dt, AXIAL_EXPLICIT, DASHPOTS_HALF_STEP, obstacles):
         return -1, 0.0, 0.0
     fmax, tmax = max_free_force(m, w, twist)
     step = 0
@@ -458,7 +466,7 @@ def fire_relax(m, s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, t
                 if not m.theta_held[j]:
                     s.omega[j] = (1.0 - alpha) * s.omega[j] + tscale * w.torque[j]
                     s.theta[j] += dt * s.omega[j]
-        if not compute_forces(m, s, w, c, twist, contact, 0.0, dt):
+        if not compute_forces(m, s, w, c, twist, contact, 0.0, dt, AXIAL_EXPLICIT, DASHPOTS_HALF_STEP, obstacles):
             return -1, 0.0, 0.0
         fmax, tmax = max_free_force(m, w, twist)
     for i in range(s.x.shape[0]):
