@@ -81,7 +81,16 @@ def test_a_node_pressed_on_a_plane_sticks_below_mu_n_and_slides_above_it_at_the_
     assert sim.obstacle_reactions_N()[0, 2] == pytest.approx(-len(s) * N, rel=1e-3)
 
 
-@pytest.mark.parametrize("name", ["euler_buckling", "coulomb_slide", "ring_between_plates", "capstan"])
+def test_a_yarn_dropped_on_a_cylinder_rests_on_it_as_two_cantilevers_carrying_its_weight():
+    """After the fall and a relaxation the cylinder carries the weight (to the relaxation's tolerance,
+    1e-3), and each end sags below the middle by w a^4 / (8 B) within 1 % (measured +0.2 %)."""
+    weight, on_cylinder, sag, cantilever = example("yarn_on_cylinder").drop()
+    assert on_cylinder[1] == pytest.approx(-weight, rel=1e-3) and abs(on_cylinder[0]) < 1e-3 * weight
+    np.testing.assert_allclose(sag, cantilever, rtol=0.01)
+
+
+@pytest.mark.parametrize("name", ["euler_buckling", "coulomb_slide", "ring_between_plates", "capstan",
+                                  "yarn_on_cylinder"])
 def test_examples_are_short_and_use_only_the_public_api(name):
     text = (EXAMPLES / f"{name}.py").read_text()
     assert len(text.splitlines()) <= 40
