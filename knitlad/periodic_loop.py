@@ -22,11 +22,7 @@ neighbouring columns keep a course's height). tau = t_cl - t_0, t_cl the last co
 between the loop (its middle column) and the upper row before they stay apart for
 ``confirm_s``; v_lad = l_y / tau (the paper's definition).
 
-Measured (2026-12-02, ``scripts/paper/loop_table.py --geometry ...``, docs/single_loop.md):
-one stitch per period, free in y, the loop row does not open: pulled up by the upper
-row's legs it climbs bodily through the stack while the box grows by half (f_x = 4,
-mu = 0: L from 0.37 to 0.56 l0); with its sinkers held it stays hooked; the strip
-stays hooked at f_x = 8 for 400 us (6 and 12 columns).
+What each geometry did: docs/single_loop.md ("Periodic geometries").
 """
 
 from __future__ import annotations

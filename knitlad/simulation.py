@@ -84,7 +84,7 @@ class ThreadGovernor:
 
     A parallel step meets its threads at barriers several times; when another process holds one of
     two cores, each barrier waits for a descheduled thread: a 16 x 16 run went from 5.45 s to 48 s,
-    and a chunk of an 8 x 8 run from 0.045 s on one thread to 15 s on two (2026-12-03). So a run
+    and a chunk of an 8 x 8 run from 0.045 s on one thread to 15 s on two (docs/performance.md). So a run
     starts on one thread and tries its threads only when the processors it may use were idle
     for at least half a core per extra thread during the last chunk (/proc/stat; where that cannot be
     read, it tries anyway). It times every chunk, keeps the faster count, and tries again more

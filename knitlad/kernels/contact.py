@@ -135,7 +135,7 @@ def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge
     interior (then its own closest point is not the node).
 
     The rule is written out in this loop, not in a helper: as a helper over the arrays (compiled
-    or inlined) it made the narrow phase 4 to 7 x slower (measured 2026-12-02, 42 x 42 knit).
+    or inlined) it made the narrow phase 4 to 7 x slower on a 42 x 42 knit (docs/history.md).
 
     ``mode`` ALL_PAIRS_RECORD_GAPS also stores each pair's gap (axis distance less the two radii)
     in ``gap_ref``; SKIP_BY_GAPS writes an overlap of 0 without a distance test for a pair whose

@@ -66,8 +66,7 @@ def bishop_reference_directors(tangent, edge_yarn, ref_u):
 def _small_atan2(y, x):
     """atan2(y, x), by its series where the angle is small: below |z| = |y / x| < 1e-3 (x > 0) it is
     atan z = z - z^3/3 + z^5/5, whose next term (z^7/7 < 1.5e-22) is below round-off. The angles of
-    one step are small: the reference-twist update then costs half as much as with atan2 (measured
-    2026-12-02)."""
+    one step are small: the reference-twist update then costs half as much as with atan2 (docs/history.md)."""
     if x > 0.0 and abs(y) < 1e-3 * x:
         z = y / x
         z2 = z * z

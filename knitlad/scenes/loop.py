@@ -12,25 +12,7 @@ stitches of a course keep them at the course's height; free in y, the loop
 climbs out over the upper row (seen). Limitation: the held upper row cannot
 yield, and at high tension the tightened head of the loop is trapped between
 its diverging legs (no release at f_x = 20 with mu = 0, f_x >= 16 with mu = 0.4).
-Variants tried and dropped: a free upper row (under the same tension, or with
-pinned ends) and a row held above it (the loops ring against each other and
-part only at f_x <= 2), the column stretched from 0.30 to 0.39 l0 before
-the release (the upper row's legs then trap the head at every tension), and the
-loop row without tails, clamped at its sinkers and sliding along x as the
-fabric's courses are held (never released, f_x = 1 to 20, mu = 0), and
-rows three stitches wide with only the middle stitch of the lower row removed, so
-that the loop's neighbours stay hooked to held rows (never released in 2 ms,
-f_x = 0.05 to 20, mu = 0: the tails are drawn out by 0.1 l0 and spring back, the
-head stays on the upper row's legs), and the three rows copied from the relaxed
-periodised stitch at the fabric's l_x for each f_x (l_x/l0 from 0.346 at f_x = 1 to
-0.405 at 20; the 42 x 42 fabric measures 0.348 to 0.394): where the loop lets go,
-v_lad is within 15 % of this model's (mu = 0: 0.65, 0.83, 1.11 at f_x 1, 4, 8; one
-exception: 0.49 against 0.67 at mu = 0.8, f_x = 2), but
-it stays hooked at f_x >= 12 for every mu, and at some lower tensions too (mu = 0 at
-f_x = 2, mu = 0.4 and 0.8 at 1): whether the recoil carries the head past the held
-upper row's legs decides release or trap. With the tails' tips clamped along x (the
-last two nodes on rails), the loop never lets go (f_x = 0.05 to 16, mu = 0 and 0.4):
-the recoil that frees it here swings the legs about the tips.
+Variants tried and dropped, with what each did: docs/single_loop.md ("Variants of the tails geometry").
 """
 
 from __future__ import annotations
