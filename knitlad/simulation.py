@@ -37,6 +37,7 @@ from knitlad.kernels.integrate import (
     verlet_steps,
 )
 from knitlad.obstacles import Obstacle, ObstacleReadout, obstacle_state, obstacle_time_step
+from knitlad.quasistatic import QuasiStatics
 from knitlad.state import Rods, Workspace
 from knitlad.timestep import DEFAULT_SAFETY, TimeStepLimits, UnstableTimeStep, critical_time_steps
 
@@ -279,7 +280,7 @@ class ContactReadout:
         return int(touching_pairs_among(self.state.x, m.edge_a, m.edge_b, m.edge_shift, c, in_a, in_b))
 
 
-class Simulation(SupportControl, ContactReadout, ObstacleReadout):
+class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics):
     """Explicit dynamics and FIRE statics of a rod scene.
 
     Parameters
