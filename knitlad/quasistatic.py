@@ -39,7 +39,8 @@ class QuasiStatics:
                check_every_s: float | None = None) -> dict:
         """Run damped dynamics (``damping_per_s`` = alpha [1/s], module docstring) until
         :meth:`residual_force_N` is at most ``force_tol_N``, checked every ``check_every_s`` (default:
-        1/alpha), or until ``max_time_s`` of simulated time. The drag in force before is restored.
+        1/alpha; at least one such interval is run), or until ``max_time_s`` of simulated time. The drag
+        in force before is restored.
 
         Returns ``converged``, ``time_s`` (simulated) and ``max_force_N`` (the residual at the end).
         """
@@ -49,13 +50,15 @@ class QuasiStatics:
         if not (every > 0 and math.isfinite(every)):
             raise ValueError(f"check_every_s must be positive, got {check_every_s!r}")
         before, t0 = self.drag / units.TIME, self.time_s
-        residual = self.residual_force_N()  # the forces at hand were evaluated under the drag before
         self.set_drag(damping_per_s)
         try:
-            while residual > force_tol_N and self.time_s - t0 < max_time_s:
+            # at least one chunk: the forces at hand may predate a move (move_held, move_obstacle keep them)
+            while True:
                 chunk = min(every, max_time_s - (self.time_s - t0))
                 self.step(max(1, int(round(chunk / self.dt_s))))
                 residual = self.residual_force_N()
+                if residual <= force_tol_N or self.time_s - t0 >= max_time_s * (1 - 1e-9):
+                    break
         finally:
             self.set_drag(before)
         return {"converged": residual <= force_tol_N, "time_s": self.time_s - t0, "max_force_N": residual}

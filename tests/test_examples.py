@@ -89,8 +89,19 @@ def test_a_yarn_dropped_on_a_cylinder_rests_on_it_as_two_cantilevers_carrying_it
     np.testing.assert_allclose(sag, cantilever, rtol=0.01)
 
 
+def test_pulling_a_course_out_of_a_knit_stores_the_work_without_friction_and_dissipates_with_it():
+    """Frictionless statics: the pull's work (trapezoid rule over 10 steps of 0.02 mm) equals the stored
+    energy gained within 1 % (measured 0.1 %). At mu = 0.4, every step settled (to 1e-6 N), the work
+    exceeds the energy stored: the rest was dissipated by sliding (measured 7.6 % of the work)."""
+    pull = example("pull_out").pull
+    x, f, e = pull(mu=0.0)
+    assert np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(x)) == pytest.approx(e[-1] - e[0], rel=0.01) and e[-1] > e[0]
+    x, f, e = pull(mu=0.4)
+    assert np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(x)) > e[-1] - e[0] > 0
+
+
 @pytest.mark.parametrize("name", ["euler_buckling", "coulomb_slide", "ring_between_plates", "capstan",
-                                  "yarn_on_cylinder"])
+                                  "yarn_on_cylinder", "pull_out"])
 def test_examples_are_short_and_use_only_the_public_api(name):
     text = (EXAMPLES / f"{name}.py").read_text()
     assert len(text.splitlines()) <= 40
