@@ -28,6 +28,17 @@ def tension_per_thread(reactions_N: np.ndarray, left_end: np.ndarray, right_end:
     return float(F_x / (len(right_end) * f0))
 
 
+def course_tensions(reactions_N: np.ndarray, left_end: np.ndarray, right_end: np.ndarray, f0: float) -> np.ndarray:
+    """Each course's own f_x: its right-end pull and minus its left-end pull, averaged, over f0 ((n_y,) [-]).
+
+    Their mean is :func:`tension_per_thread`. A ladder relaxes the courses it crosses and leaves the
+    others near f_x^ini, so the mean is a reading of the arrest only where every course was crossed.
+    """
+    right = reactions_N[right_end, 0].reshape(len(right_end), -1).sum(axis=1)
+    left = reactions_N[left_end, 0].reshape(len(left_end), -1).sum(axis=1)
+    return 0.5 * (right - left) / f0
+
+
 def periodicities(course_positions: list[np.ndarray], column_x: np.ndarray, l_x_guess: float,
                   margin: float = 0.25) -> tuple[float, float]:
     """(l_x, l_y) [same unit as the positions] measured on the central courses and columns.

@@ -82,13 +82,15 @@ class FrontRecorder:
 
 
 class TensionRecorder:
-    """f_x at every observation."""
+    """f_x at every observation, and each free course's own (``fx_courses``)."""
 
     def __init__(self) -> None:
         self.fx: list[float] = []
+        self.fx_courses: list[np.ndarray] = []
 
     def observe(self, t: float, run, undone: np.ndarray) -> None:
         self.fx.append(run.tension())
+        self.fx_courses.append(run.course_tensions())
 
 
 AUTO_FRAMES = 60  # frames over a ladder's expected duration when no frame interval is given (protocol.frame_interval)

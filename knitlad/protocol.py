@@ -37,7 +37,7 @@ import numpy as np
 
 from knitlad import units
 from knitlad.contact import ContactModel, Counting, contact_time_step
-from knitlad.measure import cell_overlap, laddered_cells, periodicities, tension_per_thread
+from knitlad.measure import cell_overlap, course_tensions, laddered_cells, periodicities, tension_per_thread
 from knitlad.observers import (
     AUTO_FRAMES,
     Arrested,
@@ -168,6 +168,11 @@ class KnitGauge:
     def tension(self, sim: Simulation) -> float:
         k = self.knit
         return tension_per_thread(sim.reaction_forces_N(), k.left_end, k.right_end, self.material.f0)
+
+    def course_tensions(self, sim: Simulation) -> np.ndarray:
+        """Each free course's f_x, bottom to top (:func:`knitlad.measure.course_tensions`)."""
+        k = self.knit
+        return course_tensions(sim.reaction_forces_N(), k.left_end, k.right_end, self.material.f0)
 
     def rows(self, x: np.ndarray) -> list[np.ndarray]:
         """Positions of the free courses, bottom to top, then of the held top course, by their
@@ -500,6 +505,9 @@ class Laddering:
     def tension(self) -> float:
         return self.knit.gauge.tension(self.sim)
 
+    def course_tensions(self) -> np.ndarray:
+        return self.knit.gauge.course_tensions(self.sim)
+
 
 def sinker_edge(knit: StretchedKnit, row: int, column: int) -> int:
     """The edge at the apex of the sinker loop of course ``row`` on the -x side of ``column``."""
@@ -603,6 +611,7 @@ class LadderTrace:
     columns: tuple[int, ...]  # the columns beside the cut sinker loop, each followed
     times_s: np.ndarray  # observation times since the cut
     fx: np.ndarray  # f_x at each observation
+    fx_courses: np.ndarray  # (n_obs, n_y) each free course's f_x at each observation
     fronts: tuple[np.ndarray, ...]  # per column: (n_obs, 2) upward and downward extents [stitches]
     column_cells: tuple[np.ndarray, ...]  # per column: (n_obs, n_y) laddered flags
     frames: FrameRecorder  # positions, velocities and undone cells at the frame times
@@ -682,7 +691,7 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
     frames.observe(t, run, undone, last=True)  # the state at the stop
     return LadderTrace(
         knit=run.knit, dynamics=d, cut_row=run.cut_row, columns=columns, times_s=np.array(times),
-        fx=np.array(tension.fx), fronts=fronts.extents(), column_cells=fronts.cells(), frames=frames,
+        fx=np.array(tension.fx), fx_courses=np.array(tension.fx_courses), fronts=fronts.extents(), column_cells=fronts.cells(), frames=frames,
         baseline=run.baseline, final_laddered=undone, stop_reason=reason,
         reached_edge=isinstance(rule, EdgeReached), steps=run.sim.steps,
         yarn_start=run.sim.model.yarn_start.copy(), peak_overlap_over_d=guard.peak_over_d,
@@ -700,6 +709,8 @@ class LadderResult:
     settings: LadderSettings
     fx_ini: float = math.nan
     fx_fin: float = math.nan
+    fx_fin_crossed: float = math.nan  # f_x at the stop of the courses with an undone cell (the ladder crossed them)
+    fx_fin_intact: float = math.nan  # ... and of the others
     lx_over_l0: float = math.nan
     ly_over_l0: float = math.nan
     n_lad: int = 0
@@ -714,6 +725,7 @@ class LadderResult:
     front_up: list = field(default_factory=list)
     front_down: list = field(default_factory=list)
     fx_series: list = field(default_factory=list)
+    fx_course_series: np.ndarray | None = None  # (n_obs, n_y) each course's f_x
     column_history: list = field(default_factory=list)  # laddered flags of the laddering column over time
     frames: list = field(default_factory=list)
     frame_times_s: list = field(default_factory=list)
@@ -738,7 +750,8 @@ class LadderResult:
     def summary(self) -> dict:
         """The scalar results, and the settings a reader needs beside them (mu, twist, drag)."""
         d = self.settings.dynamics
-        skip = {"settings", "wall_s", "times_s", "front_up", "front_down", "fx_series", "column_history", "frames",
+        skip = {"settings", "wall_s", "times_s", "front_up", "front_down", "fx_series", "fx_course_series",
+                "column_history", "frames",
                 "frame_times_s", "final_laddered", "baseline_laddered", "yarn_start", "frame_velocities",
                 "frame_laddered", "frame_contact", "stretch_tension", "node_course", "cut_node", "cell_centres", "edges"}
         out = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in skip}
@@ -766,8 +779,15 @@ def analyse(trace: LadderTrace) -> LadderResult:
     l_y = knit.box_ly * s.material.stitch_length
     v_lad = laddering_velocity(trace.times_s, front[:, 0], l_y, first, last)
     n_lad = int(trace.final_laddered.sum())
+    fin_courses = trace.fx_courses[window].mean(axis=0)
+    crossed = trace.final_laddered.any(axis=1)  # courses with an undone cell: the ladder relaxed them
+
+    def mean_of(rows: np.ndarray) -> float:
+        return float(fin_courses[rows].mean()) if rows.any() else math.nan
+
     return LadderResult(
         settings=LadderSettings(s, d), fx_ini=knit.fx_ini, fx_fin=float(np.mean(trace.fx[window])),
+        fx_fin_crossed=mean_of(crossed), fx_fin_intact=mean_of(~crossed), fx_course_series=trace.fx_courses,
         lx_over_l0=knit.lx_over_l0, ly_over_l0=knit.ly_over_l0, n_lad=n_lad, n_lad_over_ny=n_lad / s.n_y,
         v_lad_over_cb=v_lad / s.material.c_b, laddering_column=trace.columns[best], reached_edge=trace.reached_edge,
         stop_reason=trace.stop_reason, v_fit_stitches=(first, last),

@@ -113,3 +113,19 @@ def test_cut_edge_splits_a_yarn_and_frees_its_ends(knit):
     # no hinge bends across the cut, and every hinge still joins two consecutive edges
     assert not np.any((cut.edge_b[cut.hinge_e0] == start + 31) & (cut.edge_a[cut.hinge_e0] == start + 30))
     assert np.all(cut.edge_b[cut.hinge_e0] == cut.edge_a[cut.hinge_e1])
+
+
+def test_each_course_carries_its_own_tension_and_their_mean_is_the_knit_s():
+    """Three courses clamped by two nodes at each end, pulled by 2, 4 and 6 f0 (the right ends along +x,
+    the left along -x, split unevenly over the clamp's two nodes): course_tensions gives 2, 4, 6 and
+    tension_per_thread their mean, 4."""
+    from knitlad.measure import course_tensions, tension_per_thread
+
+    f0 = 0.0148
+    left, right = np.array([[0, 1], [2, 3], [4, 5]]), np.array([[6, 7], [8, 9], [10, 11]])
+    reactions = np.zeros((12, 3))
+    for course, pull in enumerate((2.0, 4.0, 6.0)):
+        reactions[left[course], 0] = -pull * f0 * np.array([0.3, 0.7])
+        reactions[right[course], 0] = pull * f0 * np.array([0.9, 0.1])
+    np.testing.assert_allclose(course_tensions(reactions, left, right, f0), [2.0, 4.0, 6.0])
+    assert tension_per_thread(reactions, left, right, f0) == pytest.approx(4.0)

@@ -253,3 +253,15 @@ def test_the_cut_leaves_every_course_and_cell_where_it_was():
     heights = [r[:, 1].mean() for r in rows]
     assert np.all(np.diff(heights) > 0.5 * knit.box_ly * NYLON.stitch_length / units.LENGTH)
     assert np.array_equal(run.laddered(), run.baseline)
+
+
+def test_a_ladder_relaxes_the_courses_it_crosses_and_leaves_the_others_taut():
+    """Per-course f_x after the cut (6 x 8, l_x 0.38, fast preset, 1 ms): at every observation their mean
+    is the knit's f_x (to round-off); at the stop the courses with an undone cell carry less than half
+    the tension of the others (measured 1.71 against 5.16), so the mean f_x^fin mixes the two."""
+    r = analyse(propagate(cut(stretch(config(n_x=6, n_y=8, lx=0.38, preset="fast").stretch_settings()),
+                              config(n_x=6, n_y=8, lx=0.38, preset="fast", max_time_ms=1.0).dynamics_settings())))
+    np.testing.assert_allclose(np.asarray(r.fx_course_series).mean(axis=1), r.fx_series, atol=1e-12)
+    assert 0 < r.final_laddered.any(axis=1).sum() < 8
+    assert r.fx_fin_crossed < 0.5 * r.fx_fin_intact
+    assert min(r.fx_fin_crossed, r.fx_fin_intact) < r.fx_fin < max(r.fx_fin_crossed, r.fx_fin_intact)

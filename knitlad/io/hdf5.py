@@ -14,6 +14,7 @@ A laddering run (``ladder.h5``, a sweep's ``jobs/<id>.h5``)::
     /series/time        (n_obs,) [s] since the cut
     /series/front_up, front_down   ladder extent [stitches]
     /series/fx          tension per thread f_x
+/series/fx_courses  (n_obs, n_y) each free course's own f_x (bottom to top)
     /series/laddering_column_cells  (n_obs, n_y) bool
     /stretch/relax_steps, box_lx_over_l0, fx   the stretch's tension readings (FIRE steps so far, box, f_x)
     /final/laddered     (n_y, n_x) bool
@@ -193,6 +194,8 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
         checksummed_dataset(g, "front_up", result.front_up)
         checksummed_dataset(g, "front_down", result.front_down)
         checksummed_dataset(g, "fx", result.fx_series)
+        if result.fx_course_series is not None:
+            checksummed_dataset(g, "fx_courses", np.asarray(result.fx_course_series, dtype=float))
         if result.column_history:
             checksummed_dataset(g, "laddering_column_cells", result.column_history)
         if result.final_laddered is not None:
@@ -218,7 +221,7 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
 RUN_UNITS = {
     "frames/positions": "m", "frames/velocities": "m/s", "frames/laddered": "1", "frames/contact": "1",
     "frames/time": "s", "fields/axial_strain": "1", "fields/curvature": "1/m", "series/time": "s",
-    "series/front_up": "stitches", "series/front_down": "stitches", "series/fx": "f0",
+    "series/front_up": "stitches", "series/front_down": "stitches", "series/fx": "f0", "series/fx_courses": "f0",
     "series/laddering_column_cells": "1", "stretch/relax_steps": "1", "stretch/box_lx_over_l0": "l0",
     "stretch/fx": "f0", "final/laddered": "1", "cells/centres": "m", "topology/yarn_start": "1",
     "topology/edges": "1", "topology/node_course": "1", "contacts/offsets": "1", "contacts/points": "m",
