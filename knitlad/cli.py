@@ -282,9 +282,7 @@ def cut(
     typer.echo(
         f"{n_x} x {n_y} jersey, mu = {cfg.mu}, {cfg.resolution} nodes/stitch ({result.nodes} nodes)\n"
         f"  f_x^ini     = {result.fx_ini:.3f}\n"
-        f"  f_x^fin     = {result.fx_fin:.3f}{_fin_caveat(result)}\n"
-        f"    per course: {result.fx_fin_crossed:.3f} in the courses the ladder crossed, "
-        f"{result.fx_fin_intact:.3f} in the others\n"
+        f"  f_x^fin     = {result.fx_fin:.3f}{_fin_caveat(result)}\n    per course: {result.fx_fin_crossed:.3f} crossed by the ladder, {result.fx_fin_intact:.3f} not\n"
         f"  n_lad/n_y   = {result.n_lad_over_ny:.3f}  ({result.n_lad} cells)\n"
         f"  v_lad/c_b   = {result.v_lad_over_cb:.3f}  {_velocity_caveat(result)}\n"
         f"  l_x/l0, l_y/l0 = {result.lx_over_l0:.3f}, {result.ly_over_l0:.3f}\n"
