@@ -111,6 +111,18 @@ def peaked_weights(kappa: np.ndarray, lengths: np.ndarray, hinges: np.ndarray, m
     return np.sqrt(np.divide(excess, q, out=np.zeros_like(q), where=q > 0))
 
 
+def positional_curvature(rods: Rods, x: np.ndarray, hinges: np.ndarray, material: Material) -> np.ndarray:
+    """(kappa/kappa0)^2 of ``hinges`` read from positions ``x`` alone [-]: |kb| = 2 tan(phi/2) over the
+    Voronoi length (DER's discrete curvature, no frames): what a photograph of the yarn would give."""
+    m = rods.model
+    e, elen = np.zeros((m.edge_a.size, 3)), np.zeros(m.edge_a.size)
+    edge_vectors(x, m.edge_a, m.edge_b, m.edge_shift, e, elen)
+    t0 = e[m.hinge_e0[hinges]] / elen[m.hinge_e0[hinges], None]
+    t1 = e[m.hinge_e1[hinges]] / elen[m.hinge_e1[hinges], None]
+    kb = 2 * np.linalg.norm(np.cross(t0, t1), axis=1) / (1 + np.sum(t0 * t1, axis=1))
+    return (kb / (voronoi_lengths(rods)[hinges] * material.kappa0 * units.LENGTH)) ** 2
+
+
 def flattened_curvature(points: np.ndarray) -> np.ndarray:
     """Curvature [1/length of ``points``] at the interior vertices of an open polyline laid flat: projected
     on its best-fitting plane (the two leading principal axes), as the paper measured its thread, on a

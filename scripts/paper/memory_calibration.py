@@ -21,8 +21,7 @@ import pandas as pd
 
 import knitlad as kl
 from knitlad.config import CutConfig
-from knitlad.kernels.elastic import edge_vectors
-from knitlad.natural_curvature import flattened_curvature, voronoi_lengths
+from knitlad.natural_curvature import flattened_curvature, positional_curvature
 from knitlad.protocol import stretch
 from knitlad.simulation import Simulation
 
@@ -40,15 +39,9 @@ def freed_course(K: float, preset: str, fx: float = 4.0, peak_ratio: float | Non
     if not sim.relax(force_tol_N=1e-7, max_steps=600_000)["converged"]:
         raise RuntimeError(f"K = {K}: the freed course did not relax")
     x = sim.state.x
-    e, elen = np.zeros((m.edge_a.size, 3)), np.zeros(m.edge_a.size)
-    edge_vectors(x, m.edge_a, m.edge_b, m.edge_shift, e, elen)
-    t0 = e[m.hinge_e0[hinges]] / elen[m.hinge_e0[hinges], None]
-    t1 = e[m.hinge_e1[hinges]] / elen[m.hinge_e1[hinges], None]
-    kb = 2 * np.linalg.norm(np.cross(t0, t1), axis=1) / (1 + np.sum(t0 * t1, axis=1))
-    kappa0 = material.kappa0 * kl.units.LENGTH
-    k3 = (kb / (voronoi_lengths(rods)[hinges] * kappa0)) ** 2
+    k3 = positional_curvature(rods, x, hinges, material)
     nodes = np.flatnonzero(m.node_yarn == course)
-    return x[nodes], k3, kappa0
+    return x[nodes], k3, material.kappa0 * kl.units.LENGTH
 
 
 def main() -> None:

@@ -91,8 +91,7 @@ def test_a_course_freed_of_the_knit_relaxes_to_the_natural_curvature_it_was_give
     to a shape whose mean (kappa/kappa0)^2, read from the positions alone (|kb| = 2 tan(phi/2)
     over the Voronoi length), is K within 2 %. Stretched, the same course is bent more (1.86)."""
     from knitlad.config import CutConfig
-    from knitlad.kernels.elastic import edge_vectors
-    from knitlad.natural_curvature import voronoi_lengths
+    from knitlad.natural_curvature import positional_curvature
     from knitlad.protocol import stretch
     from knitlad.simulation import Simulation
 
@@ -105,13 +104,7 @@ def test_a_course_freed_of_the_knit_relaxes_to_the_natural_curvature_it_was_give
     hinges = np.flatnonzero(m.node_yarn[m.edge_a[m.hinge_e1]] == knit.knit.courses[1])
 
     def mean_squared_curvature(x):
-        e, elen = np.zeros((m.edge_a.size, 3)), np.zeros(m.edge_a.size)
-        edge_vectors(x, m.edge_a, m.edge_b, m.edge_shift, e, elen)
-        t0 = e[m.hinge_e0[hinges]] / elen[m.hinge_e0[hinges], None]
-        t1 = e[m.hinge_e1[hinges]] / elen[m.hinge_e1[hinges], None]
-        kb = 2 * np.linalg.norm(np.cross(t0, t1), axis=1) / (1 + np.sum(t0 * t1, axis=1))
-        kappa0 = material.kappa0 * kl.units.LENGTH
-        return float(np.mean((kb / (voronoi_lengths(rods)[hinges] * kappa0)) ** 2))
+        return float(np.mean(positional_curvature(rods, x, hinges, material)))
 
     stretched = mean_squared_curvature(rods.state.x)
     free = rods.copy().replace_model(held=np.zeros_like(m.held), v_prescribed=np.zeros_like(m.v_prescribed))
