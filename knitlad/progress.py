@@ -68,9 +68,6 @@ class ProgressLine:
             if (changed and (force or finished)) or now - self._drawn_at >= wait:
                 self._draw(now)
 
-    def advance(self, amount: float = 1.0, note: str = "") -> None:
-        self.update(self.done + amount, note)
-
     def text(self, now: float | None = None) -> str:
         """The line as drawn: bar, amount, rate, elapsed time and time left."""
         now = time.perf_counter() if now is None else now
