@@ -20,6 +20,9 @@ from knitlad.state import RodModel
 from knitlad.timestep import damped_limit_factor
 
 
+STIFFNESS_INTERNAL = units.LENGTH / units.FORCE  # N/m -> mN/mm
+
+
 def _unit(vector, name: str) -> np.ndarray:
     a = np.asarray(vector, dtype=float)
     norm = float(np.linalg.norm(a)) if a.shape == (3,) else 0.0
@@ -83,13 +86,12 @@ Obstacle = Plane | Cylinder
 def obstacle_state(obstacles: Sequence[Obstacle], n_nodes: int) -> ObstacleState:
     """The kernels' arrays of ``obstacles`` (internal units), with an empty contact history."""
     k = len(obstacles)
-    k_per_internal = units.LENGTH / units.FORCE  # N/m -> mN/mm
     kind = np.array([PLANE if isinstance(o, Plane) else CYLINDER for o in obstacles], dtype=np.int64)
     point = np.array([o.point_m for o in obstacles], dtype=float).reshape(k, 3) / units.LENGTH
     axis = np.array([_unit(o.normal if isinstance(o, Plane) else o.axis, "axis") for o in obstacles]).reshape(k, 3)
     radius = np.array([0.0 if isinstance(o, Plane) else o.radius_m / units.LENGTH for o in obstacles])
     velocity = np.array([o.velocity_m_s for o in obstacles], dtype=float).reshape(k, 3) / units.VELOCITY
-    k_n = np.array([o.stiffness * k_per_internal for o in obstacles])
+    k_n = np.array([o.stiffness * STIFFNESS_INTERNAL for o in obstacles])
     return ObstacleState(
         kind, point, axis, radius, velocity, k_n, np.array([o.damping_ratio for o in obstacles], dtype=float),
         k_n * np.array([o.tangential_stiffness_ratio for o in obstacles], dtype=float),
@@ -105,8 +107,7 @@ def obstacle_time_step(model: RodModel, obstacles: Sequence[Obstacle], predicted
     free = ~model.held
     if not obstacles or not np.any(free):
         return math.inf
-    k_per_internal = units.LENGTH / units.FORCE
-    stiffness = sum(o.stiffness * (1 + o.tangential_stiffness_ratio) for o in obstacles) * k_per_internal
+    stiffness = sum(o.stiffness * (1 + o.tangential_stiffness_ratio) for o in obstacles) * STIFFNESS_INTERNAL
     zeta = max(max(o.damping_ratio, o.tangential_damping_ratio) for o in obstacles)
     return 2.0 / math.sqrt(stiffness / float(model.mass[free].min())) * damped_limit_factor(zeta, predicted)
 

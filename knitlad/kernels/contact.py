@@ -353,6 +353,45 @@ def max_displacement(x, x_ref):
 MIN_PAIRS_PER_THREAD = 1000
 
 
+@njit(**INLINE_OPTS)
+def coulomb_spring(ux, uy, uz, nx, ny, nz, vtx, vty, vtz, sx, sy, sz, dt, k_t, gamma_t, limit):
+    """The tangential force of a touching contact (Cundall & Strack 1979; module docstring), shared by the
+    yarn-yarn pairs and the obstacles: the slip u (kept in the tangent plane of normal n with its length)
+    grows by the slip velocity s over dt; f_t = -k_t u - gamma_t v_t (v_t: the dashpot's tangential
+    velocity), capped at ``limit`` = mu f_n, when u is set to the slipping value.
+    Returns (f_t, the new u, sliding)."""
+    u_len = math.sqrt(ux * ux + uy * uy + uz * uz)
+    un = dot(ux, uy, uz, nx, ny, nz)
+    ux -= un * nx
+    uy -= un * ny
+    uz -= un * nz
+    u_new = math.sqrt(ux * ux + uy * uy + uz * uz)
+    if u_new > 0.0:
+        ux *= u_len / u_new
+        uy *= u_len / u_new
+        uz *= u_len / u_new
+    ux += sx * dt
+    uy += sy * dt
+    uz += sz * dt
+    ftx = -k_t * ux - gamma_t * vtx
+    fty = -k_t * uy - gamma_t * vty
+    ftz = -k_t * uz - gamma_t * vtz
+    ft = math.sqrt(ftx * ftx + fty * fty + ftz * ftz)
+    sliding = False
+    if ft > limit:
+        # sliding: Coulomb force along the trial direction, spring set to match it
+        scale = limit / ft if ft > 0.0 else 0.0
+        ftx *= scale
+        fty *= scale
+        ftz *= scale
+        if k_t > 0.0:
+            ux = -(ftx + gamma_t * vtx) / k_t
+            uy = -(fty + gamma_t * vty) / k_t
+            uz = -(ftz + gamma_t * vtz) / k_t
+        sliding = True
+    return ftx, fty, ftz, ux, uy, uz, sliding
+
+
 @njit(**NUMBA_OPTS)
 def pair_contact_forces(
     lo, hi, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
@@ -449,47 +488,18 @@ def pair_contact_forces(
         fn = k_n * overlap - 2.0 * damping_n * math.sqrt(k_n * m_eff) * vn
         if fn < 0.0:
             fn = 0.0
-        # tangential slip: keep it in the current tangent plane with its length
-        sliding = 0.0
-        ux, uy, uz = slip[p, 0], slip[p, 1], slip[p, 2]
-        u_len = math.sqrt(ux * ux + uy * uy + uz * uz)
-        un = dot(ux, uy, uz, nx, ny, nz)
-        ux -= un * nx
-        uy -= un * ny
-        uz -= un * nz
-        u_new = math.sqrt(ux * ux + uy * uy + uz * uz)
-        if u_new > 0.0:
-            ux *= u_len / u_new
-            uy *= u_len / u_new
-            uz *= u_len / u_new
         vtx = dvx - vn * nx  # of the dashpot
         vty = dvy - vn * ny
         vtz = dvz - vn * nz
         if predicted:  # the slip grows with the half-step velocity (midpoint rule)
             vn_slip = dot(vrx, vry, vrz, nx, ny, nz)
-            ux += (vrx - vn_slip * nx) * dt
-            uy += (vry - vn_slip * ny) * dt
-            uz += (vrz - vn_slip * nz) * dt
+            sx, sy, sz = vrx - vn_slip * nx, vry - vn_slip * ny, vrz - vn_slip * nz
         else:
-            ux += vtx * dt
-            uy += vty * dt
-            uz += vtz * dt
+            sx, sy, sz = vtx, vty, vtz
         gamma_t = 2.0 * damping_t * math.sqrt(k_t * m_eff)
-        ftx = -k_t * ux - gamma_t * vtx
-        fty = -k_t * uy - gamma_t * vty
-        ftz = -k_t * uz - gamma_t * vtz
-        ft = math.sqrt(ftx * ftx + fty * fty + ftz * ftz)
-        limit = mu * fn
-        if ft > limit:
-            # sliding: Coulomb force along the trial direction, spring set to match it
-            scale = limit / ft if ft > 0.0 else 0.0
-            ftx *= scale
-            fty *= scale
-            ftz *= scale
-            ux = -(ftx + gamma_t * vtx) / k_t
-            uy = -(fty + gamma_t * vty) / k_t
-            uz = -(ftz + gamma_t * vtz) / k_t
-            sliding = 1.0
+        ftx, fty, ftz, ux, uy, uz, slides = coulomb_spring(slip[p, 0], slip[p, 1], slip[p, 2], nx, ny, nz, vtx, vty,
+                                                           vtz, sx, sy, sz, dt, k_t, gamma_t, mu * fn)
+        sliding = 1.0 if slides else 0.0
         slip[p, 0] = ux
         slip[p, 1] = uy
         slip[p, 2] = uz

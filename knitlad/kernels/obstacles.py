@@ -21,6 +21,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from knitlad.kernels.contact import coulomb_spring
 from knitlad.kernels.options import NUMBA_OPTS
 from knitlad.kernels.vec import dot
 
@@ -85,42 +86,14 @@ def obstacle_forces(x, v, mass, node_radius, held, o, dt, force):
             fn = o.k_n[b] * overlap - 2.0 * o.damping_n[b] * math.sqrt(o.k_n[b] * mass[i]) * vn
             if fn < 0.0:
                 fn = 0.0
-            # the slip stays in the current tangent plane with its length
-            ux, uy, uz = o.slip[i, b, 0], o.slip[i, b, 1], o.slip[i, b, 2]
-            u_len = math.sqrt(ux * ux + uy * uy + uz * uz)
-            un = dot(ux, uy, uz, nx, ny, nz)
-            ux -= un * nx
-            uy -= un * ny
-            uz -= un * nz
-            u_new = math.sqrt(ux * ux + uy * uy + uz * uz)
-            if u_new > 0.0:
-                ux *= u_len / u_new
-                uy *= u_len / u_new
-                uz *= u_len / u_new
             vtx = vx - vn * nx
             vty = vy - vn * ny
             vtz = vz - vn * nz
-            ux += vtx * dt
-            uy += vty * dt
-            uz += vtz * dt
-            k_t = o.k_t[b]
-            gamma_t = 2.0 * o.damping_t[b] * math.sqrt(k_t * mass[i])
-            ftx = -k_t * ux - gamma_t * vtx
-            fty = -k_t * uy - gamma_t * vty
-            ftz = -k_t * uz - gamma_t * vtz
-            ft = math.sqrt(ftx * ftx + fty * fty + ftz * ftz)
-            limit = o.mu[b] * fn
-            o.state[i, b] = 1
-            if ft > limit:
-                scale = limit / ft if ft > 0.0 else 0.0
-                ftx *= scale
-                fty *= scale
-                ftz *= scale
-                if k_t > 0.0:
-                    ux = -(ftx + gamma_t * vtx) / k_t
-                    uy = -(fty + gamma_t * vty) / k_t
-                    uz = -(ftz + gamma_t * vtz) / k_t
-                o.state[i, b] = 2
+            gamma_t = 2.0 * o.damping_t[b] * math.sqrt(o.k_t[b] * mass[i])
+            ftx, fty, ftz, ux, uy, uz, slides = coulomb_spring(o.slip[i, b, 0], o.slip[i, b, 1], o.slip[i, b, 2], nx,
+                                                               ny, nz, vtx, vty, vtz, vtx, vty, vtz, dt, o.k_t[b],
+                                                               gamma_t, o.mu[b] * fn)
+            o.state[i, b] = 2 if slides else 1
             o.slip[i, b, 0] = ux
             o.slip[i, b, 1] = uy
             o.slip[i, b, 2] = uz
