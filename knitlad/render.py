@@ -290,6 +290,18 @@ def movie(h5: str | Path, path: str | Path, fps: int = 12, size=(960, 720),
     return path
 
 
+def _hyperslab(ref: str, start: tuple, count: tuple, full: tuple, dims: tuple, number_type: str = "Float",
+               precision: int = 4) -> str:
+    """An XDMF DataItem selecting the block ``count`` at ``start`` of the HDF5 dataset ``ref``
+    ("file.h5:/path", shape ``full``), read as an array of shape ``dims``."""
+    dims = " ".join(map(str, dims))
+    selection = " ".join(map(str, (*start, *(1 for _ in start), *count)))
+    return (f'<DataItem ItemType="HyperSlab" Dimensions="{dims}" Type="HyperSlab">'
+            f'<DataItem Dimensions="3 {len(start)}" Format="XML">{selection}</DataItem>'
+            f'<DataItem Dimensions="{" ".join(map(str, full))}" NumberType="{number_type}" Precision="{precision}" '
+            f'Format="HDF">{ref}</DataItem></DataItem>')
+
+
 def _contact_points_xdmf(h5: Path) -> str:
     """A second temporal collection, "contacts": each frame's touching pairs as points with their normal and
     friction forces [N] and sliding flag (``/contacts`` of a trajectory file; "" if it has none). A frame
@@ -299,39 +311,30 @@ def _contact_points_xdmf(h5: Path) -> str:
             return ""
         offsets = f["contacts/offsets"][()]
         times = f["frames/time"][()]
-    name, total = h5.name, int(offsets[-1])
+    total = int(offsets[-1])
     if total == 0:
         return ""
+    zero = '<DataItem Dimensions="1 3" Format="XML">0 0 0</DataItem>'
     grids = []
     for k, t in enumerate(times):
         start, count = int(offsets[k]), int(offsets[k + 1] - offsets[k])
-        if count == 0:
-            start, count = 0, 0
-        slab = lambda path, cols: (  # noqa: E731 - the rows of frame k in a concatenated dataset
-            f'<DataItem ItemType="HyperSlab" Dimensions="{max(count, 1)}{f" {cols}" if cols > 1 else ""}" '
-            f'Type="HyperSlab"><DataItem Dimensions="3 {2 if cols > 1 else 1}" Format="XML">'
-            f'{start}{" 0" if cols > 1 else ""} 1{" 1" if cols > 1 else ""} {max(count, 1)}'
-            f'{f" {cols}" if cols > 1 else ""}</DataItem><DataItem Dimensions="{total}'
-            f'{f" {cols}" if cols > 1 else ""}" NumberType="{"Float" if cols > 1 else "UChar"}" '
-            f'Precision="{4 if cols > 1 else 1}" Format="HDF">{name}:{path}</DataItem></DataItem>')
-        if count == 0:  # nothing touches: one point at the origin, zero force
-            geometry = '<DataItem Dimensions="1 3" Format="XML">0 0 0</DataItem>'
-            zero3 = '<DataItem Dimensions="1 3" Format="XML">0 0 0</DataItem>'
-            attrs = (f'<Attribute Name="normal_force" Center="Node" AttributeType="Vector">{zero3}</Attribute>'
-                     f'<Attribute Name="friction_force" Center="Node" AttributeType="Vector">{zero3}</Attribute>'
-                     '<Attribute Name="sliding" Center="Node" AttributeType="Scalar">'
-                     '<DataItem Dimensions="1" Format="XML">0</DataItem></Attribute>')
-        else:
-            geometry = slab("/contacts/points", 3)
-            attrs = (f'<Attribute Name="normal_force" Center="Node" AttributeType="Vector">'
-                     f'{slab("/contacts/normal_force", 3)}</Attribute>'
-                     f'<Attribute Name="friction_force" Center="Node" AttributeType="Vector">'
-                     f'{slab("/contacts/friction_force", 3)}</Attribute>'
-                     f'<Attribute Name="sliding" Center="Node" AttributeType="Scalar">{slab("/contacts/sliding", 1)}'
-                     '</Attribute>')
+
+        def rows(path: str, cols: int = 3) -> str:  # frame k's rows of a concatenated dataset
+            if count == 0:  # nothing touches: one point at the origin, zero force
+                return zero if cols == 3 else '<DataItem Dimensions="1" Format="XML">0</DataItem>'
+            if cols == 1:
+                return _hyperslab(f"{h5.name}:{path}", (start,), (count,), (total,), (count,), "UChar", 1)
+            return _hyperslab(f"{h5.name}:{path}", (start, 0), (count, cols), (total, cols), (count, cols))
+
         grids.append(f'<Grid Name="c{k}" GridType="Uniform"><Time Value="{t:.9g}"/>'
                      f'<Topology TopologyType="Polyvertex" NumberOfElements="{max(count, 1)}" NodesPerElement="1"/>'
-                     f'<Geometry GeometryType="XYZ">{geometry}</Geometry>{attrs}</Grid>')
+                     f'<Geometry GeometryType="XYZ">{rows("/contacts/points")}</Geometry>'
+                     f'<Attribute Name="normal_force" Center="Node" AttributeType="Vector">'
+                     f'{rows("/contacts/normal_force")}</Attribute>'
+                     f'<Attribute Name="friction_force" Center="Node" AttributeType="Vector">'
+                     f'{rows("/contacts/friction_force")}</Attribute>'
+                     f'<Attribute Name="sliding" Center="Node" AttributeType="Scalar">{rows("/contacts/sliding", 1)}'
+                     '</Attribute></Grid>')
     return '<Grid Name="contacts" GridType="Collection" CollectionType="Temporal">' + "".join(grids) + "</Grid>"
 
 
@@ -357,19 +360,15 @@ def write_xdmf(h5: str | Path) -> Path:
     def contact(k: int) -> str:
         if not has_contact:
             return ""
-        return (f'<Attribute Name="contact" Center="Node" AttributeType="Scalar"><DataItem ItemType="HyperSlab" '
-                f'Dimensions="{n}" Type="HyperSlab"><DataItem Dimensions="3 2" Format="XML">{k} 0 1 1 1 {n}</DataItem>'
-                f'<DataItem Dimensions="{n_frames} {n}" NumberType="UChar" Precision="1" Format="HDF">'
-                f'{name}:/frames/contact</DataItem></DataItem></Attribute>')
+        return (f'<Attribute Name="contact" Center="Node" AttributeType="Scalar">'
+                f'{_hyperslab(f"{name}:/frames/contact", (k, 0), (1, n), (n_frames, n), (n,), "UChar", 1)}</Attribute>')
 
     for k, t in enumerate(times):
-        def item(path, cols):
-            dims = f"{n} {cols}" if cols > 1 else f"{n}"
-            return (f'<DataItem ItemType="HyperSlab" Dimensions="{dims}" Type="HyperSlab">'
-                    f'<DataItem Dimensions="3 {2 if cols == 1 else 3}" Format="XML">{k} 0{"" if cols == 1 else " 0"} '
-                    f'1 1{"" if cols == 1 else " 1"} 1 {n}{"" if cols == 1 else f" {cols}"}</DataItem>'
-                    f'<DataItem Dimensions="{n_frames} {dims}" NumberType="Float" Precision="4" Format="HDF">'
-                    f'{name}:{path}</DataItem></DataItem>')
+        def item(path, cols):  # frame k of an (n_frames, n[, cols]) dataset
+            if cols == 1:
+                return _hyperslab(f"{name}:{path}", (k, 0), (1, n), (n_frames, n), (n,))
+            return _hyperslab(f"{name}:{path}", (k, 0, 0), (1, n, cols), (n_frames, n, cols), (n, cols))
+
         steps.append(
             f'<Grid Name="t{k}" GridType="Uniform"><Time Value="{t:.9g}"/>'
             f'<Topology TopologyType="Polyline" NodesPerElement="2" NumberOfElements="{len(edges)}">'
