@@ -67,6 +67,11 @@ class ContactModel:
     sagitta_radius  R_s [m]     the capsule chain's sagitta correction: each edge's contact radius
                                 is r - l^2/(12 R_s), l its rest length (:func:`sagitta_corrected_radius`);
                                 None: capsules of the yarn's radius
+    pair_stiffness  [N/m]       ``((material_a, material_b, k_n), ...)``: the normal stiffness of contacts
+                                between a yarn of material a and one of material b (either order; the
+                                tangential spring keeps its ratio); every other pair has ``stiffness``.
+                                A yarn's material is known to the contact by its diameter and Young's
+                                modulus (what sets a contact's stiffness)
     """
 
     stiffness: float
@@ -80,8 +85,15 @@ class ContactModel:
     capacity_per_edge: int = 4
     counting: Counting = Counting.UNION
     sagitta_radius: float | None = None
+    pair_stiffness: tuple = ()
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "pair_stiffness", tuple(tuple(entry) for entry in self.pair_stiffness))
+        for entry in self.pair_stiffness:
+            if len(entry) != 3 or not all(isinstance(m, units.Material) for m in entry[:2]):
+                raise ValueError(f"pair_stiffness entries are (Material, Material, k_n [N/m]), got {entry!r}")
+            if not (entry[2] > 0 and math.isfinite(entry[2])):
+                raise ValueError(f"pair_stiffness: k_n must be > 0 N/m, got {entry[2]!r}")
         if not (self.stiffness > 0 and math.isfinite(self.stiffness)):
             raise ValueError(f"contact stiffness must be > 0 N/m, got {self.stiffness!r}")
         if not (self.friction >= 0 and math.isfinite(self.friction)):
@@ -162,6 +174,8 @@ class Contacts(NamedTuple):
     pair_results: np.ndarray  # (cap, PAIR_RESULTS) scratch of contact_forces
     gap_ref: np.ndarray  # (cap,) each pair's gap at the list's first evaluation (a lower bound at its rebuild)
     edge_moved: np.ndarray  # (ne,) each edge's largest end displacement since the rebuild (scratch)
+    edge_class: np.ndarray  # (ne,) int64 row of ``stiffness`` for each edge's material (0: the default)
+    stiffness: np.ndarray  # (c, c, 2) k_n and k_t of a pair of edge classes [mN/mm]
 
 
 def edge_topology(m: RodModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -311,6 +325,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         pair_results=np.zeros((cap, PAIR_RESULTS)),
         gap_ref=np.zeros(cap),
         edge_moved=np.zeros(ne),
+        **pair_stiffness_table(m, model, params),
     )
     if previous is not None:
         m = int(previous.n_pairs[0])
@@ -321,6 +336,27 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         contacts.stats[PEAK_OVERLAP] = previous.stats[PEAK_OVERLAP]
         contacts = contacts._replace(params=previous.params)
     return contacts
+
+
+def pair_stiffness_table(m: RodModel, model: ContactModel | None, params: ContactParams) -> dict:
+    """``edge_class`` and ``stiffness`` of :class:`Contacts`: class 0 has the model's k_n and k_t
+    (``params``), class c > 0 the edges of the c-th material named in ``model.pair_stiffness``."""
+    edge_class = np.zeros(m.edge_a.shape[0], dtype=np.int64)
+    materials = []
+    for entry in () if model is None else model.pair_stiffness:
+        materials += [mat for mat in entry[:2] if mat not in materials]
+    table = np.empty((len(materials) + 1, len(materials) + 1, 2))
+    table[:, :, 0], table[:, :, 1] = params.k_n, params.k_t
+    radius = 0.5 * (m.radius[m.edge_a] + m.radius[m.edge_b])
+    for c, mat in enumerate(materials, start=1):
+        same = (np.isclose(radius, 0.5 * mat.diameter / units.LENGTH, rtol=1e-9, atol=0.0)
+                & np.isclose(m.EA, mat.stretching_stiffness / units.FORCE, rtol=1e-9, atol=0.0))
+        edge_class[same] = c
+    for mat_a, mat_b, k in () if model is None else model.pair_stiffness:
+        a, b = materials.index(mat_a) + 1, materials.index(mat_b) + 1
+        k_n = k * units.LENGTH / units.FORCE
+        table[a, b] = table[b, a] = (k_n, k * model.tangential_stiffness_ratio * units.LENGTH / units.FORCE)
+    return dict(edge_class=edge_class, stiffness=table)
 
 
 class ContactStats(NamedTuple):
@@ -398,7 +434,7 @@ def contact_time_step(m: RodModel, model: ContactModel | None, spin: bool = Fals
     """
     if model is None:
         return math.inf
-    k_n = model.stiffness * units.LENGTH / units.FORCE
+    k_n = max([model.stiffness] + [entry[2] for entry in model.pair_stiffness]) * units.LENGTH / units.FORCE
     k_t = k_n * model.tangential_stiffness_ratio
     # counting every pair, a contact at a node shared by two edges of each yarn is four pairs,
     # each with its full lever weight on that node: four times the stiffness union counting puts there

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import knitlad as kl
-from knitlad.contact import ContactModel, make_contacts
+from knitlad.contact import ContactModel, contact_time_step, make_contacts
 from knitlad.kernels.contact import NORMAL_FORCE_SUM, TOUCHING, segment_closest_points
 from knitlad.scenes.weave import plain_weave
 
@@ -374,3 +374,30 @@ def test_skipping_pairs_whose_stored_gap_rules_them_out_changes_no_bit():
         return sim.state.x.copy()
 
     np.testing.assert_array_equal(shaken(False), shaken(True))
+
+
+def test_each_pair_of_materials_has_its_own_contact_stiffness():
+    """Three yarns crossing at right angles, overlapping by 5 % d at rest: the normal force over the
+    overlap is the pair's k_n (the steel-nylon entry), the default for nylon on nylon."""
+    steel = kl.Material(diameter=D, line_density=1.2e-4, young_modulus=2.0e11)
+    scene = kl.Scene(kl.NYLON)
+    s = np.linspace(-4 * D, 4 * D, 9)
+    gap = 0.95 * D
+    scene.add_yarn(np.column_stack([s, 0 * s, 0 * s]))                          # nylon along x
+    scene.add_yarn(np.column_stack([0 * s + 0.5 * D, s, 0 * s + gap]), material=steel)  # steel along y, above
+    scene.add_yarn(np.column_stack([0 * s - 0.5 * D, s, 0 * s - gap]))           # nylon along y, below
+    model = ContactModel(stiffness=1e3, pair_stiffness=[(kl.NYLON, steel, 7e3)])
+    pairs = kl.Simulation(scene.build(), contact=model).contact_pairs()
+    stiffness = {frozenset(map(int, yarns)): np.linalg.norm(normal) / overlap
+                 for yarns, normal, overlap in zip(pairs.yarns, pairs.normal_N, pairs.overlap_m)}
+    assert len(stiffness) == 2
+    assert stiffness[frozenset((0, 1))] == pytest.approx(7e3, rel=1e-9)
+    assert stiffness[frozenset((0, 2))] == pytest.approx(1e3, rel=1e-9)
+    assert ContactModel(stiffness=1e3).pair_stiffness == ()
+    with pytest.raises(ValueError, match="pair_stiffness"):
+        ContactModel(stiffness=1e3, pair_stiffness=[(kl.NYLON, steel, -1.0)])
+    with pytest.raises(ValueError, match="pair_stiffness"):
+        ContactModel(stiffness=1e3, pair_stiffness=[(kl.NYLON, "steel", 1.0)])
+    rods = scene.build()  # the stiffest pair sets the step
+    assert contact_time_step(rods.model, model) == pytest.approx(
+        contact_time_step(rods.model, ContactModel(stiffness=7e3)), rel=1e-12)

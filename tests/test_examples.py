@@ -100,8 +100,17 @@ def test_pulling_a_course_out_of_a_knit_stores_the_work_without_friction_and_dis
     assert np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(x)) > e[-1] - e[0] > 0
 
 
+def test_two_plied_yarns_press_on_each_other_with_the_line_force_of_a_helical_rod():
+    """p = kappa (T + B tau^2) within 1 % at two pulls and two pitches; the bending term is of the
+    tension's size (B tau^2 / T from 0.5 to 1.2), so dropping it would miss by a third or more."""
+    for kwargs in ({}, {"pull": 0.02}, {"pitch": 3e-3}):
+        p, kirchhoff, bending = example("plied_pair").ply(**kwargs)
+        assert p == pytest.approx(kirchhoff, rel=0.01)
+        assert bending > 0.4
+
+
 @pytest.mark.parametrize("name", ["euler_buckling", "coulomb_slide", "ring_between_plates", "capstan",
-                                  "yarn_on_cylinder", "pull_out"])
+                                  "yarn_on_cylinder", "pull_out", "plied_pair"])
 def test_examples_are_short_and_use_only_the_public_api(name):
     text = (EXAMPLES / f"{name}.py").read_text()
     assert len(text.splitlines()) <= 40

@@ -395,7 +395,8 @@ def coulomb_spring(ux, uy, uz, nx, ny, nz, vtx, vty, vtz, sx, sy, sz, dt, k_t, g
 @njit(**NUMBA_OPTS)
 def pair_contact_forces(
     lo, hi, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
-    edge_prev, edge_next, union, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out, mode, gap_ref, edge_moved,
+    edge_prev, edge_next, union, pairs, slip, edge_class, stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref,
+    edge_moved,
 ):
     """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``
     (the narrow phase in ``mode``, :func:`counted_overlaps`).
@@ -485,6 +486,8 @@ def pair_contact_forces(
         m_a = (1 - s) * mass[a0] + s * mass[a1]
         m_b = (1 - t) * mass[b0] + t * mass[b1]
         m_eff = m_a * m_b / (m_a + m_b)
+        k_n = stiffness[edge_class[i], edge_class[j], 0]
+        k_t = stiffness[edge_class[i], edge_class[j], 1]
         fn = k_n * overlap - 2.0 * damping_n * math.sqrt(k_n * m_eff) * vn
         if fn < 0.0:
             fn = 0.0
@@ -519,13 +522,14 @@ def pair_contact_forces(
 @njit(**PARALLEL_OPTS)
 def _pair_contact_forces_in_blocks(
     n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
-    edge_prev, edge_next, union, pairs, slip, k_n, damping_n, k_t, damping_t, mu, dt, out, mode, gap_ref, edge_moved,
+    edge_prev, edge_next, union, pairs, slip, edge_class, stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref,
+    edge_moved,
 ):
     for blk in prange(n_blocks):
         pair_contact_forces(
             blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, omega, v_damp, omega_damp, predicted,
-            spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, slip, k_n,
-            damping_n, k_t, damping_t, mu, dt, out, mode, gap_ref, edge_moved,
+            spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, slip, edge_class,
+            stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref, edge_moved,
         )
 
 
@@ -565,13 +569,15 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
     if n_blocks > 1:
         _pair_contact_forces_in_blocks(
             n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
-            c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, p.k_n, p.damping_n, p.k_t, p.damping_t,
+            c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.stiffness, p.damping_n,
+            p.damping_t,
             p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved,
         )
     else:
         pair_contact_forces(
             0, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
-            c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, p.k_n, p.damping_n, p.k_t, p.damping_t,
+            c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.stiffness, p.damping_n,
+            p.damping_t,
             p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved,
         )
     c.status[GAPS_KNOWN] = 1
@@ -627,7 +633,6 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
 def contact_energy(x, edge_a, edge_b, edge_shift, c, pairs, slip):
     """Stored contact energy: sum of k_n delta^2 / 2 + k_t |u_t|^2 / 2 over the counted touching
     ``pairs`` (m, 2) with their ``slip`` (m, 3) (``c.pairs[:n]``, ``c.slip[:n]``, or a subset)."""
-    k_n, k_t = c.params.k_n, c.params.k_t
     n_pairs = pairs.shape[0]
     narrow = np.empty((n_pairs, PAIR_RESULTS))
     counted_overlaps(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, c.union, pairs, 0, n_pairs,
@@ -636,6 +641,8 @@ def contact_energy(x, edge_a, edge_b, edge_shift, c, pairs, slip):
     for p in range(n_pairs):
         overlap = narrow[p, OVERLAP]
         if overlap > 0.0:
+            k_n = c.stiffness[c.edge_class[pairs[p, 0]], c.edge_class[pairs[p, 1]], 0]
+            k_t = c.stiffness[c.edge_class[pairs[p, 0]], c.edge_class[pairs[p, 1]], 1]
             total += 0.5 * k_n * overlap * overlap
             total += 0.5 * k_t * (slip[p, 0] ** 2 + slip[p, 1] ** 2 + slip[p, 2] ** 2)
     return total
