@@ -13,7 +13,7 @@ from knitlad.simulation import Simulation, SimulationBlowUp, UnstableTimeStep
 from knitlad.state import RodModel, Rods, RodState, Scene
 from knitlad.units import NYLON, Material, Scales
 
-__version__ = "0.4.0"
+__version__ = "0.5.0"
 
 # the laddering experiment: name -> module that defines it (loaded on first use, PEP 562)
 _EXPERIMENT = {

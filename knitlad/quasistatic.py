@@ -13,6 +13,13 @@ faster). At equilibrium the damping force vanishes with the velocity, so a settl
 no bias. During a protocol that keeps moving (a bar pulled at speed V between settles, or without
 them), the damping pulls back on the moving mass M with alpha M V: the bias on a measured force,
 to be kept small against it (alpha M V << F), or removed by settling before each reading.
+
+Jumps or ramps. With friction the answer depends on the path, and a jump of the supports
+(``move_held`` then ``settle`` or ``relax``) is a path of its own: the knit rings after each jump and
+its contacts slip further than under a steady pull. :meth:`QuasiStatics.ramp_held` moves the supports
+at a steady speed under the same damping instead. On a 4 x 4 knit at mu = 0.4 (a course pulled out by
+0.2 mm, ``tests/test_quasistatic.py``) ramps at 0.01, 0.02 and 0.04 m/s and alpha 1e4 or 2e4 /s
+give one pull to 1e-4; jumps of 20 um give 15 % less, of 2.5 um 2 % less (docs/quasistatic.md).
 """
 
 from __future__ import annotations
@@ -34,6 +41,33 @@ class QuasiStatics:
             return 0.0
         f = self.work.force[free] + self.drag * m.mass[free, None] * self.state.v[free]
         return float(np.sqrt(np.max(np.sum(f * f, axis=1))) * units.FORCE)
+
+    def ramp_held(self, nodes, by_m, speed_m_s: float, damping_per_s: float) -> dict:
+        """Move held ``nodes`` by ``by_m`` [m] (one 3-vector, or one per node) at a steady speed of at most
+        ``speed_m_s`` under the damping ``damping_per_s`` = alpha [1/s] (module docstring), then hold them
+        still; the drag in force before is restored. They land on ``by_m`` to round-off (the speed is lowered to a
+        whole number of steps). Read forces after :meth:`settle`, or while moving with the bias alpha M V.
+
+        Returns ``time_s`` (simulated) and ``steps``.
+        """
+        idx = self._nodes(nodes)
+        if not self.model.held[idx].all():
+            raise ValueError("ramp_held moves held nodes only: hold() them first")
+        if not (speed_m_s > 0 and math.isfinite(speed_m_s) and damping_per_s > 0):
+            raise ValueError("speed_m_s and damping_per_s must be positive")
+        by = np.broadcast_to(np.asarray(by_m, dtype=float), (idx.size, 3))
+        if not np.all(np.isfinite(by)):
+            raise ValueError("by_m contains NaN or infinity")
+        steps = max(1, math.ceil(float(np.max(np.linalg.norm(by, axis=1))) / speed_m_s / self.dt_s))
+        before = self.drag / units.TIME
+        self.set_drag(damping_per_s)
+        try:
+            self.hold(idx, velocity_m_s=by / (steps * self.dt_s))
+            self.step(steps)
+        finally:
+            self.hold(idx)
+            self.set_drag(before)
+        return {"time_s": steps * self.dt_s, "steps": steps}
 
     def settle(self, force_tol_N: float, max_time_s: float, damping_per_s: float,
                check_every_s: float | None = None) -> dict:

@@ -71,3 +71,40 @@ def test_settle_reaches_the_static_answer_of_a_frictionless_cantilever_and_resto
     assert damped.drag * 1.0 == pytest.approx(5.0 * kl.units.TIME)
     with pytest.raises(ValueError, match="positive"):
         damped.settle(force_tol_N=0.0, max_time_s=1.0, damping_per_s=1.0)
+
+
+@pytest.fixture(scope="module")
+def small_knit():
+    return kl.stretch(kl.CutConfig(n_x=4, n_y=4, lx=0.36, preset="fast").stretch_settings())
+
+
+def pulled_course(knit, mu=0.4):
+    sim = kl.Simulation(knit.knit.rods.copy(), contact=kl.ContactModel.for_knit(kl.NYLON, friction=mu))
+    end = sim.nodes_of(knit.knit.courses[2], [-2, -1])
+    sim.release(end[:1])
+    sim.relax(force_tol_N=1e-8, max_steps=400_000)
+    return sim, end[1:]
+
+
+def test_a_course_pulled_by_a_ramp_gives_one_pull_at_any_slow_speed_and_jumps_give_less(small_knit):
+    """With friction the path counts: ramps at 0.04 and 0.02 m/s (and two dampings) end on one settled
+    pull within 1e-3; jumps of 50 um, each settled, leave the knit ringing and slipping, 5 % or more
+    below it. The supports land where the ramp says."""
+    pulls = []
+    for speed, alpha in ((0.04, 2e4), (0.02, 2e4), (0.04, 1e4)):
+        sim, end = pulled_course(small_knit)
+        start = sim.positions_m()[end].copy()
+        out = sim.ramp_held(end, by_m=(2e-4, 0.0, 0.0), speed_m_s=speed, damping_per_s=alpha)
+        np.testing.assert_allclose(sim.positions_m()[end] - start, [[2e-4, 0.0, 0.0]], atol=1e-12)
+        assert out["time_s"] == pytest.approx(2e-4 / speed, rel=1e-3) and sim.drag == 0.0
+        assert sim.settle(force_tol_N=1e-6, max_time_s=0.05, damping_per_s=alpha)["converged"]
+        pulls.append(sim.reaction_forces_N()[end[0], 0])
+    assert pulls[1] == pytest.approx(pulls[0], rel=1e-3) and pulls[2] == pytest.approx(pulls[0], rel=1e-3)
+    sim, end = pulled_course(small_knit)
+    for _ in range(4):
+        sim.move_held(end, by_m=(5e-5, 0.0, 0.0))
+        assert sim.settle(force_tol_N=1e-6, max_time_s=0.05, damping_per_s=2e4)["converged"]
+    assert sim.reaction_forces_N()[end[0], 0] < 0.95 * pulls[0]
+    middle = sim.nodes_of(small_knit.knit.courses[2], [5])
+    with pytest.raises(ValueError, match="held"):
+        sim.ramp_held(middle, by_m=(1e-5, 0, 0), speed_m_s=0.01, damping_per_s=1e4)
