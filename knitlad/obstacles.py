@@ -117,15 +117,15 @@ class ObstacleReadout:
     on them and where they touch, and move them between relaxations (displacement-controlled statics)."""
 
     def move_obstacle(self, index: int, by_m) -> None:
-        """Translate obstacle ``index`` by ``by_m`` [m] now (then ``relax``): a plate pressed step by step.
-        Its contact history stays (a node that no longer touches forgets it at the next evaluation)."""
+        """Translate obstacle ``index`` by ``by_m`` [m] now (then ``relax`` or ``settle``): a plate pressed
+        step by step. As with ``move_held``, the forces of the old position stay until the next evaluation;
+        its contact history stays (a node that no longer touches forgets it at that evaluation)."""
         if self.obstacles is None or not 0 <= index < self.obstacles.kind.shape[0]:
             raise IndexError(f"no obstacle {index}")
         shift = np.asarray(by_m, dtype=float)
         if shift.shape != (3,) or not np.all(np.isfinite(shift)):
             raise ValueError(f"by_m must be a finite 3-vector [m], got {by_m!r}")
         self.obstacles.point[index] += shift / units.LENGTH
-        self.compute_forces()
 
     def obstacle_reactions_N(self) -> np.ndarray:
         """(k, 3) the force the yarns exert on each obstacle at the last force evaluation [N]."""
