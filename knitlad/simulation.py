@@ -306,6 +306,7 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics):
         if not 0.0 < safety <= 1.0:
             raise ValueError(f"safety must lie in (0, 1], got {safety}")
         self.rods = rods
+        self._shift_drift = 0.0  # largest move of a closing edge [mm] since the last forced rebuild (replace_model)
         self.twist = rods.twist
         self.framed_twist = bool(framed_twist)
         self.axial_mode = AXIAL_IMPLICIT if check_open_chains(rods.model, implicit_axial) else AXIAL_EXPLICIT
@@ -378,9 +379,16 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics):
 
     def replace_model(self, **arrays) -> None:
         """Replace model arrays of the same shapes (e.g. a periodic cell's shifts) from the next step on."""
+        old_shift = self.model.edge_shift
         self.rods = self.rods.replace_model(**arrays)
         if "edge_shift" in arrays:  # closing edges moved without their nodes: the pairs' stored gaps no longer bound
             self.contacts.status[GAPS_KNOWN] = 0
+            # nor does the list's skin, which counts node displacements only: rebuild once the closing
+            # edges may have moved by half of it since this simulation last forced a rebuild
+            self._shift_drift += float(np.max(np.abs(self.model.edge_shift - old_shift), initial=0.0)) * math.sqrt(3.0)
+            if self._shift_drift > 0.5 * self.contacts.params.skin:
+                self.contacts.status[STALE] = 1
+                self._shift_drift = 0.0
 
     def set_external_forces(self, forces_N) -> None:
         """Replace the constant external forces [N], (n, 3) or one 3-vector for all, from now on (a new model).

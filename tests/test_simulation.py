@@ -290,3 +290,25 @@ def test_a_relaxation_takes_the_chunks_choice_or_one_thread_when_the_load_says_t
     assert g.for_one_call(2) == 1
     g.seconds_per_step, g.current = {1: 1e-4, 2: 5e-5}, 2  # the chunks measured: their choice rules
     assert g.for_one_call(2) == 2
+
+
+def test_a_closing_edge_moved_by_a_new_period_finds_the_yarn_it_now_crosses():
+    """A periodised yarn's period grows (replace_model(edge_shift=...)) until its closing edge crosses
+    another yarn two diameters past its old end: the candidate list, which counts node moves only, is
+    rebuilt, and the crossing touches."""
+    d = kl.NYLON.diameter
+    s = np.arange(10) * d
+    scene = kl.Scene(kl.NYLON)
+    scene.add_yarn(np.column_stack([s, 0 * s, 0 * s]), closed=True, period=(10 * d, 0.0, 0.0))
+    y = np.linspace(-3 * d, 3 * d, 7)
+    crossing = scene.add_yarn(np.column_stack([0 * y + 12 * d, y, 0 * y + 0.9 * d]))
+    sim = kl.Simulation(scene.build(), contact=kl.ContactModel(stiffness=1e3))
+    sim.hold(np.arange(sim.model.n_nodes))  # the period alone moves the closing edge
+    sim.step()
+    assert sim.contact_stats().touching == 0
+    shift = sim.model.edge_shift.copy()
+    for grown in (11, 12, 13, 14):  # a box stretched in steps
+        shift[9, 0] = grown * d / 1e-3  # internal units: mm
+        sim.replace_model(edge_shift=shift)
+        sim.step()
+    assert sim.contact_stats().touching >= 1
