@@ -234,7 +234,7 @@ def cut(
         options["fx"] = 13.6
     cfg = validated(_config.CutConfig, {**options, "n_x": n_x, "n_y": n_y}, {"n_x": "--stitches", "n_y": "--stitches"})
     from knitlad.io.folders import FolderError, writable_folder
-    from knitlad.protocol import KnitTooLarge, require_memory
+    from knitlad.protocol import KnitTooLarge, require_memory, run_ladder
 
     out_dir = Path(out) if out else Path("runs") / time.strftime("cut-%Y%m%d-%H%M%S")
     made = not out_dir.exists()
@@ -255,7 +255,7 @@ def cut(
     _say_if_compiling()
     progress = _StageProgress()
     try:
-        result = _ladder_or_exit(cfg, progress)
+        result = _experiment_or_exit(lambda: run_ladder(cfg.settings(), progress=progress), progress)
     except typer.Exit:
         nothing_written()
         raise
@@ -290,6 +290,88 @@ def cut(
         f"  wall time   = {summary['wall_s']:.1f} s (stretch {result.wall_s.get('stretch', 0):.1f} s, propagate {result.wall_s.get('propagate', 0):.1f} s)\n"
         f"  wrote {h5}, {h5.with_suffix('.xdmf').name} (ParaView) and {png.name}; pictures: knitlad render {out_dir}"
     )
+
+
+@app.command()
+@config_options(_config.CycleConfig, exclude=("n_x", "n_y"))
+def cycle(
+    stitches: str = typer.Option("16", "--stitches", help="Fabric size: N (N x N) or NXxNY.", rich_help_panel=EXPERIMENT_PANEL),
+    out: str = typer.Option(None, "--out", help="Output folder; default runs/cycle-<time>.", rich_help_panel=OUTPUT_PANEL),
+    options: dict = None,
+) -> None:
+    """Protocol B (paper Fig. 4a): cycle the knit with friction on between Delta x_min and --lx-max, cut a
+    copy at Delta x_max of the last cycle, read delta l on the uncut twin's unloading (with --fx-thr).
+
+    Without --fx or --lx, Delta x_min holds the knit at f_x = 0.68 (the experiments'). Writes cycle.csv
+    (the force-displacement readings), cycle.png (Fig. 4a), cycle.h5 (readings, and the ladder of the cut).
+    """
+    from pathlib import Path
+
+    try:
+        n_x, n_y = _config.parse_stitches(stitches)
+    except ValueError as e:
+        fail(f"--stitches: {e}")
+    if options.get("fx") is None and options.get("lx") is None:
+        options["fx"] = 0.68
+    cfg = validated(_config.CycleConfig, {**options, "n_x": n_x, "n_y": n_y}, {"n_x": "--stitches", "n_y": "--stitches"})
+    from knitlad.cycling import run_protocol_b
+    from knitlad.io.folders import FolderError, writable_folder
+    from knitlad.protocol import KnitTooLarge, require_memory
+
+    out_dir = Path(out) if out else Path("runs") / time.strftime("cycle-%Y%m%d-%H%M%S")
+    try:
+        require_memory(cfg.memory_estimate_bytes(), f"--stitches {n_x}x{n_y} at --resolution {cfg.resolution}")
+        writable_folder(out_dir)
+    except (KnitTooLarge, FolderError) as e:
+        fail(str(e) if isinstance(e, KnitTooLarge) else f"--out {e}")
+    if (out_dir / "cycle.h5").exists():
+        fail(f"--out {out_dir}: holds an earlier cycle run (cycle.h5); choose another folder")
+    _say_if_compiling()
+    progress = _StageProgress()
+    result, ladder = _experiment_or_exit(
+        lambda: run_protocol_b(cfg.settings(), cfg.cycle_settings(), cut_at_max=cfg.cut, progress=progress), progress)
+    progress.close(finished=True)
+    h5, csv, png = _write_cycle_outputs(out_dir, cfg, result, ladder)
+    l0 = cfg.settings().material.stitch_length
+    typer.echo(
+        f"{n_x} x {n_y} jersey, protocol B: {cfg.cycles} cycles at mu = {cfg.mu}, bars at {cfg.bar_speed:g} m/s, "
+        f"{cfg.resolution} nodes/stitch\n"
+        f"  Delta x_max - Delta x_min = {(cfg.lx_max - result.lx_min) * n_x * l0 * 1e3:.3f} mm "
+        f"(box l_x/l0 {result.lx_min:.4f} -> {cfg.lx_max:.4f})\n"
+        f"  at Delta x_max: f_x^ini = {result.fx_ini:.3f}, l_x/l0 = {result.lx_over_l0:.4f}, l_y/l0 = {result.ly_over_l0:.4f}"
+        f"{'' if result.hold_converged else ' (the hold did not settle within --hold-ms)'}")
+    if cfg.fx_thr is not None:
+        typer.echo(f"  delta l = {result.delta_l_over_l0 * l0 * 1e3:.3f} mm to f_x^thr = {cfg.fx_thr:g}: "
+                   f"predicted n_lad/n_y = delta l/(l0 - l_x) = {result.predicted_damage:.3f}")
+    if ladder is not None:
+        typer.echo(f"  cut: n_lad/n_y = {ladder.n_lad_over_ny:.3f} ({ladder.n_lad} cells), f_x^fin = {ladder.fx_fin:.3f} "
+                   f"(crossed courses {ladder.fx_fin_crossed:.3f}), stop: {ladder.stop_reason}")
+    typer.echo(f"  wall time {result.wall_s:.1f} s; wrote {h5}, {csv.name}, {png.name}")
+
+
+def _write_cycle_outputs(out_dir, cfg, result, ladder):
+    """cycle.h5 (the readings; the ladder's series and frames if cut), cycle.csv and cycle.png."""
+    import json
+
+    import pandas as pd
+
+    from knitlad.io.atomic import atomic_path
+    from knitlad.io.hdf5 import write_ladder_result, write_record
+    from knitlad.plots import cycle_curve_plot
+
+    attrs = {f"cycle_{k}": v for k, v in result.summary().items()}
+    attrs["cycle_config_json"] = json.dumps(cfg.model_dump(), default=str)
+    data = {"cycle/readings": result.readings}
+    if ladder is not None:
+        h5 = write_ladder_result(out_dir / "cycle.h5", ladder, attrs=attrs, datasets=data)
+    else:
+        h5 = write_record(out_dir / "cycle.h5", attrs, datasets=data)
+    table = pd.DataFrame(result.readings, columns=["cycle", "leg", "t_s", "box_lx_over_l0", "fx"])
+    with atomic_path(out_dir / "cycle.csv") as tmp:
+        table.to_csv(tmp, index=False)
+    png = cycle_curve_plot(result.readings, cfg.n_x, cfg.settings().material.stitch_length, cfg.fx_thr,
+                           result.delta_l_over_l0, out_dir / "cycle.png")
+    return h5, out_dir / "cycle.csv", png
 
 
 @app.command()
@@ -671,18 +753,19 @@ def _velocity_caveat(result) -> str:
     return f"({span})"
 
 
-def _ladder_or_exit(cfg, progress):
-    """run_ladder, every way it can end without a result said in one line: Ctrl-C (130) and SIGTERM (143),
-    a run that failed (1), settings found infeasible once the knit is built (2)."""
+def _experiment_or_exit(run, progress):
+    """``run()`` (an experiment: run_ladder, run_protocol_b), every way it can end without a result said in
+    one line: Ctrl-C (130) and SIGTERM (143), a run that failed (1), settings found infeasible once the knit
+    is built (2)."""
     from knitlad.observers import Interpenetration
-    from knitlad.protocol import InfeasibleRun, run_ladder
+    from knitlad.protocol import InfeasibleRun
     from knitlad.scenes.jersey import CourseTooWide
     from knitlad.simulation import SimulationBlowUp
     from knitlad.stretching import OutOfReach
 
     previous = signal.signal(signal.SIGTERM, _on_sigterm)  # a batch system's kill: said, as Ctrl-C is
     try:
-        return run_ladder(cfg.settings(), progress=progress)
+        return run()
     except KeyboardInterrupt as e:
         progress.close()
         how, code = ("terminated", 143) if isinstance(e, Terminated) else ("interrupted", 130)

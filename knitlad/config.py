@@ -235,6 +235,48 @@ class CutConfig(_WithPreset):
         return LadderSettings(self.stretch_settings(), self.dynamics_settings())
 
 
+class CycleConfig(CutConfig):
+    """Protocol B (``knitlad cycle``, sweep scene ``cycle``; paper Fig. 4a): the knit stretched at mu = 0 to
+    Delta x_min (``fx``, the holding tension, or ``lx``), then cycled with friction on to Delta x_max
+    (``lx_max``) and back; a copy is cut at Delta x_max of the last cycle, the uncut twin unloads.
+    The laddering's settings are those of ``knitlad cut``."""
+
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ()
+    fx: float | None = Field(None, gt=0, le=40, description=(
+        "tension per thread f_x at Delta x_min, where the knit is stretched at mu = 0 [-] (force control; the "
+        "experiments' 0.68)"))
+    lx: float | None = Field(None, gt=0.2, lt=1.0, description="l_x/l0 at Delta x_min [-] (position control, instead of fx)")
+    mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient while cycling and laddering [-]")
+    lx_max: float = Field(..., gt=0.2, lt=1.0, description="the box's l_x/l0 at Delta x_max [-]")
+    cycles: int = Field(3, ge=1, le=10, description="loading cycles; the cut comes at Delta x_max of the last [-]")
+    bar_speed: float = Field(0.05, gt=0, le=10, description=(
+        "speed of each held end away from (or towards) the knit's centre line [m/s]; quasi-static when halving it "
+        "changes nothing that counts (docs/quasistatic.md)"))
+    cycle_damping_per_s: float = Field(2e4, gt=0, le=1e7, description=(
+        "mass-proportional damping alpha while the bars move and hold [1/s]; biases a reading taken while "
+        "moving by alpha M V (knitlad/quasistatic.py)"))
+    readings_per_leg: int = Field(20, ge=2, le=10000, description="f_x readings per loading or unloading [-]")
+    hold_ms: float = Field(5.0, gt=0, le=1000, description="longest hold at Delta x_max, a settle [ms]")
+    hold_tol_f0: float = Field(1e-3, gt=0, le=1, description="a hold has settled when no free node carries more [f0]")
+    fx_thr: float | None = Field(None, gt=0, le=40, description=(
+        "threshold tension f_x^thr [-]: delta l is read where the uncut twin's unloading crosses it; none: not read"))
+    cut: bool = Field(True, description="cut a copy at Delta x_max of the last cycle and follow its ladder [-]")
+
+    @model_validator(mode="after")
+    def loads(self) -> "CycleConfig":
+        if self.lx is not None and self.lx_max <= self.lx:
+            raise ValueError(f"lx_max: {self.lx_max:g} is not above the start lx = {self.lx:g}")
+        return self
+
+    def cycle_settings(self):
+        from knitlad.cycling import CycleSettings
+
+        return CycleSettings(
+            lx_max=self.lx_max, cycles=self.cycles, bar_speed_m_s=self.bar_speed,
+            damping_per_s=self.cycle_damping_per_s, readings_per_leg=self.readings_per_leg, hold_s=self.hold_ms * 1e-3,
+            hold_tol_f0=self.hold_tol_f0, fx_thr=self.fx_thr)
+
+
 class LoopConfig(_WithPreset):
     """One single-loop run (``knitlad loop``, paper Fig. 5b,c)."""
 

@@ -18,12 +18,14 @@ import numpy as np
 
 from knitlad import units
 from knitlad.kernels.contact import (
+    GAPS_KNOWN,
     MAX_OVERLAP,
     N_STATS,
     NORMAL_FORCE_SUM,
     PAIR_RESULTS,
     PEAK_OVERLAP,
     SLIDING_PAIRS,
+    STALE,
     TOUCHING,
     ContactParams,
 )
@@ -336,6 +338,26 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         contacts.stats[PEAK_OVERLAP] = previous.stats[PEAK_OVERLAP]
         contacts = contacts._replace(params=previous.params)
     return contacts
+
+
+def carry_friction_history(old: Contacts, new: Contacts, edge_map: np.ndarray) -> bool:
+    """Give ``new`` (the buffers of a changed model) the candidate pairs and tangential springs of ``old``:
+    old edge k is new edge ``edge_map[k]``, -1 where it is gone (its pairs go with it). The list is
+    rebuilt at the next evaluation, which keeps the springs of the pairs still candidates. False, with
+    nothing changed, when ``new`` is too small to hold them."""
+    n = int(old.n_pairs[0])
+    pairs = edge_map[old.pairs[:n]]
+    kept = np.all(pairs >= 0, axis=1)
+    pairs = np.sort(pairs[kept], axis=1)
+    keys = pairs[:, 0] * new.edge_moved.shape[0] + pairs[:, 1]
+    order = np.argsort(keys, kind="stable")
+    m = order.size
+    if m > new.pairs.shape[0]:
+        return False
+    new.pairs[:m], new.keys[:m], new.slip[:m] = pairs[order], keys[order], old.slip[:n][kept][order]
+    new.n_pairs[0] = m
+    new.status[STALE], new.status[GAPS_KNOWN] = 1, 0
+    return True
 
 
 def pair_stiffness_table(m: RodModel, model: ContactModel | None, params: ContactParams) -> dict:

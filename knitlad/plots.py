@@ -257,3 +257,28 @@ def job_figure_names(df) -> dict[str, str]:
     for stem in stems.values():
         counts[stem] = counts.get(stem, 0) + 1
     return {job: (stem if counts[stem] == 1 else f"{stem}_{job}") for job, stem in stems.items()}
+
+
+def cycle_curve_plot(readings, n_x: int, stitch_length_m: float, fx_thr: float | None, delta_l_over_l0: float,
+                     path: str | Path) -> Path:
+    """Protocol B's force-displacement curve (paper, Fig. 4a): f_x against Delta x - Delta x_min [mm], one
+    colour per cycle, the holds as dots; with f_x^thr, the threshold and delta l on the last unloading."""
+    plt = _pyplot()
+    r = np.asarray(readings)
+    dx = (r[:, 3] - r[0, 3]) * n_x * stitch_length_m * 1e3
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    for cycle in np.unique(r[r[:, 0] > 0, 0]).astype(int):
+        rows = np.flatnonzero(r[:, 0] == cycle)
+        rows = np.concatenate([[rows[0] - 1], rows])  # from where the cycle before ended
+        line, = ax.plot(dx[rows], r[rows, 4], lw=1.2, label=f"cycle {cycle}")
+        holds = rows[r[rows, 1] == 0]
+        ax.plot(dx[holds], r[holds, 4], "o", ms=3, color=line.get_color())
+    if fx_thr is not None:
+        ax.axhline(fx_thr, color="0.4", ls="--", lw=0.8, label=r"$f_x^{\mathrm{thr}}$")
+        if np.isfinite(delta_l_over_l0):
+            top = dx.max()
+            ax.annotate("", xy=(top - delta_l_over_l0 * stitch_length_m * 1e3, fx_thr), xytext=(top, fx_thr),
+                        arrowprops=dict(arrowstyle="<->", color="k", lw=0.8))
+            ax.text(top - 0.5 * delta_l_over_l0 * stitch_length_m * 1e3, fx_thr, r"$\delta l$", ha="center",
+                    va="bottom")
+    return _labelled(fig, ax, r"$\Delta x - \Delta x_{\min}$ [mm]", symbol("fx"), "protocol B", path)

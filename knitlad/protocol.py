@@ -544,9 +544,40 @@ def laddering_time_step(rods: Rods, contact: ContactModel, dynamics: DynamicsSet
     return min(dt, DEFAULT_SAFETY * limit_s(True)) if rods.twist else dt
 
 
-def cut(knit: StretchedKnit, dynamics: DynamicsSettings) -> Laddering:
+def dynamics_rods(rods: Rods, dynamics: DynamicsSettings, material: Material) -> Rods:
+    """The stretched knit's rods as the dynamics run them: their dashpots, axial stiffness and twist."""
+    rods = rods.replace_model(
+        stretch_damping=rods.model.stretch_damping * (dynamics.stretch_damping_ratio / STRETCH_AXIAL_DAMPING))
+    if dynamics.axial_stiffness_factor != 1.0:
+        rods = with_axial_stiffness(rods, dynamics.axial_stiffness_factor)
+    if dynamics.twist and not rods.twist:  # a yarn with natural curvature carries twist from the stretch
+        rods = with_twist(rods, material.twisting_stiffness / material.bending_stiffness)
+    if rods.twist and dynamics.twist_inertia_factor != 1.0:
+        # a heavier spin, for studies: the yarns roll at the contacts, so the spin inertia enters the ladder
+        # (docs/accuracy.md, default 1); the step does not need it (laddering_time_step)
+        rods = rods.replace_model(twist_inertia=rods.model.twist_inertia * dynamics.twist_inertia_factor)
+    return rods
+
+
+def dynamics_simulation(rods: Rods, knit: StretchedKnit, dynamics: DynamicsSettings) -> Simulation:
+    """A simulation of ``rods`` (:func:`dynamics_rods`) under the dynamics' contact, friction and step."""
+    contact = stretch_contact(knit.settings, damping_ratio=dynamics.contact_damping_ratio,
+                              tangential_damping_ratio=dynamics.contact_damping_ratio,
+                              counting=dynamics.contact_counting)
+    # a cut frees two end nodes: keep the smaller of the stretch's step (of a yarn as soft) and the new stable step
+    stretch_step = math.inf if dynamics.implicit_axial else knit.dt_s / math.sqrt(dynamics.axial_stiffness_factor)
+    sim = Simulation(rods, contact=contact, dt_s=min(stretch_step, laddering_time_step(rods, contact, dynamics)),
+                     drag_per_s=dynamics.drag_per_s, framed_twist=dynamics.framed_twist,
+                     implicit_axial=dynamics.implicit_axial, predicted_dashpots=dynamics.predicted_dashpots)
+    sim.set_friction(dynamics.mu)
+    check_feasible(sim.dt_s, dynamics)
+    return sim
+
+
+def cut(knit: StretchedKnit, dynamics: DynamicsSettings, rods_ready: bool = False) -> Laddering:
     """Stage 2: a copy of the knit with the sinker loop of the central course cut at the central
-    column, its dashpots, twist and friction those of ``dynamics``, ready to run."""
+    column, its dashpots, twist and friction those of ``dynamics``, ready to run (``rods_ready``: the
+    knit's rods already have them, :func:`dynamics_rods`, as a knit loaded under the dynamics has)."""
     s, m = knit.settings, knit.settings.material
     t0 = time.perf_counter()
     row, column = s.n_y // 2, s.n_x // 2
@@ -554,26 +585,9 @@ def cut(knit: StretchedKnit, dynamics: DynamicsSettings) -> Laddering:
     baseline = knit.gauge.laddered(rods.state.x, knit.box_lx, knit.box_ly)
     edge = sinker_edge(knit, row, column)
     rods = cut_edge(rods, edge)
-    rods = rods.replace_model(
-        stretch_damping=rods.model.stretch_damping * (dynamics.stretch_damping_ratio / STRETCH_AXIAL_DAMPING))
-    if dynamics.axial_stiffness_factor != 1.0:
-        rods = with_axial_stiffness(rods, dynamics.axial_stiffness_factor)
-    if dynamics.twist and not rods.twist:  # a yarn with natural curvature carries twist from the stretch
-        rods = with_twist(rods, m.twisting_stiffness / m.bending_stiffness)
-    if rods.twist and dynamics.twist_inertia_factor != 1.0:
-        # a heavier spin, for studies: the yarns roll at the contacts, so the spin inertia enters the ladder
-        # (docs/accuracy.md, default 1); the step does not need it (laddering_time_step)
-        rods = rods.replace_model(twist_inertia=rods.model.twist_inertia * dynamics.twist_inertia_factor)
-    contact = stretch_contact(s, damping_ratio=dynamics.contact_damping_ratio,
-                              tangential_damping_ratio=dynamics.contact_damping_ratio,
-                              counting=dynamics.contact_counting)
-    # the cut frees two end nodes: keep the smaller of the stretch's step (of a yarn as soft) and the new stable step
-    stretch_step = math.inf if dynamics.implicit_axial else knit.dt_s / math.sqrt(dynamics.axial_stiffness_factor)
-    sim = Simulation(rods, contact=contact, dt_s=min(stretch_step, laddering_time_step(rods, contact, dynamics)),
-                     drag_per_s=dynamics.drag_per_s, framed_twist=dynamics.framed_twist,
-                     implicit_axial=dynamics.implicit_axial, predicted_dashpots=dynamics.predicted_dashpots)
-    sim.set_friction(dynamics.mu)
-    check_feasible(sim.dt_s, dynamics)
+    if not rods_ready:
+        rods = dynamics_rods(rods, dynamics, m)
+    sim = dynamics_simulation(rods, knit, dynamics)
     return Laddering(knit, dynamics, sim, edge, row, column, baseline, time.perf_counter() - t0)
 
 

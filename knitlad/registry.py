@@ -17,7 +17,7 @@ from typing import Callable
 
 from pydantic import BaseModel
 
-from knitlad.config import CutConfig, LoopConfig, StitchConfig
+from knitlad.config import CutConfig, CycleConfig, LoopConfig, StitchConfig
 
 
 @dataclass(frozen=True)
@@ -66,6 +66,37 @@ def run_ladder_job(cfg: CutConfig, output, folder: Path | None = None, progress=
     return {**result.summary(), "stretch_reused": reused}, write
 
 
+def run_cycle_job(cfg: CycleConfig, output, folder: Path | None = None, progress=None):
+    """Protocol B (`knitlad cycle`): its file holds the readings and, if cut, the ladder."""
+    import json
+
+    from knitlad.cycling import run_protocol_b
+    from knitlad.io.hdf5 import write_ladder_result, write_record
+
+    from knitlad.io.knit_cache import cached_stretch
+    from knitlad.protocol import stretch
+
+    knit = None if folder is None else cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch,
+                                                      progress)[0]
+    cycle, ladder = run_protocol_b(cfg.settings(), cfg.cycle_settings(), cut_at_max=cfg.cut, progress=progress,
+                                   knit=knit)
+    summary = {**cycle.summary(), **({f"cut_{k}": v for k, v in ladder.summary().items()} if ladder else {})}
+    data = {"cycle/readings": cycle.readings}
+    compression = None if output.compression == "none" else output.compression
+
+    def write(path: Path, record: dict) -> None:
+        attrs = {**{f"cycle_{k}": v for k, v in cycle.summary().items()}, **record,
+                 "cycle_config_json": json.dumps(cfg.model_dump(), default=str)}
+        if ladder is None:
+            write_record(path, attrs, datasets=data)
+        else:
+            if not output.frames:
+                ladder.frames, ladder.frame_times_s = [], []
+            write_ladder_result(path, ladder, compression=compression, attrs=attrs, datasets=data)
+
+    return summary, write
+
+
 def _attributes_only(result):
     """A reduced model's summary, and a writer of a file of attributes (summary, settings, scales)."""
     from knitlad.io.hdf5 import write_record
@@ -99,6 +130,10 @@ SCENES: dict[str, Scene] = {
         "box_lx_over_l0", "fx_within_tolerance", "peak_overlap_over_d", "reached_edge", "stop_reason",
         "laddering_column", "v_fit_stitches", "nodes", "steps", "relax_steps", "stretch_reused", "wall_s",
         "wall_stretch_s", "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment", stretch_of),
+    "cycle": Scene(CycleConfig, run_cycle_job, (
+        "fx_ini", "lx_over_l0", "ly_over_l0", "lx_max", "fx_thr", "delta_l_over_l0", "predicted_damage",
+        "cut_n_lad_over_ny", "cut_fx_fin", "cut_fx_fin_crossed", "cut_reached_edge", "hold_converged", "wall_s",
+        "job_wall_s"), "`knitlad cycle`: protocol B, the damage prediction's loading", stretch_of),
     "loop": Scene(LoopConfig, run_loop_job, (
         "tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before", "steps",
         "nodes", "lx_over_l0", "lx_end_over_l0", "climb_over_ly", "wall_s", "job_wall_s"),

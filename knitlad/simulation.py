@@ -16,7 +16,15 @@ import numba
 import numpy as np
 
 from knitlad import units
-from knitlad.contact import ContactModel, ContactPairs, Contacts, ContactStats, contact_time_step, make_contacts
+from knitlad.contact import (
+    ContactModel,
+    ContactPairs,
+    Contacts,
+    ContactStats,
+    carry_friction_history,
+    contact_time_step,
+    make_contacts,
+)
 from knitlad.kernels.contact import GAPS_KNOWN, PAIRS_NEEDED, PEAK_OVERLAP, STALE, refresh_contacts, touching_pairs_among
 from knitlad.kernels.integrate import (
     AXIAL_EXPLICIT,
@@ -193,7 +201,7 @@ def check_open_chains(model, implicit_axial: bool) -> bool:
 
 
 class SupportControl:
-    """Supports changed during a run, without rebuilding (mixed into :class:`Simulation`): each change
+    """Supports and loads changed during a run, without rebuilding (mixed into :class:`Simulation`): each change
     is a new model (``replace_model``), so a model is still never changed in place."""
 
     def _nodes(self, nodes) -> np.ndarray:
@@ -246,10 +254,30 @@ class SupportControl:
             x[idx] += np.broadcast_to(np.asarray(by_m, dtype=float) / units.LENGTH, (idx.size, 3))
         self.contacts.status[STALE] = 1
 
+    def set_external_forces(self, forces_N) -> None:
+        """Replace the constant external forces [N], (n, 3) or one 3-vector for all, from now on (a new model).
+
+        The forces of the current state change by the difference (not recomputed: a force
+        evaluation would also advance the friction history by a step)."""
+        f = np.broadcast_to(np.asarray(forces_N, dtype=float) / units.FORCE, self.model.f_ext.shape)
+        self.work.force[:] += f - self.model.f_ext
+        rail_forces(self.model.rail_node, self.model.rail_axis, self.work.force)
+        self.replace_model(f_ext=f)
+
 
 class ContactReadout:
     """What the contact saw, read from a :class:`Simulation`'s buffers (mixed into it): totals, each
-    touching pair, the deepest overlap, the pairs between two yarns."""
+    touching pair, the deepest overlap, the pairs between two yarns; and the friction history handed over
+    from another simulation of the same nodes."""
+
+    def adopt_friction_history(self, contacts: Contacts, edge_map: np.ndarray) -> None:
+        """Take the contact pairs and their tangential springs from ``contacts`` (another simulation's, of the
+        same nodes: its edge k is this one's ``edge_map[k]``, -1 where gone), then evaluate the forces with
+        them: a knit loaded with friction, cut, keeps what the loading left in its contacts."""
+        while not carry_friction_history(contacts, self.contacts, np.asarray(edge_map, dtype=np.int64)):
+            self.contacts = make_contacts(self.rods, self.contact_model, capacity=2 * self.contacts.pairs.shape[0],
+                                          previous=self.contacts)
+        self.compute_forces()
 
     def contact_stats(self) -> ContactStats:
         """At the last force evaluation: touching pairs, largest overlap [m], sum of normal forces [N], sliding pairs, candidate pairs."""
@@ -389,16 +417,6 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics):
             if self._shift_drift > 0.5 * self.contacts.params.skin:
                 self.contacts.status[STALE] = 1
                 self._shift_drift = 0.0
-
-    def set_external_forces(self, forces_N) -> None:
-        """Replace the constant external forces [N], (n, 3) or one 3-vector for all, from now on (a new model).
-
-        The forces of the current state change by the difference (not recomputed: a force
-        evaluation would also advance the friction history by a step)."""
-        f = np.broadcast_to(np.asarray(forces_N, dtype=float) / units.FORCE, self.model.f_ext.shape)
-        self.work.force[:] += f - self.model.f_ext
-        rail_forces(self.model.rail_node, self.model.rail_axis, self.work.force)
-        self.replace_model(f_ext=f)
 
     @property
     def friction(self) -> float:

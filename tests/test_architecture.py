@@ -48,7 +48,7 @@ LAYERS = {
     2: ("state", "topology", "observers"),
     3: ("contact", "timestep", "natural_curvature", "scenes", "obstacles"),
     4: ("simulation", "quasistatic"),
-    5: ("protocol", "stitch_model", "loop_model", "periodic_loop", "demo"),
+    5: ("protocol", "stitch_model", "loop_model", "periodic_loop", "cycling", "demo"),
     6: ("config",),
     7: ("io", "plots", "render", "registry"),
     8: ("sweep", "cluster", "runner", "ensemble"),

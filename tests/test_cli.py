@@ -37,6 +37,9 @@ def run(*args, cwd=None):
         (["loop", "--geometry", "periodic", "--columns", "3"], "columns"),
         (["cut", "--preset", "fastest"], "--preset"),
         (["loop", "--preset", "exact"], "--preset"),
+        (["cycle", "--lx", "0.38", "--lx-max", "0.36"], "lx_max"),
+        (["cycle"], "--lx-max"),
+        (["cycle", "--lx-max", "0.38", "--bar-speed", "0"], "--bar-speed"),
     ],
 )
 def test_bad_options_get_one_line_and_exit_code_2(args, option):
@@ -62,6 +65,22 @@ def test_cut_runs_a_ladder_end_to_end_on_a_small_knit(tmp_path):
         assert f.attrs["scale_f0_N"] == pytest.approx(0.01477, abs=1e-4)
         assert len(f["series/front_up"]) == len(f["series/time"])
     assert (tmp_path / "spatio_temporal.png").stat().st_size > 1000
+
+
+def test_cycle_runs_protocol_b_end_to_end_on_a_small_knit(tmp_path):
+    """One cycle of a 6 x 8 knit (fast preset) to l_x = 0.36 l0 and a cut there: the readings (start, a
+    loading, the hold, an unloading) in the CSV and the HDF5 file beside the ladder, Fig. 4a as a PNG."""
+    p = run("cycle", "--stitches", "6x8", "--preset", "fast", "--lx-max", "0.36", "--cycles", "1",
+            "--readings-per-leg", "3", "--bar-speed", "0.2", "--fx-thr", "1", "--max-time-ms", "1", "--out", str(tmp_path))
+    assert p.returncode == 0, p.stderr
+    assert "predicted n_lad/n_y" in p.stdout and "cut: n_lad/n_y" in p.stdout
+    table = (tmp_path / "cycle.csv").read_text().splitlines()
+    assert table[0] == "cycle,leg,t_s,box_lx_over_l0,fx" and len(table) == 1 + 1 + 3 + 1 + 3
+    with h5py.File(tmp_path / "cycle.h5") as f:
+        assert f["cycle/readings"].shape == (8, 5) and "series/fx" in f
+        assert f.attrs["cycle_fx_ini"] > 1 and f.attrs["cycle_delta_l_over_l0"] > 0
+    assert (tmp_path / "cycle.png").stat().st_size > 1000
+    assert run("cycle", "--stitches", "6x8", "--lx-max", "0.36", "--out", str(tmp_path)).returncode == 2  # not over it
 
 
 def test_a_run_that_fails_is_reported_in_one_line_with_exit_code_1(tmp_path, monkeypatch):

@@ -170,10 +170,20 @@ def _write_run_attrs(f: h5py.File, settings, material) -> None:
         f.attrs[f"scale_{key}"] = value
 
 
-def write_ladder_result(path: str | Path, result, compression: str | None = "gzip", attrs: dict | None = None) -> Path:
-    """Write one run (:class:`knitlad.protocol.LadderResult`); ``attrs`` adds file attributes (a sweep's job record)."""
+def _extra_datasets(f: h5py.File, datasets: dict | None) -> None:
+    """``{"group/name": array}`` written as checksummed datasets."""
+    for name, data in (datasets or {}).items():
+        group, _, leaf = name.rpartition("/")
+        checksummed_dataset(f.require_group(group or "/"), leaf, data)
+
+
+def write_ladder_result(path: str | Path, result, compression: str | None = "gzip", attrs: dict | None = None,
+                        datasets: dict | None = None) -> Path:
+    """Write one run (:class:`knitlad.protocol.LadderResult`); ``attrs`` adds file attributes (a sweep's job
+    record), ``datasets`` more datasets by path (``{"cycle/readings": array}``: the loading before the cut)."""
     path = Path(path)
     with atomic_hdf5(path) as f:
+        _extra_datasets(f, datasets)
         _set_attrs(f, result.summary())
         _set_attrs(f, attrs or {})
         _write_run_attrs(f, result.settings, result.settings.material)
@@ -226,6 +236,7 @@ RUN_UNITS = {
     "stretch/fx": "f0", "final/laddered": "1", "cells/centres": "m", "topology/yarn_start": "1",
     "topology/edges": "1", "topology/node_course": "1", "contacts/offsets": "1", "contacts/points": "m",
     "contacts/normal_force": "N", "contacts/friction_force": "N", "contacts/sliding": "1",
+    "cycle/readings": "cycle, leg (1 loading, 0 hold, -1 unloading), s, l0 (the box's l_x), f0 (f_x)",
 }
 
 
@@ -279,11 +290,14 @@ def _mark_units(f: h5py.File) -> None:
             f[name].attrs["unit"] = unit
 
 
-def write_record(path: str | Path, attrs: dict) -> Path:
-    """A file holding attributes only (a failed sweep job: its config, status and error), atomically."""
+def write_record(path: str | Path, attrs: dict, datasets: dict | None = None) -> Path:
+    """A file holding attributes (a failed sweep job: its config, status and error) and any ``datasets``
+    by path, atomically."""
     path = Path(path)
     with atomic_hdf5(path) as f:
+        _extra_datasets(f, datasets)
         _set_attrs(f, attrs)
+        _mark_units(f)
         f.attrs["knitlad_version"] = __version__
         f.attrs["knitlad_code"] = code_identity()
     return path
