@@ -77,7 +77,8 @@ class CutConfig(_WithPreset):
         "drag_per_s", "twist", "d_over_l0", "contact_force_f0", "overlap_fraction", "contact_counting", "edge",
         "contact_damping_ratio", "stretch_damping_ratio", "stretch_increment", "steps_per_increment",
         "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor",
-        "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio")
+        "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
+        "stop_at_edge")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -157,6 +158,9 @@ class CutConfig(_WithPreset):
         "dt_safety x the contact and bending limit, grows; the static tensions are unchanged [-]; "
         "default: the preset's"))
 
+    stop_at_edge: bool = Field(True, description=(
+        "stop the run when a ladder reaches an edge course (its damage and f_x^fin are then those of that moment); "
+        "false: go on until every front has stopped (or max_time_ms) [-]"))
     predicted_dashpots: bool = Field(False, description=(
         "the laddering dynamics' dashpots (axial and contact) act on the velocity at the end of each step, "
         "predicted from the last forces (second order in dt), instead of the half-step velocity (first order); "
@@ -227,6 +231,7 @@ class CutConfig(_WithPreset):
             observe_every_s=self.observe_every_us * 1e-6, arrest_s=self.arrest_ms * 1e-3,
             max_time_s=self.max_time_ms * 1e-3,
             frame_every_s=None if self.frame_every_us is None else self.frame_every_us * 1e-6,
+            stop_at_edge=self.stop_at_edge,
         )
 
     def settings(self):
@@ -261,6 +266,9 @@ class CycleConfig(CutConfig):
     fx_thr: float | None = Field(None, gt=0, le=40, description=(
         "threshold tension f_x^thr [-]: delta l is read where the uncut twin's unloading crosses it; none: not read"))
     cut: bool = Field(True, description="cut a copy at Delta x_max of the last cycle and follow its ladder [-]")
+    stop_at_edge: bool = Field(False, description=(
+        "stop the laddering when a ladder reaches an edge course; false: go on until every front has stopped, "
+        "the damage Eq. 1 predicts [-]"))
 
     @model_validator(mode="after")
     def loads(self) -> "CycleConfig":

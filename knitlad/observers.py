@@ -152,30 +152,45 @@ class EdgeReached:
     under the held top course, whose sinkers cannot move: it comes undone late if
     at all (16 x 16 at f_x^ini 13.6: the ladder reached the row below it at 0.8 ms
     and it still held 2 ms later), so the top is the row below it
-    (:data:`TOP_ROWS_HELD`). The run stops there: n_lad/n_y and f_x^fin of a
+    (:data:`TOP_ROWS_HELD`). As a stop rule (``stop_at_edge``), n_lad/n_y and f_x^fin of a
     ladder that reaches an edge are those of that moment, a lower bound of the
-    damage it would end with.
+    damage it would end with; without it, the run goes on until every front has stopped.
     """
 
-    def check(self, t: float, undone: np.ndarray) -> str | None:
+    @staticmethod
+    def reached(undone: np.ndarray) -> bool:
         top = undone.shape[0] - 1 - TOP_ROWS_HELD
-        return "ladder reached an edge course" if undone[top].any() or undone[0].any() else None
+        return bool(undone[top].any() or undone[0].any())
 
+    def check(self, t: float, undone: np.ndarray) -> str | None:
+        return "ladder reached an edge course" if self.reached(undone) else None
 
 
 class Arrested:
-    """No cell has changed for ``arrest_s``."""
+    """Every front has stopped: no cell has changed for ``arrest_s``, nor for ``pause_factor`` times the
+    longest pause between two changes so far.
 
-    def __init__(self, arrest_s: float) -> None:
-        self.arrest_s = arrest_s
+    A stick-slip front advances in bursts between pauses of some duration tau; with the second condition it
+    is not taken as arrested before it has been still for ``pause_factor`` tau (3 by default), whatever
+    ``arrest_s`` says.
+    """
+
+    def __init__(self, arrest_s: float, pause_factor: float = 3.0) -> None:
+        self.arrest_s, self.pause_factor = arrest_s, pause_factor
         self._count = -1
         self._since = 0.0
+        self._changed = False  # a change after the first observation: pauses are counted from it on
+        self.longest_pause = 0.0
 
     def check(self, t: float, undone: np.ndarray) -> str | None:
         n = int(undone.sum())
         if n != self._count:
+            if self._changed:  # the wait before the first change is the ladder's start, not a pause
+                self.longest_pause = max(self.longest_pause, t - self._since)
+            self._changed = self._count >= 0
             self._count, self._since = n, t
-        return f"no cell changed for {self.arrest_s * 1e3:.1f} ms" if t - self._since >= self.arrest_s else None
+        wait = max(self.arrest_s, self.pause_factor * self.longest_pause)
+        return f"no cell changed for {wait * 1e3:.1f} ms" if t - self._since >= wait else None
 
 
 class TimeLimit:

@@ -140,6 +140,7 @@ class DynamicsSettings:
     arrest_s: float
     max_time_s: float
     frame_every_s: float | None  # None: AUTO_FRAMES over the expected ladder duration (frame_interval)
+    stop_at_edge: bool = True  # stop when a ladder reaches an edge course (else: when every front has stopped)
 
 
 @dataclass(frozen=True)
@@ -683,7 +684,8 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
     guard = OverlapGuard(run.knit.settings.material.diameter)
     fronts, tension = FrontRecorder(columns, run.cut_row), TensionRecorder()
     frames = FrameRecorder(frame_interval(run))
-    rules = list(stop_rules) if stop_rules is not None else [EdgeReached(), Arrested(d.arrest_s), TimeLimit(d.max_time_s)]
+    rules = list(stop_rules) if stop_rules is not None else (
+        [EdgeReached()] * d.stop_at_edge + [Arrested(d.arrest_s), TimeLimit(d.max_time_s)])
     undone = np.zeros_like(run.baseline)
     t_start = run.sim.time_s
     frames.observe(0.0, run, undone)  # the stretched knit just cut, before the first step
@@ -707,7 +709,7 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
         knit=run.knit, dynamics=d, cut_row=run.cut_row, columns=columns, times_s=np.array(times),
         fx=np.array(tension.fx), fx_courses=np.array(tension.fx_courses), fronts=fronts.extents(), column_cells=fronts.cells(), frames=frames,
         baseline=run.baseline, final_laddered=undone, stop_reason=reason,
-        reached_edge=isinstance(rule, EdgeReached), steps=run.sim.steps,
+        reached_edge=EdgeReached.reached(undone), steps=run.sim.steps,
         yarn_start=run.sim.model.yarn_start.copy(), peak_overlap_over_d=guard.peak_over_d,
         edges=np.column_stack([run.sim.model.edge_a, run.sim.model.edge_b]),
         cut_node=int(run.knit.knit.rods.model.edge_a[run.cut_edge]), cell_centres=cell_centres(run),

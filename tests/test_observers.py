@@ -97,3 +97,20 @@ def test_a_scene_of_one_s_own_writes_a_trajectory_that_reads_back_with_units_and
     assert "/frames/positions" in (tmp_path / "mine.xdmf").read_text()
     with pytest.raises(ValueError, match="no frame recorded"):
         kl.write_trajectory(tmp_path / "none.h5", kl.TrajectoryRecorder())
+
+
+def test_a_stick_slip_front_is_not_taken_as_arrested_during_its_pauses():
+    """A front undoing a cell every 1.5 ms, then after a pause of 4 ms (longer than the 2 ms window, shorter
+    than three of its pauses so far), runs on; once still for three times its longest pause it is arrested."""
+    rule = Arrested(arrest_s=2e-3)
+    undone = np.zeros((8, 4), dtype=bool)
+    changes = [1.0e-3, 2.5e-3, 4.0e-3, 5.5e-3, 9.5e-3, 11.0e-3]
+    fired = None
+    for t in np.round(np.arange(0.0, 40e-3, 1e-4), 7):
+        undone.flat[:sum(c <= t + 1e-9 for c in changes)] = True
+        if (reason := rule.check(t, undone)) is not None:
+            fired = (t, reason)
+            break
+    assert rule.longest_pause == pytest.approx(4e-3)
+    assert fired is not None and fired[0] == pytest.approx(11e-3 + 3 * 4e-3, abs=1.5e-4)
+    assert "12.0 ms" in fired[1]
