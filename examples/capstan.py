@@ -23,7 +23,7 @@ def capstan(mu=0.3, load=0.05, radius=3e-3, leg=6e-3, speed=0.05, duration=0.03)
     scene = kl.Scene(kl.NYLON)
     yarn = scene.add_yarn(points)
     scene.hold(yarn, [0], velocity=(0.0, -speed, 0.0))                     # pulled down the left leg
-    cylinder = kl.Cylinder(stiffness=2e3, friction=mu, radius_m=radius, axis=(0, 0, 1))
+    cylinder = kl.Cylinder(stiffness=2e3, mu=mu, radius_m=radius, axis=(0, 0, 1))
     sim = kl.Simulation(scene.build(), obstacles=[cylinder], implicit_axial=True)
     forces = np.zeros((len(points), 3))
     forces[-1] = (0.0, -load, 0.0)                                          # the dead load

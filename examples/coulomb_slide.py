@@ -18,7 +18,7 @@ def drag(mu=0.4, press=0.2, speed=1.0, steps=100):
     scene.hold(dragged, range(t.size), velocity=(speed, 0.0, 0.0))       # moved rigidly along x
     for x0 in (-3 * d, 3 * d):                                          # two yarns across, held rigid
         scene.hold(scene.add_yarn(np.column_stack([np.full_like(t, x0), t, 0 * t])), range(t.size))
-    contact = kl.ContactModel(stiffness=1e3, friction=mu)               # N/m; the overlap is press * d
+    contact = kl.ContactModel(stiffness=1e3, mu=mu)               # N/m; the overlap is press * d
     sim = kl.Simulation(scene.build(), contact=contact, dt_s=1e-6)      # all held: any step is stable
     sim.step(steps)
     pairs = sim.contact_pairs()

@@ -14,7 +14,7 @@ def pull(mu=0.0, steps=10, step_m=2e-5, course=2):
     """(displacements [m], pulls [N], stored energies [J]) of a 4 x 4 knit's ``course`` pulled along +x."""
     knit = kl.stretch(kl.CutConfig(n_x=4, n_y=4, lx=0.36, preset="fast").stretch_settings())
     rods = knit.knit.rods.copy()
-    contact = kl.ContactModel.for_knit(kl.NYLON, friction=mu)
+    contact = kl.ContactModel.for_knit(kl.NYLON, mu=mu)
     sim = kl.Simulation(rods, contact=contact)
     end = sim.nodes_of(knit.knit.courses[course], [-2, -1])                 # the clamp at its right end
     sim.release(end[:1])                                                    # the end node alone holds it

@@ -17,7 +17,7 @@ def drop(length=0.03, nodes=61, radius=2e-3, gap=5e-4, mu=0.5, fall=0.03, g=9.81
     top = radius + 0.5 * kl.NYLON.diameter + gap
     scene = kl.Scene(kl.NYLON)
     scene.add_yarn(np.column_stack([x, np.full(nodes, top), np.zeros(nodes)]))
-    cylinder = kl.Cylinder(stiffness=500.0, friction=mu, radius_m=radius, axis=(0, 0, 1))
+    cylinder = kl.Cylinder(stiffness=500.0, mu=mu, radius_m=radius, axis=(0, 0, 1))
     sim = kl.Simulation(scene.build(), obstacles=[cylinder], drag_per_s=200.0)   # air drag settles the ringing
     weight = kl.NYLON.line_density * length * g
     per_node = np.full(nodes, weight / (nodes - 1))

@@ -17,6 +17,7 @@ import numba
 import numpy as np
 
 from knitlad import units
+from knitlad.deprecation import renamed_field
 from knitlad.kernels.contact import (
     GAPS_KNOWN,
     MAX_OVERLAP,
@@ -48,12 +49,19 @@ class Counting(str, Enum):
 COUNTING = tuple(c.value for c in Counting)
 
 
+def check_friction_coefficient(mu: float) -> None:
+    """The one check of a Coulomb coefficient, wherever one is given (contact, obstacles, a run's switch)."""
+    if not (mu >= 0 and math.isfinite(mu)):
+        raise ValueError(f"mu (the friction coefficient) must be >= 0, got {mu!r}")
+
+
+@renamed_field("friction", "mu", since="0.5.0")
 @dataclass(frozen=True)
 class ContactModel:
     """Yarn-yarn contact parameters (SI).
 
     stiffness       k_n [N/m]   normal penalty stiffness
-    friction        mu  [-]     Coulomb coefficient (changeable during a run)
+    mu              [-]         Coulomb coefficient (changeable during a run; ``friction`` before 0.5.0)
     damping_ratio   zeta_n [-]  normal dashpot as a fraction of critical (per contact)
     tangential_stiffness_ratio  k_t / k_n [-]
     tangential_damping_ratio    zeta_t [-]
@@ -77,7 +85,7 @@ class ContactModel:
     """
 
     stiffness: float
-    friction: float = 0.0
+    mu: float = 0.0
     damping_ratio: float = 0.3
     tangential_stiffness_ratio: float = 0.5
     tangential_damping_ratio: float = 0.3
@@ -98,8 +106,7 @@ class ContactModel:
                 raise ValueError(f"pair_stiffness: k_n must be > 0 N/m, got {entry[2]!r}")
         if not (self.stiffness > 0 and math.isfinite(self.stiffness)):
             raise ValueError(f"contact stiffness must be > 0 N/m, got {self.stiffness!r}")
-        if not (self.friction >= 0 and math.isfinite(self.friction)):
-            raise ValueError(f"friction must be >= 0, got {self.friction!r}")
+        check_friction_coefficient(self.mu)
         for name in ("damping_ratio", "tangential_damping_ratio", "exclusion_diameters"):
             if getattr(self, name) < 0:
                 raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
@@ -295,7 +302,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
             damping_n=float(model.damping_ratio),
             k_t=model.stiffness * model.tangential_stiffness_ratio * units.LENGTH / units.FORCE,
             damping_t=float(model.tangential_damping_ratio),
-            mu=float(model.friction),
+            mu=float(model.mu),
             skin=float(skin),
         )
         # exclusion: edges within `exclusion_diameters` d of arc, and always the adjacent edge

@@ -118,7 +118,7 @@ class LoopRun:
         geometry = Jersey(n_x=1, n_y=1, l_x=settings.lx_over_l0 * l0, l_y=settings.ly_over_l0 * l0,
                           nodes_per_stitch=settings.nodes_per_stitch, material=m, edge="tail")
         self.scene: LoopScene = build_single_loop(geometry, settings.fx * m.f0)
-        contact = ContactModel.for_knit(m, settings.contact_force_f0, settings.overlap_fraction, friction=0.0)
+        contact = ContactModel.for_knit(m, settings.contact_force_f0, settings.overlap_fraction, mu=0.0)
         self.sim = Simulation(self.scene.rods, contact=contact, safety=settings.dt_safety)
         self.result = LoopResult(settings, nodes=self.scene.rods.model.n_nodes)
 

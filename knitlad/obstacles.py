@@ -15,6 +15,8 @@ from typing import Sequence
 import numpy as np
 
 from knitlad import units
+from knitlad.contact import check_friction_coefficient
+from knitlad.deprecation import renamed_field
 from knitlad.kernels.obstacles import CYLINDER, PLANE, ObstacleState
 from knitlad.state import RodModel
 from knitlad.timestep import damped_limit_factor
@@ -34,7 +36,7 @@ def _unit(vector, name: str) -> np.ndarray:
 @dataclass(frozen=True, kw_only=True)
 class _Contact:
     stiffness: float  # k_n [N/m]
-    friction: float = 0.0  # Coulomb coefficient mu [-]
+    mu: float = 0.0  # Coulomb coefficient [-] (``friction`` before 0.5.0)
     damping_ratio: float = 0.3  # normal dashpot, fraction of critical [-]
     tangential_stiffness_ratio: float = 0.5  # k_t / k_n [-]
     tangential_damping_ratio: float = 0.3  # [-]
@@ -43,7 +45,8 @@ class _Contact:
     def _check(self) -> None:
         if not (self.stiffness > 0 and math.isfinite(self.stiffness)):
             raise ValueError(f"stiffness must be a positive number of N/m, got {self.stiffness!r}")
-        for name in ("friction", "damping_ratio", "tangential_stiffness_ratio", "tangential_damping_ratio"):
+        check_friction_coefficient(self.mu)
+        for name in ("damping_ratio", "tangential_stiffness_ratio", "tangential_damping_ratio"):
             value = getattr(self, name)
             if not (value >= 0 and math.isfinite(value)):
                 raise ValueError(f"{name} must be >= 0, got {value!r}")
@@ -51,6 +54,7 @@ class _Contact:
             raise ValueError(f"velocity_m_s must be a finite 3-vector, got {self.velocity_m_s!r}")
 
 
+@renamed_field("friction", "mu", since="0.5.0")
 @dataclass(frozen=True, kw_only=True)
 class Plane(_Contact):
     """A rigid plane through ``point_m`` [m]; the yarn stays on the side ``normal`` points to."""
@@ -63,6 +67,7 @@ class Plane(_Contact):
         _unit(self.normal, "normal")
 
 
+@renamed_field("friction", "mu", since="0.5.0")
 @dataclass(frozen=True, kw_only=True)
 class Cylinder(_Contact):
     """A rigid cylinder of radius ``radius_m`` [m] about the line through ``point_m`` along ``axis``;
@@ -96,7 +101,7 @@ def obstacle_state(obstacles: Sequence[Obstacle], n_nodes: int) -> ObstacleState
         kind, point, axis, radius, velocity, k_n, np.array([o.damping_ratio for o in obstacles], dtype=float),
         k_n * np.array([o.tangential_stiffness_ratio for o in obstacles], dtype=float),
         np.array([o.tangential_damping_ratio for o in obstacles], dtype=float),
-        np.array([o.friction for o in obstacles], dtype=float), np.zeros((n_nodes, k, 3)),
+        np.array([o.mu for o in obstacles], dtype=float), np.zeros((n_nodes, k, 3)),
         np.zeros((n_nodes, k), dtype=np.uint8), np.zeros((k, 3)),
     )
 

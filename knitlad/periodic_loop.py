@@ -197,7 +197,7 @@ class PeriodicLoopRun:
                                         rest_length=self.cell.sim.model.rest_length[self.cell.cell.real_edges])
         if s.columns > 1:
             self.rows.absent.add(LOWER)  # a support: out of the energy
-        contact = ContactModel.for_knit(s.material, s.contact_force_f0, s.overlap_fraction, friction=0.0)
+        contact = ContactModel.for_knit(s.material, s.contact_force_f0, s.overlap_fraction, mu=0.0)
         self.sim = Simulation(self.rows.rods, contact=contact, safety=s.dt_safety)
         self.box = TensionBox(self.rows, self.sim, s.material, s.rows if s.columns == 1 else s.rows - 1)
         self.result.nodes = int(self.sim.model.yarn_start[s.rows])

@@ -222,8 +222,8 @@ class StretchedKnit:
 
 
 def stretch_contact(s: StretchSettings, **changes) -> ContactModel:
-    """The contact model of the stretch (mu = 0, the stretch's dashpots); ``changes`` for the dynamics'."""
-    kw = dict(friction=0.0, damping_ratio=STRETCH_CONTACT_DAMPING, tangential_damping_ratio=STRETCH_CONTACT_DAMPING)
+    """The contact model of the stretch (mu = 0, the stretch's dashpots); ``changes`` for the dynamics' (their mu)."""
+    kw = dict(mu=0.0, damping_ratio=STRETCH_CONTACT_DAMPING, tangential_damping_ratio=STRETCH_CONTACT_DAMPING)
     return ContactModel.for_knit(s.material, s.contact_force_f0, s.overlap_fraction,
                                  sagitta_radius_d=s.sagitta_radius_d, **{**kw, **changes})
 
@@ -562,7 +562,7 @@ def dynamics_rods(rods: Rods, dynamics: DynamicsSettings, material: Material) ->
 
 def dynamics_simulation(rods: Rods, knit: StretchedKnit, dynamics: DynamicsSettings) -> Simulation:
     """A simulation of ``rods`` (:func:`dynamics_rods`) under the dynamics' contact, friction and step."""
-    contact = stretch_contact(knit.settings, damping_ratio=dynamics.contact_damping_ratio,
+    contact = stretch_contact(knit.settings, mu=dynamics.mu, damping_ratio=dynamics.contact_damping_ratio,
                               tangential_damping_ratio=dynamics.contact_damping_ratio,
                               counting=dynamics.contact_counting)
     # a cut frees two end nodes: keep the smaller of the stretch's step (of a yarn as soft) and the new stable step
@@ -570,7 +570,6 @@ def dynamics_simulation(rods: Rods, knit: StretchedKnit, dynamics: DynamicsSetti
     sim = Simulation(rods, contact=contact, dt_s=min(stretch_step, laddering_time_step(rods, contact, dynamics)),
                      drag_per_s=dynamics.drag_per_s, framed_twist=dynamics.framed_twist,
                      implicit_axial=dynamics.implicit_axial, predicted_dashpots=dynamics.predicted_dashpots)
-    sim.set_friction(dynamics.mu)
     check_feasible(sim.dt_s, dynamics)
     return sim
 

@@ -7,6 +7,7 @@ arguments speak SI; the state itself is in internal units (:mod:`knitlad.units`)
 from __future__ import annotations
 
 import math
+import warnings
 import os
 import time
 from contextlib import contextmanager
@@ -22,6 +23,7 @@ from knitlad.contact import (
     Contacts,
     ContactStats,
     carry_friction_history,
+    check_friction_coefficient,
     contact_time_step,
     make_contacts,
 )
@@ -279,6 +281,17 @@ class ContactReadout:
                                           previous=self.contacts)
         self.compute_forces()
 
+    @property
+    def mu(self) -> float:
+        """The Coulomb coefficient in force now (:meth:`set_friction`)."""
+        return float(self.contacts.params.mu) if self.contact_model is not None else 0.0
+
+    @property
+    def friction(self) -> float:
+        """Deprecated since 0.5.0: :attr:`mu`."""
+        warnings.warn("Simulation.friction is deprecated since 0.5.0: use .mu", DeprecationWarning, stacklevel=2)
+        return self.mu
+
     def contact_stats(self) -> ContactStats:
         """At the last force evaluation: touching pairs, largest overlap [m], sum of normal forces [N], sliding pairs, candidate pairs."""
         return ContactStats.of(self.contacts)
@@ -380,8 +393,7 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics):
         """Change the Coulomb coefficient from the next step on (the paper: 0 while stretching, then 0.4)."""
         if self.contact_model is None:
             raise ValueError("this simulation has no contact model")
-        if not (mu >= 0 and math.isfinite(mu)):
-            raise ValueError(f"friction must be >= 0, got {mu!r}")
+        check_friction_coefficient(mu)
         self.contacts = self.contacts._replace(params=self.contacts.params._replace(mu=float(mu)))
 
     def set_drag(self, per_s: float) -> None:
@@ -417,10 +429,6 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics):
             if self._shift_drift > 0.5 * self.contacts.params.skin:
                 self.contacts.status[STALE] = 1
                 self._shift_drift = 0.0
-
-    @property
-    def friction(self) -> float:
-        return float(self.contacts.params.mu) if self.contact_model is not None else 0.0
 
     def fresh_contacts(self) -> Contacts:
         """The contact buffers with a candidate list valid at the current positions."""

@@ -86,7 +86,7 @@ class StitchRun:
         self.lx, geometry = self._build_geometry()
         self.cell: PeriodicStitch = build_periodic_stitch(geometry)
         contact = ContactModel.for_knit(m, settings.contact_force_f0, settings.overlap_fraction,
-                                        sagitta_radius_d=settings.sagitta_radius_d, friction=0.0)
+                                        sagitta_radius_d=settings.sagitta_radius_d, mu=0.0)
         self.sim = Simulation(self.cell.rods, contact=contact)
         self.result = StitchResult(settings)
 

@@ -177,7 +177,7 @@ def test_bad_contact_parameters_are_refused():
     with pytest.raises(ValueError, match="stiffness"):
         ContactModel(stiffness=-1)
     with pytest.raises(ValueError, match="friction"):
-        ContactModel(stiffness=1, friction=-0.1)
+        ContactModel(stiffness=1, mu=-0.1)
     sim = kl.Simulation(pressed_weave(), contact=ContactModel(stiffness=1e3))
     with pytest.raises(ValueError, match="friction"):
         sim.set_friction(float("nan"))
@@ -240,7 +240,7 @@ def test_contact_forces_are_bit_for_bit_the_same_on_one_and_two_threads():
     finals = []
     for threads in (1, 2):
         with numba_threads(threads):
-            sim = kl.Simulation(rods.copy(), contact=ContactModel(stiffness=1e3, friction=0.02))
+            sim = kl.Simulation(rods.copy(), contact=ContactModel(stiffness=1e3, mu=0.02))
             assert sim.contacts.threads[0] == threads
             sliding = 0
             for _ in range(30):
@@ -342,7 +342,7 @@ def test_per_contact_friction_is_at_the_coulomb_limit_where_a_pair_slides():
     for x0 in (-3 * D, 3 * D):
         crossed = scene.add_yarn(np.column_stack([np.full_like(t, x0), t, np.zeros_like(t)]))
         scene.hold(crossed, range(t.size))
-    sim = kl.Simulation(scene.build(), contact=ContactModel(stiffness=1e3, friction=mu), dt_s=1e-6)
+    sim = kl.Simulation(scene.build(), contact=ContactModel(stiffness=1e3, mu=mu), dt_s=1e-6)
     sim.step(100)  # 100 um of drag (all held: no stability limit), beyond the tangential spring's stick length
     pairs = sim.contact_pairs()
     fn, ft = np.linalg.norm(pairs.normal_N, axis=1), np.linalg.norm(pairs.friction_N, axis=1)
@@ -363,7 +363,7 @@ def test_skipping_pairs_whose_stored_gap_rules_them_out_changes_no_bit():
         rods = pressed_weave()
         rng = np.random.default_rng(3)
         rods.state.v[:] = rng.normal(scale=0.2, size=rods.state.v.shape)  # m/s: pairs close and open
-        sim = kl.Simulation(rods, contact=ContactModel(stiffness=1e3, friction=0.4))
+        sim = kl.Simulation(rods, contact=ContactModel(stiffness=1e3, mu=0.4))
         known = 0
         for _ in range(400):
             if forget_gaps:

@@ -67,7 +67,7 @@ def test_a_node_pressed_on_a_plane_sticks_below_mu_n_and_slides_above_it_at_the_
     for T, sliding in ((0.5 * mu * N, False), (2 * mu * N, True)):
         scene = kl.Scene(kl.NYLON)
         scene.add_yarn(np.column_stack([s, 0 * s, np.full_like(s, 0.5 * d - N / 100.0)]))
-        sim = kl.Simulation(scene.build(), obstacles=[kl.Plane(stiffness=100.0, friction=mu)])
+        sim = kl.Simulation(scene.build(), obstacles=[kl.Plane(stiffness=100.0, mu=mu)])
         sim.set_external_forces((T, 0.0, -N))
         sim.run(2e-3)
         drift = sim.positions_m()[:, 0] - s

@@ -30,7 +30,7 @@ def test_a_moving_plate_carries_a_yarn_resting_on_it_and_says_where_it_is():
     (lambda: kl.Plane(stiffness=-1.0), "stiffness"),
     (lambda: kl.Plane(stiffness=1.0, normal=(0, 0, 0)), "normal"),
     (lambda: kl.Cylinder(stiffness=1.0, radius_m=0.0), "radius_m"),
-    (lambda: kl.Cylinder(stiffness=1.0, friction=-0.1), "friction"),
+    (lambda: kl.Cylinder(stiffness=1.0, mu=-0.1), "friction"),
     (lambda: kl.Plane(stiffness=1.0, velocity_m_s=(1.0, 2.0)), "velocity_m_s"),
 ])
 def test_a_bad_obstacle_is_refused_naming_what_is_wrong(make, says):

@@ -21,7 +21,7 @@ def straight_rows(rows: int = 2, columns: int = 1, spacing: float = 5.0, **kwarg
     pts = np.zeros((k, 3))
     pts[:, 0] = np.arange(k) * REST / (k * columns)
     stack = build_periodic_rows(pts, REST / columns, spacing, rows, columns, M, **kwargs)
-    sim = kl.Simulation(stack.rods, contact=ContactModel.for_knit(M, 20.0, 0.05, friction=0.0))
+    sim = kl.Simulation(stack.rods, contact=ContactModel.for_knit(M, 20.0, 0.05, mu=0.0))
     return stack, sim
 
 
@@ -74,7 +74,7 @@ def test_touching_pairs_of_edge_sets_count_as_those_of_yarns():
     t = np.linspace(-1e-3, 1e-3, 11)[:, None]
     a = scene.add_yarn(np.hstack([t, 0 * t, 0 * t]))
     b = scene.add_yarn(np.hstack([0 * t, t, 0 * t + 0.9 * M.diameter]))
-    sim = kl.Simulation(scene.build(), contact=ContactModel.for_knit(M, 20.0, 0.05, friction=0.0))
+    sim = kl.Simulation(scene.build(), contact=ContactModel.for_knit(M, 20.0, 0.05, mu=0.0))
     edge_yarn = sim.model.node_yarn[sim.model.edge_a]
     by_yarn = sim.touching_pairs(a, b)
     assert by_yarn >= 1

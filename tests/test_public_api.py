@@ -115,3 +115,37 @@ if __name__ == "__main__" and "--write" in sys.argv:
     RECORD.write_text("# knitlad's public surface (tests/test_public_api.py): names, and parameters of callables\n"
                       + "\n".join(public_surface()) + "\n")
     print(f"wrote {RECORD}")
+
+
+def test_the_friction_coefficient_renamed_mu_keeps_its_old_name_with_a_warning():
+    """0.5.0 named the Coulomb coefficient mu everywhere (config, contact, obstacles, simulation, kernel);
+    the old name ``friction`` still works, for at least a version, and says so."""
+    import warnings
+
+    import knitlad as kl
+
+    with pytest.warns(DeprecationWarning, match="mu="):
+        model = kl.ContactModel(stiffness=1e3, friction=0.3)
+    with pytest.warns(DeprecationWarning, match="mu="):
+        plane = kl.Plane(stiffness=1.0, friction=0.2)
+    assert model.mu == 0.3 and plane.mu == 0.2
+    with pytest.warns(DeprecationWarning, match=r"\.mu"):
+        assert model.friction == 0.3
+    with pytest.raises(TypeError, match="both"), pytest.warns(DeprecationWarning):
+        kl.Cylinder(stiffness=1.0, mu=0.1, friction=0.2)
+    sim = kl.Simulation(_two_node_rods(), contact=model)
+    with pytest.warns(DeprecationWarning, match=r"\.mu"):
+        assert sim.friction == sim.mu == 0.3
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        kl.ContactModel(stiffness=1e3, mu=0.3)  # the new name: no warning
+
+
+def _two_node_rods():
+    import numpy as np
+
+    import knitlad as kl
+
+    scene = kl.Scene()
+    scene.add_yarn(np.array([[0.0, 0.0, 0.0], [1e-3, 0.0, 0.0], [2e-3, 0.0, 0.0]]))
+    return scene.build()

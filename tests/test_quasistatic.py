@@ -22,7 +22,7 @@ def draped(ratio: float, mu: float = 0.3, load: float = 0.02, radius=3e-3, leg=6
     scene = kl.Scene(kl.NYLON)
     scene.add_yarn(points)
     sim = kl.Simulation(scene.build(), implicit_axial=True,
-                        obstacles=[kl.Cylinder(stiffness=2e3, friction=mu, radius_m=radius, axis=(0, 0, 1))])
+                        obstacles=[kl.Cylinder(stiffness=2e3, mu=mu, radius_m=radius, axis=(0, 0, 1))])
     forces = np.zeros((len(points), 3))
     forces[0, 1], forces[-1, 1] = -ratio * load, -load
     sim.set_external_forces(forces)
@@ -79,7 +79,7 @@ def small_knit():
 
 
 def pulled_course(knit, mu=0.4):
-    sim = kl.Simulation(knit.knit.rods.copy(), contact=kl.ContactModel.for_knit(kl.NYLON, friction=mu))
+    sim = kl.Simulation(knit.knit.rods.copy(), contact=kl.ContactModel.for_knit(kl.NYLON, mu=mu))
     end = sim.nodes_of(knit.knit.courses[2], [-2, -1])
     sim.release(end[:1])
     sim.relax(force_tol_N=1e-8, max_steps=400_000)

@@ -275,7 +275,7 @@ def test_the_contact_pairs_of_one_s_own_scene_open_in_paraview_as_points_with_th
     scene.hold(dragged, range(t.size), velocity=(1.0, 0.0, 0.0))
     for x0 in (-3 * d, 3 * d):
         scene.hold(scene.add_yarn(np.column_stack([np.full_like(t, x0), t, 0 * t])), range(t.size))
-    sim = kl.Simulation(scene.build(), contact=kl.ContactModel(stiffness=1e3, friction=0.4), dt_s=1e-6)
+    sim = kl.Simulation(scene.build(), contact=kl.ContactModel(stiffness=1e3, mu=0.4), dt_s=1e-6)
     recorder = kl.TrajectoryRecorder()
     sim.run(4e-5, observe=recorder, observe_every_s=1e-5)
     path = kl.write_trajectory(tmp_path / "slide.h5", recorder)

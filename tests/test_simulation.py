@@ -264,7 +264,7 @@ def test_switching_thread_counts_mid_run_changes_no_bit():
     def run(threads: int, probe_often: bool):
         rods = plain_weave(4, spacing=4 * kl.NYLON.diameter, nodes_per_spacing=6,
                            amplitude=0.4 * kl.NYLON.diameter).build()
-        sim = kl.Simulation(rods, contact=ContactModel(stiffness=1e3, friction=0.4), guard_every=50)
+        sim = kl.Simulation(rods, contact=ContactModel(stiffness=1e3, mu=0.4), guard_every=50)
         if probe_often:
             sim.threads.FIRST_INTERVAL = sim.threads.until_probe = sim.threads.LAST_INTERVAL = 1
             sim.threads.cpus = ()  # tries two threads whatever the machine's load

@@ -56,7 +56,7 @@ def main() -> None:
     except Exception:
         pass
     d = kl.NYLON.diameter
-    model = ContactModel.for_force(kl.NYLON.f0, d, overlap_fraction=0.05, friction=0.4)
+    model = ContactModel.for_force(kl.NYLON.f0, d, overlap_fraction=0.05, mu=0.4)
     print(f"{'yarns':>6s} {'segments':>9s} {'touching':>9s} {'step [us]':>10s} {'us/seg':>8s} "
           f"{'rebuild [us]':>12s} {'node-steps/s contact':>21s} {'no contact':>11s}")
     rows = []

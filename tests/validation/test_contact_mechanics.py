@@ -34,7 +34,7 @@ def slider(mu: float, pull: float, rail_edge_d: float = 0.5, counting: str = "un
     for i in range(n):
         scene.apply_force(s, i, (pull / n, 0.0, -PRESS / n))
     rods = scene.build()
-    model = ContactModel.for_force(PRESS, D, overlap_fraction=OVERLAP, friction=mu, damping_ratio=0.5,
+    model = ContactModel.for_force(PRESS, D, overlap_fraction=OVERLAP, mu=mu, damping_ratio=0.5,
                                    counting=counting)
     sim = kl.Simulation(rods, contact=model)
     return sim, slice(n_rail, n_rail + n)

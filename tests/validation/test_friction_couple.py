@@ -36,7 +36,7 @@ def crossing(spin_rad_s: float, axis_velocity=(0.0, 0.0, 0.0)):
     rods.state.v[:] = rods.model.v_prescribed  # moving from the first force evaluation on
     edges_a = np.flatnonzero(rods.model.node_yarn[rods.model.edge_a] == a)
     rods.state.omega[edges_a] = spin_rad_s * units.TIME
-    sim = kl.Simulation(rods, contact=ContactModel(stiffness=1e3, friction=MU))
+    sim = kl.Simulation(rods, contact=ContactModel(stiffness=1e3, mu=MU))
     return sim, edges_a
 
 

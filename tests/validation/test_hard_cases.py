@@ -91,7 +91,7 @@ def undamped_weave_energy(safety: float, counting: str = "union") -> np.ndarray:
     anywhere, every 0.05 ms over 0.4 ms. The crossings start 3 % of d into each other."""
     d = kl.NYLON.diameter
     state = plain_weave(4, 1.0e-3, nodes_per_spacing=8, amplitude=0.47 * d).build(stretch_damping_ratio=0.0)
-    model = ContactModel.for_force(20 * kl.NYLON.f0, d, friction=0.0, damping_ratio=0.0, tangential_damping_ratio=0.0,
+    model = ContactModel.for_force(20 * kl.NYLON.f0, d, mu=0.0, damping_ratio=0.0, tangential_damping_ratio=0.0,
                                    counting=counting)
     with numba_threads(1):
         total, _ = energy_history(kl.Simulation(state, contact=model, safety=safety), 8, 0.05e-3)

@@ -1,0 +1,35 @@
+"""Renamed public names keep working for at least one version, with a DeprecationWarning (CHANGELOG.md)."""
+
+from __future__ import annotations
+
+import functools
+import warnings
+
+
+def renamed_field(old: str, new: str, since: str):
+    """Class decorator: the constructor keyword and the attribute ``old`` of a dataclass still work, as
+    ``new`` (renamed in version ``since``), and say so once per call site."""
+
+    def decorate(cls):
+        init = cls.__init__
+
+        @functools.wraps(init)
+        def __init__(self, *args, **kwargs):
+            if old in kwargs:
+                warnings.warn(f"{cls.__name__}({old}=...) is deprecated since {since}: use {new}=",
+                              DeprecationWarning, stacklevel=2)
+                if new in kwargs:
+                    raise TypeError(f"{cls.__name__}: give {new}, not both {new} and {old}")
+                kwargs[new] = kwargs.pop(old)
+            init(self, *args, **kwargs)
+
+        def getter(self):
+            warnings.warn(f"{cls.__name__}.{old} is deprecated since {since}: use .{new}", DeprecationWarning,
+                          stacklevel=2)
+            return getattr(self, new)
+
+        cls.__init__ = __init__
+        setattr(cls, old, property(getter, doc=f"Deprecated since {since}: :attr:`{new}`."))
+        return cls
+
+    return decorate
