@@ -283,7 +283,7 @@ def cut(
         f"{n_x} x {n_y} jersey, mu = {cfg.mu}, {cfg.resolution} nodes/stitch ({result.nodes} nodes)\n"
         f"  f_x^ini     = {result.fx_ini:.3f}\n"
         f"  f_x^fin     = {result.fx_fin:.3f}{_fin_caveat(result)}\n    per course: {result.fx_fin_crossed:.3f} crossed by the ladder, {result.fx_fin_intact:.3f} not\n"
-        f"  n_lad/n_y   = {result.n_lad_over_ny:.3f}  ({result.n_lad} cells)\n"
+        f"  n_lad/n_y   = {result.n_lad_over_ny:.3f}  ({result.n_lad} cells; {_loop_line(result)})\n"
         f"  v_lad/c_b   = {result.v_lad_over_cb:.3f}  {_velocity_caveat(result)}\n"
         f"  l_x/l0, l_y/l0 = {result.lx_over_l0:.3f}, {result.ly_over_l0:.3f}\n"
         f"  stop: {result.stop_reason}\n"
@@ -345,7 +345,8 @@ def cycle(
                    f"predicted n_lad/n_y = delta l/(l0 - l_x) = {result.predicted_damage:.3f}")
     if ladder is not None:
         typer.echo(f"  cut: n_lad/n_y = {ladder.n_lad_over_ny:.3f} ({ladder.n_lad} cells), f_x^fin = {ladder.fx_fin:.3f} "
-                   f"(crossed courses {ladder.fx_fin_crossed:.3f}), stop: {ladder.stop_reason}")
+                   f"(crossed courses {ladder.fx_fin_crossed:.3f}), stop: {ladder.stop_reason}\n"
+                   f"  {_loop_line(ladder)}")
     typer.echo(f"  wall time {result.wall_s:.1f} s; wrote {h5}, {csv.name}, {png.name}")
 
 
@@ -736,6 +737,17 @@ def _say_if_compiling() -> None:
 
 
 MIN_FIT_STITCHES = 5  # a front fitted over fewer stitches is a rough figure
+
+
+def _loop_line(result) -> str:
+    """The ladders the cut started and the freed loops of the paper's Fig. 2d behind them."""
+    r = result.loop_record()
+    line = f"ladders: {r['ladders_up']} up, {r['ladders_down']} down"
+    if r["ladders_down"]:
+        line += f"; loops (2)/(3) from {r['first_down_ms']:.2f} ms"
+    if r["ladders_up"] > 1:
+        line += f"; (4)/(5) from {r['second_up_ms']:.2f} ms"
+    return line
 
 
 def _fin_caveat(result) -> str:

@@ -198,3 +198,30 @@ def node_strain_and_curvature(x: np.ndarray, edges: np.ndarray, rest: np.ndarray
     angle = np.arccos(np.clip(np.einsum("ij,ij->i", t0, t1), -1.0, 1.0))
     curvature[edges[k, 1]] = angle / (0.5 * (length[k] + length[k + 1]))
     return strain, curvature
+
+
+def ladders_started(undone_at: np.ndarray, cut_row: int) -> list[dict]:
+    """The ladders a cut started, read from the time each cell came undone (``undone_at`` (n_rows, n_cols)
+    [s], NaN where it never did; rows bottom to top, the cut's row ``cut_row``).
+
+    A ladder is a column's undone cells above the cut row (upward, as :func:`ladder_front` counts) or below
+    it (downward). Each gets ``column``, ``direction`` (+1 up, -1 down), ``start_s`` (its first cell),
+    ``cells`` and ``loop``, the freed loop of the paper's Fig. 2d that started it: the first upward ladder
+    is loop (1), a downward ladder loop (2) or (3), a later upward one loop (4) or (5). Ordered by start.
+    """
+    ladders = []
+    for column in range(undone_at.shape[1]):
+        for direction, rows in ((1, slice(cut_row + 1, None)), (-1, slice(0, cut_row))):
+            times = undone_at[rows, column]
+            done = times[np.isfinite(times)]
+            if done.size:
+                ladders.append({"column": column, "direction": direction, "start_s": float(done.min()),
+                                "cells": int(done.size)})
+    ladders.sort(key=lambda lad: lad["start_s"])
+    first_up = True
+    for lad in ladders:
+        if lad["direction"] < 0:
+            lad["loop"] = "2/3"
+        else:
+            lad["loop"], first_up = ("1" if first_up else "4/5"), False
+    return ladders

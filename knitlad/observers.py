@@ -81,6 +81,19 @@ class FrontRecorder:
         return tuple(np.array(c) for c in self._cells)
 
 
+class CellTimes:
+    """When each cell came undone (NaN: not yet): the record of which freed loops started ladders, and when
+    (:func:`knitlad.measure.ladders_started`)."""
+
+    def __init__(self) -> None:
+        self.undone_at: np.ndarray | None = None
+
+    def observe(self, t: float, run, undone: np.ndarray) -> None:
+        if self.undone_at is None:
+            self.undone_at = np.full(undone.shape, np.nan)
+        self.undone_at[undone & np.isnan(self.undone_at)] = t
+
+
 class TensionRecorder:
     """f_x at every observation, and each free course's own (``fx_courses``)."""
 

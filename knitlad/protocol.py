@@ -37,10 +37,18 @@ import numpy as np
 
 from knitlad import units
 from knitlad.contact import ContactModel, Counting, contact_time_step
-from knitlad.measure import cell_overlap, course_tensions, laddered_cells, periodicities, tension_per_thread
+from knitlad.measure import (
+    cell_overlap,
+    course_tensions,
+    ladders_started,
+    laddered_cells,
+    periodicities,
+    tension_per_thread,
+)
 from knitlad.observers import (
     AUTO_FRAMES,
     Arrested,
+    CellTimes,
     EdgeReached,
     FrameRecorder,
     FrontRecorder,
@@ -631,6 +639,7 @@ class LadderTrace:
     frames: FrameRecorder  # positions, velocities and undone cells at the frame times
     baseline: np.ndarray
     final_laddered: np.ndarray  # cells undone after the cut
+    undone_at: np.ndarray  # (n_y, n_x) when each cell came undone after the cut [s], NaN: never
     stop_reason: str
     reached_edge: bool
     steps: int
@@ -681,7 +690,7 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
     d = run.dynamics
     columns = (run.cut_column - 1, run.cut_column)
     guard = OverlapGuard(run.knit.settings.material.diameter)
-    fronts, tension = FrontRecorder(columns, run.cut_row), TensionRecorder()
+    fronts, tension, cell_times = FrontRecorder(columns, run.cut_row), TensionRecorder(), CellTimes()
     frames = FrameRecorder(frame_interval(run))
     rules = list(stop_rules) if stop_rules is not None else (
         [EdgeReached()] * d.stop_at_edge + [Arrested(d.arrest_s), TimeLimit(d.max_time_s)])
@@ -695,7 +704,7 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
         guard.check(run.sim, f"at t = {t * 1e3:.3f} ms after the cut")
         undone |= run.laddered() & ~run.baseline  # an undone cell does not knit itself again
         times.append(t)
-        for obs in (fronts, tension, frames, *observers):
+        for obs in (fronts, tension, cell_times, frames, *observers):
             obs.observe(t, run, undone)
         if progress:  # the ladder's reach (it stops at an edge course) or the time limit, whichever is further
             progress("propagate", max(min(t / d.max_time_s, 1.0), fronts.reach(run.knit.settings.n_y)))
@@ -707,7 +716,7 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
     return LadderTrace(
         knit=run.knit, dynamics=d, cut_row=run.cut_row, columns=columns, times_s=np.array(times),
         fx=np.array(tension.fx), fx_courses=np.array(tension.fx_courses), fronts=fronts.extents(), column_cells=fronts.cells(), frames=frames,
-        baseline=run.baseline, final_laddered=undone, stop_reason=reason,
+        baseline=run.baseline, final_laddered=undone, undone_at=cell_times.undone_at, stop_reason=reason,
         reached_edge=EdgeReached.reached(undone), steps=run.sim.steps,
         yarn_start=run.sim.model.yarn_start.copy(), peak_overlap_over_d=guard.peak_over_d,
         edges=np.column_stack([run.sim.model.edge_a, run.sim.model.edge_b]),
@@ -754,6 +763,8 @@ class LadderResult:
     stretch_tension: np.ndarray | None = None  # (k, 3) FIRE steps, box l_x/l0, f_x of the stretch's readings
     final_laddered: np.ndarray | None = None
     baseline_laddered: np.ndarray | None = None
+    undone_at: np.ndarray | None = None  # (n_y, n_x) when each cell came undone [s], NaN: never
+    cut_row: int = -1
     yarn_start: np.ndarray | None = None  # topology of the frames
     nodes: int = 0
     steps: int = 0
@@ -768,13 +779,30 @@ class LadderResult:
         skip = {"settings", "wall_s", "times_s", "front_up", "front_down", "fx_series", "fx_course_series",
                 "column_history", "frames",
                 "frame_times_s", "final_laddered", "baseline_laddered", "yarn_start", "frame_velocities",
-                "frame_laddered", "frame_contact", "stretch_tension", "node_course", "cut_node", "cell_centres", "edges"}
+                "frame_laddered", "frame_contact", "stretch_tension", "node_course", "cut_node", "cell_centres", "edges",
+                "undone_at"}
         out = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in skip}
         out["v_fit_stitches"] = list(self.v_fit_stitches)
         out.update(mu=d.mu, twist=d.twist, drag_per_s=d.drag_per_s, natural_curvature=self.settings.stretch.natural_curvature,
                    wall_s=float(sum(self.wall_s.values())))
         out.update({f"wall_{k}_s": v for k, v in self.wall_s.items()})
+        out.update(self.loop_record())
         return out
+
+    def ladders(self) -> list[dict]:
+        """The ladders the cut started, by column and direction, and the freed loop of Fig. 2d behind each
+        (:func:`knitlad.measure.ladders_started`)."""
+        return [] if self.undone_at is None else ladders_started(self.undone_at, self.cut_row)
+
+    def loop_record(self) -> dict:
+        """Summary of :meth:`ladders`: ladders up and down, when the first downward (loops (2)/(3)) and the
+        second upward (loops (4)/(5)) started [ms after the cut; NaN: never]."""
+        ladders = self.ladders()
+        start = {loop: next((lad["start_s"] * 1e3 for lad in ladders if lad["loop"] == loop), math.nan)
+                 for loop in ("2/3", "4/5")}
+        return {"ladders_up": sum(lad["direction"] > 0 for lad in ladders),
+                "ladders_down": sum(lad["direction"] < 0 for lad in ladders),
+                "first_down_ms": start["2/3"], "second_up_ms": start["4/5"]}
 
 
 def analyse(trace: LadderTrace) -> LadderResult:
@@ -813,6 +841,7 @@ def analyse(trace: LadderTrace) -> LadderResult:
         frame_laddered=trace.frames.laddered, frame_contact=trace.frames.contact, node_course=knit.knit.node_course(), cut_node=trace.cut_node,
         cell_centres=trace.cell_centres, edges=trace.edges, stretch_tension=knit.tension_history,
         final_laddered=trace.final_laddered, baseline_laddered=trace.baseline, yarn_start=trace.yarn_start,
+        undone_at=trace.undone_at, cut_row=trace.cut_row,
         nodes=knit.knit.rods.model.n_nodes, steps=trace.steps, relax_steps=knit.relax_steps,
         fx_within_tolerance=knit.fx_within_tolerance, box_lx_over_l0=knit.box_lx,
         peak_overlap_over_d=max(knit.peak_overlap_over_d, trace.peak_overlap_over_d),

@@ -9,6 +9,7 @@ import knitlad as kl
 from knitlad.measure import (
     cell_overlap,
     ladder_front,
+    ladders_started,
     laddered_cells,
     laddering_column,
     laddering_velocity,
@@ -129,3 +130,19 @@ def test_each_course_carries_its_own_tension_and_their_mean_is_the_knit_s():
         reactions[right[course], 0] = pull * f0 * np.array([0.9, 0.1])
     np.testing.assert_allclose(course_tensions(reactions, left, right, f0), [2.0, 4.0, 6.0])
     assert tension_per_thread(reactions, left, right, f0) == pytest.approx(4.0)
+
+
+def test_the_loop_record_names_each_ladder_by_the_freed_loop_that_started_it():
+    """A cut at row 4 between columns 2 and 3: column 2 ladders up first (loop 1), then both columns
+    down (loops 2 and 3), then column 3 up (loop 4 or 5); cells of the cut row start no ladder."""
+    at = np.full((9, 6), np.nan)
+    at[5:8, 2] = [1e-4, 2e-4, 3e-4]           # up in column 2 from 0.1 ms
+    at[4, 2] = 0.5e-4                           # the cut row's own cell
+    at[2:4, 2] = [6e-4, 5e-4]                   # down in column 2 from 0.5 ms
+    at[1:4, 3] = [9e-4, 8e-4, 7e-4]             # down in column 3 from 0.7 ms
+    at[5, 3] = 1.2e-3                           # up in column 3 at 1.2 ms
+    ladders = ladders_started(at, cut_row=4)
+    assert [(lad["column"], lad["direction"], lad["loop"], lad["cells"]) for lad in ladders] == [
+        (2, 1, "1", 3), (2, -1, "2/3", 2), (3, -1, "2/3", 3), (3, 1, "4/5", 1)]
+    assert [lad["start_s"] for lad in ladders] == pytest.approx([1e-4, 5e-4, 7e-4, 1.2e-3])
+    assert ladders_started(np.full((9, 6), np.nan), cut_row=4) == []

@@ -210,6 +210,9 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
             checksummed_dataset(g, "laddering_column_cells", result.column_history)
         if result.final_laddered is not None:
             checksummed_dataset(f.require_group("final"), "laddered", result.final_laddered)
+        if result.undone_at is not None:
+            checksummed_dataset(f.require_group("final"), "undone_at", result.undone_at)
+            f["final"].attrs["cut_row"] = result.cut_row
         if result.stretch_tension is not None:
             g = f.require_group("stretch")
             for k, name in enumerate(("relax_steps", "box_lx_over_l0", "fx")):
@@ -233,7 +236,7 @@ RUN_UNITS = {
     "frames/time": "s", "fields/axial_strain": "1", "fields/curvature": "1/m", "series/time": "s",
     "series/front_up": "stitches", "series/front_down": "stitches", "series/fx": "f0", "series/fx_courses": "f0",
     "series/laddering_column_cells": "1", "stretch/relax_steps": "1", "stretch/box_lx_over_l0": "l0",
-    "stretch/fx": "f0", "final/laddered": "1", "cells/centres": "m", "topology/yarn_start": "1",
+    "stretch/fx": "f0", "final/laddered": "1", "final/undone_at": "s", "cells/centres": "m", "topology/yarn_start": "1",
     "topology/edges": "1", "topology/node_course": "1", "contacts/offsets": "1", "contacts/points": "m",
     "contacts/normal_force": "N", "contacts/friction_force": "N", "contacts/sliding": "1",
     "cycle/readings": "cycle, leg (1 loading, 0 hold, -1 unloading), s, l0 (the box's l_x), f0 (f_x)",
