@@ -21,7 +21,9 @@ from knitlad.config import CutConfig, CycleConfig, LoopConfig, StitchConfig
 
 
 @dataclass(frozen=True)
-class Scene:
+class SweepScene:
+    """A scene a sweep can run (``scene:`` in a sweep config): not :class:`knitlad.state.Scene`, the rod builder."""
+
     config: type[BaseModel]
     run: Callable  # (config, output options, sweep folder, progress) -> (summary, write)
     summary_keys: tuple[str, ...]  # the results a sweep's summary table shows, in order
@@ -124,23 +126,23 @@ def run_stitch_job(cfg: StitchConfig, output, folder: Path | None = None, progre
     return _attributes_only(StitchRun(cfg.settings()).run())
 
 
-SCENES: dict[str, Scene] = {
-    "ladder": Scene(CutConfig, run_ladder_job, (
+SCENES: dict[str, SweepScene] = {
+    "ladder": SweepScene(CutConfig, run_ladder_job, (
         "fx_ini", "fx_fin", "fx_fin_crossed", "fx_fin_intact", "n_lad", "n_lad_over_ny", "v_lad_over_cb", "natural_curvature", "lx_over_l0", "ly_over_l0",
         "ladders_up", "ladders_down", "first_down_ms", "second_up_ms",
         "box_lx_over_l0", "fx_within_tolerance", "peak_overlap_over_d", "reached_edge", "stop_reason",
         "laddering_column", "v_fit_stitches", "nodes", "steps", "relax_steps", "stretch_reused", "wall_s",
         "wall_stretch_s", "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment", stretch_of),
-    "cycle": Scene(CycleConfig, run_cycle_job, (
+    "cycle": SweepScene(CycleConfig, run_cycle_job, (
         "fx_ini", "lx_over_l0", "ly_over_l0", "lx_max", "fx_thr", "delta_l_over_l0", "predicted_damage",
         "cut_n_lad_over_ny", "cut_fx_fin", "cut_fx_fin_crossed", "cut_reached_edge", "cut_ladders_up",
         "cut_ladders_down", "cut_second_up_ms", "hold_converged", "wall_s",
         "job_wall_s"), "`knitlad cycle`: protocol B, the damage prediction's loading", stretch_of),
-    "loop": Scene(LoopConfig, run_loop_job, (
+    "loop": SweepScene(LoopConfig, run_loop_job, (
         "tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before", "steps",
         "nodes", "lx_over_l0", "lx_end_over_l0", "climb_over_ly", "wall_s", "job_wall_s"),
         "`knitlad loop`: the single-loop model"),
-    "stitch": Scene(StitchConfig, run_stitch_job, (
+    "stitch": SweepScene(StitchConfig, run_stitch_job, (
         "fx", "fy", "converged", "max_overlap_over_d", "relax_steps", "wall_s", "job_wall_s"),
         "`knitlad stitch`: the periodised stitch"),
 }
