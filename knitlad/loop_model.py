@@ -29,8 +29,11 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from knitlad.contact import ContactModel
+from knitlad.observers import LetGo, TimeLimit
+from knitlad.runloop import run_until
 from knitlad.scenes.jersey import Jersey
 from knitlad.scenes.loop import LoopScene, build_single_loop
 from knitlad.simulation import Simulation, numba_threads
@@ -108,6 +111,12 @@ class LoopResult:
         }
 
 
+class LoopReading(NamedTuple):
+    """What a single loop's stop rule reads: is the loop still held (None: not read this time)."""
+
+    held: bool | None
+
+
 class LoopRun:
     """Drives one single-loop run; see the module docstring."""
 
@@ -150,28 +159,24 @@ class LoopRun:
         s, start = self.sim.state, self.sim.model.yarn_start
         loop = slice(int(start[sc.loop]), int(start[sc.loop + 1]))
         upper = slice(int(start[sc.upper]), int(start[sc.upper + 1]))
-        t_start = self.sim.time_s
         n_obs = max(1, int(round(self.s.observe_every_s / self.sim.dt_s)))
         every_topology = max(1, int(round(self.s.topology_every_s / self.s.observe_every_s)))
-        last_touch, unthreaded_since, k = 0.0, None, 0
-        while self.sim.time_s - t_start < self.s.max_time_s:
-            self.sim.step(n_obs)
-            k += 1
-            t = self.sim.time_s - t_start
+        seen = {"last_touch": 0.0, "readings": 0}
+
+        def observe(t: float) -> LoopReading:
+            seen["readings"] += 1
             if self.sim.touching_pairs(sc.loop, sc.upper) > 0:
-                last_touch = t
-            if k % every_topology == 0:
-                threaded = piercings(s.x[loop], s.x[upper])[0] > 0
-                if threaded:
-                    unthreaded_since = None
-                elif unthreaded_since is None:
-                    unthreaded_since = t
-                elif t - unthreaded_since >= self.s.confirm_s:
-                    res.released = True
-                    break
-        if res.released:
-            res.tau_s = unthreaded_since - 0.5 * self.s.topology_every_s
-            res.tau_contact_s = last_touch + 0.5 * self.s.observe_every_s
+                seen["last_touch"] = t
+            if seen["readings"] % every_topology:
+                return LoopReading(None)
+            return LoopReading(bool(piercings(s.x[loop], s.x[upper])[0] > 0))  # still threaded
+
+        let_go = LetGo(self.s.confirm_s, "unthreaded")
+        _, rule, _ = run_until(self.sim, n_obs, observe, [let_go, TimeLimit(self.s.max_time_s)])
+        if rule is let_go:
+            res.released = True
+            res.tau_s = let_go.since - 0.5 * self.s.topology_every_s
+            res.tau_contact_s = seen["last_touch"] + 0.5 * self.s.observe_every_s
             l_y = self.s.ly_over_l0 * self.s.material.stitch_length
             res.v_lad_over_cb = l_y / res.tau_s / self.s.material.c_b
         res.steps = self.sim.steps

@@ -206,11 +206,34 @@ class Arrested:
         return f"no cell changed for {wait * 1e3:.1f} ms" if t - self._since >= wait else None
 
 
+class LetGo:
+    """A single loop has let go: every reading for ``confirm_s`` said it is no longer held (the reading's
+    ``held``: True, False, or None where it was not read). ``since``: the first reading of the run of
+    "not held" that fired."""
+
+    def __init__(self, confirm_s: float, what: str) -> None:
+        self.confirm_s, self.what = confirm_s, what
+        self.since: float | None = None
+
+    def check(self, t: float, reading) -> str | None:
+        if reading.held is None:
+            return None
+        if reading.held:
+            self.since = None
+        elif self.since is None:
+            self.since = t
+        elif t - self.since >= self.confirm_s:
+            return f"the loop let go ({self.what} for {self.confirm_s * 1e3:.3f} ms)"
+        return None
+
+
 class TimeLimit:
+    """``max_time_s`` has passed since the run began (any reading)."""
+
     def __init__(self, max_time_s: float) -> None:
         self.max_time_s = max_time_s
 
-    def check(self, t: float, undone: np.ndarray) -> str | None:
+    def check(self, t: float, reading=None) -> str | None:
         return "max_time_s reached" if t >= self.max_time_s else None
 
 

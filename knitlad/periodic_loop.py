@@ -35,7 +35,9 @@ import numpy as np
 
 from knitlad import units
 from knitlad.contact import ContactModel
-from knitlad.loop_model import LoopResult, check_tension_and_friction
+from knitlad.loop_model import LoopReading, LoopResult, check_tension_and_friction
+from knitlad.observers import LetGo, TimeLimit
+from knitlad.runloop import run_until
 from knitlad.scenes.rows import PeriodicRows, build_periodic_rows
 from knitlad.simulation import Simulation, numba_threads
 from knitlad.stitch_model import StitchRun, StitchSettings, cell_energy
@@ -264,21 +266,21 @@ class PeriodicLoopRun:
         if followed:
             self.box.set_response(s.box_response_s)
         n_obs = 1 if followed else max(1, int(round(s.observe_every_s / sim.dt_s)))
-        t_start, last_touch, apart_since = sim.time_s, 0.0, None
-        while sim.time_s - t_start < s.max_time_s:
-            sim.step(n_obs)
-            if followed:
+        seen = {"last_touch": 0.0}
+
+        def observe(t: float) -> LoopReading:
+            if followed:  # force control: the box follows the imposed tension at every step
                 self.box.follow(s.fx, n_obs * sim.dt)
-            t = sim.time_s - t_start
-            if sim.touching_pairs_of_edges(in_loop, in_upper) > 0:
-                last_touch, apart_since = t, None
-            elif apart_since is None:
-                apart_since = t
-            elif t - apart_since >= s.confirm_s:
-                res.released = True
-                break
-        if res.released:
-            res.tau_s = res.tau_contact_s = last_touch + 0.5 * n_obs * sim.dt_s
+            touching = sim.touching_pairs_of_edges(in_loop, in_upper) > 0
+            if touching:
+                seen["last_touch"] = t
+            return LoopReading(touching)
+
+        let_go = LetGo(s.confirm_s, "apart from the upper row")
+        _, rule, _ = run_until(sim, n_obs, observe, [let_go, TimeLimit(s.max_time_s)])
+        if rule is let_go:
+            res.released = True
+            res.tau_s = res.tau_contact_s = seen["last_touch"] + 0.5 * n_obs * sim.dt_s
             res.v_lad_over_cb = s.ly_over_l0 * s.material.stitch_length / res.tau_s / s.material.c_b
         res.climb_over_ly = (float(sim.state.x[loop_nodes, 1].mean()) - centroid) / self.rows.ly
         res.lx_end_over_l0 = self.rows.lx / self.l0

@@ -61,6 +61,7 @@ from knitlad.observers import (
     TimeLimit,
 )
 from knitlad.scenes.jersey import BUILD_LX, CourseTooWide, Jersey, KnitScene, build_jersey, widest_fitting_width
+from knitlad.runloop import run_until
 from knitlad.simulation import Simulation, numba_threads
 from knitlad.stitch_model import StitchRun, StitchSettings, zero_tension_lx
 from knitlad.state import Rods, cut_edge, with_axial_stiffness, with_twist
@@ -695,23 +696,20 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
     rules = list(stop_rules) if stop_rules is not None else (
         [EdgeReached()] * d.stop_at_edge + [Arrested(d.arrest_s), TimeLimit(d.max_time_s)])
     undone = np.zeros_like(run.baseline)
-    t_start = run.sim.time_s
     frames.observe(0.0, run, undone)  # the stretched knit just cut, before the first step
     times: list[float] = []
-    while True:
-        run.sim.run(d.observe_every_s)
-        t = run.sim.time_s - t_start
+
+    def observe(t: float) -> np.ndarray:
         guard.check(run.sim, f"at t = {t * 1e3:.3f} ms after the cut")
-        undone |= run.laddered() & ~run.baseline  # an undone cell does not knit itself again
+        undone[...] |= run.laddered() & ~run.baseline  # an undone cell does not knit itself again
         times.append(t)
         for obs in (fronts, tension, cell_times, frames, *observers):
             obs.observe(t, run, undone)
         if progress:  # the ladder's reach (it stops at an edge course) or the time limit, whichever is further
             progress("propagate", max(min(t / d.max_time_s, 1.0), fronts.reach(run.knit.settings.n_y)))
-        fired = next(((rule, reason) for rule in rules if (reason := rule.check(t, undone))), None)
-        if fired:
-            break
-    rule, reason = fired
+        return undone
+
+    t, rule, reason = run_until(run.sim, max(1, int(round(d.observe_every_s / run.sim.dt_s))), observe, rules)
     frames.observe(t, run, undone, last=True)  # the state at the stop
     return LadderTrace(
         knit=run.knit, dynamics=d, cut_row=run.cut_row, columns=columns, times_s=np.array(times),

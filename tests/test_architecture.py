@@ -47,7 +47,7 @@ LAYERS = {
     1: ("kernels", "units", "measure", "stretching", "presets", "provenance", "progress", "deprecation"),
     2: ("state", "topology", "observers"),
     3: ("contact", "timestep", "natural_curvature", "scenes", "obstacles"),
-    4: ("simulation", "quasistatic"),
+    4: ("simulation", "quasistatic", "runloop"),
     5: ("protocol", "stitch_model", "loop_model", "periodic_loop", "cycling", "demo"),
     6: ("config",),
     7: ("io", "plots", "render", "registry"),
