@@ -9,7 +9,7 @@ import pytest
 
 from knitlad.config import CycleConfig
 from knitlad.cycling import HOLD, LOADING, UNLOADING, cut_cycled, run_cycles, shortening_to
-from knitlad.protocol import stretch
+from knitlad.protocol import cut, stretch
 
 
 def test_delta_l_is_read_between_readings_where_the_unloading_crosses_the_threshold():
@@ -36,6 +36,10 @@ def cycled():
         seen["snapshot"], seen["loaded_slip"] = snapshot, sim.contacts.slip[:sim.contacts.n_pairs[0]].copy()
         seen["loaded_pairs"] = sim.contacts.pairs[:sim.contacts.n_pairs[0]].copy()
         seen["run"] = cut_cycled(snapshot, sim, cfg.dynamics_settings())
+        forgetful = cut(snapshot, cfg.dynamics_settings(), rods_ready=True)  # the same cut, springs lost
+        forgetful.sim.compute_forces()
+        away = (snapshot.knit.node_course() != snapshot.settings.n_y // 2) & ~sim.model.held
+        seen["force_off_cut"] = [np.linalg.norm(r.sim.forces_N()[away], axis=1).max() for r in (seen["run"], forgetful)]
 
     return cfg, knit, run_cycles(knit, cfg.cycle_settings(), cfg.dynamics_settings(), at_the_cut=at_the_cut), seen
 
@@ -76,6 +80,11 @@ def test_a_cycled_knit_is_cut_with_the_friction_history_its_loading_left(cycled)
         if pair in carried:  # still a candidate after the cut's rebuild
             np.testing.assert_allclose(carried[pair], slip, atol=1e-4 * np.abs(slip).max())
     assert sum(pair in carried for pair, _ in springs) > 0.9 * len(springs)
+    # the point of it: off the cut course the knit is as static as the hold left it (within twice the hold's
+    # tolerance, 1e-3 f0); with the springs lost, friction lets go at once (2026-12-04: 0.013 mN against 35 mN)
+    f0 = snapshot.settings.material.f0
+    kept, lost = seen["force_off_cut"]
+    assert kept < 2e-3 * f0 and lost > 100 * kept
 
 
 def test_cycle_settings_are_checked_before_anything_runs():
