@@ -211,6 +211,8 @@ def summary_plots(df, out_dir: str | Path, fmt: str = "png") -> list[Path]:
     if "scene" in ok and (ok["scene"] == "loop").any():
         paths.append(loop_velocity_plot(ok[ok["scene"] == "loop"], out / f"loop_velocity_vs_fx.{fmt}"))
         ok = ok[ok["scene"] != "loop"]
+    if "scene" in ok and (ok["scene"] == "cycle").any():
+        paths.append(damage_prediction_plot(ok[ok["scene"] == "cycle"], out / f"damage_vs_prediction.{fmt}"))
     if "scene" in ok:
         ok = ok[ok["scene"] == "ladder"]  # stitch sweeps: the table says it all
     if not len(ok):
@@ -282,3 +284,19 @@ def cycle_curve_plot(readings, n_x: int, stitch_length_m: float, fx_thr: float |
             ax.text(top - 0.5 * delta_l_over_l0 * stitch_length_m * 1e3, fx_thr, r"$\delta l$", ha="center",
                     va="bottom")
     return _labelled(fig, ax, r"$\Delta x - \Delta x_{\min}$ [mm]", symbol("fx"), "protocol B", path)
+
+
+def damage_prediction_plot(df, path: str | Path) -> Path:
+    """Paper Fig. 4c: the damage of protocol B's cut, n_lad/n_y, against Eq. 1's delta l/(l0 - l_x), one
+    series per l_y/l0; open symbols where a ladder reached an edge course (the knit too small for it)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(4.5, 3.4))
+    for ly, g in df.groupby("ly") if "ly" in df else [(None, df)]:
+        line, = ax.plot(g["predicted_damage"], g["cut_n_lad_over_ny"], "o", ms=5,
+                        label=f"{symbol('ly')} = {ly}" if ly is not None else "knitlad")
+        edge = g[g["cut_reached_edge"].astype(bool)] if "cut_reached_edge" in g else g.iloc[:0]
+        ax.plot(edge["predicted_damage"], edge["cut_n_lad_over_ny"], "o", ms=9, mfc="none", color=line.get_color())
+    top = float(np.nanmax([df["predicted_damage"].max(), df["cut_n_lad_over_ny"].max(), 1.0]))
+    ax.plot([0, top], [0, top], "k:", lw=0.8, label="Eq. 1")
+    return _labelled(fig, ax, r"$\delta l/(l_0 - l_x)$", symbol("n_lad_over_ny"), "damage against Eq. 1 (paper Fig. 4c)",
+                     path)

@@ -106,3 +106,15 @@ def test_the_cycle_does_not_depend_on_the_bars_speed():
                   for v in (0.1, 0.05))
     assert slow.fx_ini == pytest.approx(fast.fx_ini, rel=2e-3)
     assert slow.delta_l_over_l0 == pytest.approx(fast.delta_l_over_l0, rel=5e-3)
+
+
+def test_a_sweep_of_protocol_b_plots_its_damage_against_eq_1(tmp_path):
+    import pandas as pd
+
+    from knitlad.plots import summary_plots
+
+    table = pd.DataFrame({"status": ["ok", "ok", "failed"], "scene": ["cycle"] * 3, "ly": [0.25, 0.3, 0.3],
+                          "predicted_damage": [0.5, 1.2, np.nan], "cut_n_lad_over_ny": [0.6, 1.0, np.nan],
+                          "cut_reached_edge": [False, True, False], "fx_ini": [3.0, 6.0, np.nan]})
+    paths = summary_plots(table, tmp_path)
+    assert [p.name for p in paths] == ["damage_vs_prediction.png"] and paths[0].stat().st_size > 1000
