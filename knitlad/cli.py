@@ -329,7 +329,9 @@ def cycle(
     _say_if_compiling()
     progress = _StageProgress()
     result, ladder = _experiment_or_exit(
-        lambda: run_protocol_b(cfg.settings(), cfg.cycle_settings(), cut_at_max=cfg.cut, progress=progress), progress)
+        lambda: run_protocol_b(cfg.settings(), cfg.cycle_settings(), cut_at_max=cfg.cut, progress=progress,
+                               after_leg=lambda readings: _write_cycle_table(out_dir / "cycle.csv", readings)), progress,
+        kept=f"the readings so far are in {out_dir / 'cycle.csv'} (if a leg had ended)")
     progress.close(finished=True)
     h5, csv, png = _write_cycle_outputs(out_dir, cfg, result, ladder)
     l0 = cfg.settings().material.stitch_length
@@ -350,13 +352,20 @@ def cycle(
     typer.echo(f"  wall time {result.wall_s:.1f} s; wrote {h5}, {csv.name}, {png.name}")
 
 
+def _write_cycle_table(path, readings) -> None:
+    """cycle.csv: the readings (cycle, leg: 1 loading, 0 hold, -1 unloading, t [s], box l_x/l0, f_x), atomically."""
+    import pandas as pd
+
+    from knitlad.io.atomic import atomic_path
+
+    with atomic_path(path) as tmp:
+        pd.DataFrame(readings, columns=["cycle", "leg", "t_s", "box_lx_over_l0", "fx"]).to_csv(tmp, index=False)
+
+
 def _write_cycle_outputs(out_dir, cfg, result, ladder):
     """cycle.h5 (the readings; the ladder's series and frames if cut), cycle.csv and cycle.png."""
     import json
 
-    import pandas as pd
-
-    from knitlad.io.atomic import atomic_path
     from knitlad.io.hdf5 import write_ladder_result, write_record
     from knitlad.plots import cycle_curve_plot
 
@@ -367,9 +376,7 @@ def _write_cycle_outputs(out_dir, cfg, result, ladder):
         h5 = write_ladder_result(out_dir / "cycle.h5", ladder, attrs=attrs, datasets=data)
     else:
         h5 = write_record(out_dir / "cycle.h5", attrs, datasets=data)
-    table = pd.DataFrame(result.readings, columns=["cycle", "leg", "t_s", "box_lx_over_l0", "fx"])
-    with atomic_path(out_dir / "cycle.csv") as tmp:
-        table.to_csv(tmp, index=False)
+    _write_cycle_table(out_dir / "cycle.csv", result.readings)
     png = cycle_curve_plot(result.readings, cfg.n_x, cfg.settings().material.stitch_length, cfg.fx_thr,
                            result.delta_l_over_l0, out_dir / "cycle.png")
     return h5, out_dir / "cycle.csv", png
@@ -765,7 +772,7 @@ def _velocity_caveat(result) -> str:
     return f"({span})"
 
 
-def _experiment_or_exit(run, progress):
+def _experiment_or_exit(run, progress, kept: str = "nothing written"):
     """``run()`` (an experiment: run_ladder, run_protocol_b), every way it can end without a result said in
     one line: Ctrl-C (130) and SIGTERM (143), a run that failed (1), settings found infeasible once the knit
     is built (2)."""
@@ -781,7 +788,7 @@ def _experiment_or_exit(run, progress):
     except KeyboardInterrupt as e:
         progress.close()
         how, code = ("terminated", 143) if isinstance(e, Terminated) else ("interrupted", 130)
-        typer.echo(f"knitlad: {how}; nothing written", err=True)
+        typer.echo(f"knitlad: {how}; {kept}", err=True)
         raise typer.Exit(code)
     except (OutOfReach, Interpenetration, SimulationBlowUp) as e:  # the run failed (not bad input): one line, exit 1
         progress.close()

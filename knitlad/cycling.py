@@ -176,11 +176,13 @@ def shortening_to(unloading: np.ndarray, fx_thr: float, n_x: int) -> float:
 
 def run_cycles(knit: StretchedKnit, s: CycleSettings, dynamics: DynamicsSettings,
                progress: Callable[[str, float], None] | None = None,
-               at_the_cut: Callable[[StretchedKnit, Simulation], None] | None = None) -> CycleResult:
+               at_the_cut: Callable[[StretchedKnit, Simulation], None] | None = None,
+               after_leg: Callable[[np.ndarray], None] | None = None) -> CycleResult:
     """Protocol B on ``knit`` (stretched at mu = 0 to Delta x_min) under ``dynamics`` (its friction on):
     ``cycles`` loadings to ``lx_max`` with a hold, back to the start; ``at_the_cut(snapshot, sim)`` is
     called at Delta x_max of the last cycle (to cut a copy: :func:`cut_cycled`); the last unloading is the
-    uncut twin's, read for delta l."""
+    uncut twin's, read for delta l. ``after_leg(readings)``: the readings so far after each leg and hold
+    (to keep them as they come: a run of an hour stopped early keeps its curve)."""
     t0 = time.perf_counter()
     loaded, lx_min = LoadedKnit(knit, s, dynamics), knit.box_lx
     loaded.readings.append((0, HOLD, 0.0, lx_min, loaded.tension()))
@@ -192,12 +194,16 @@ def run_cycles(knit: StretchedKnit, s: CycleSettings, dynamics: DynamicsSettings
                 progress("cycle", (done + f) / legs)
         loaded.move_bars(s.lx_max, cycle, report)
         result.hold_converged = bool(loaded.hold(cycle)["converged"])
+        if after_leg:
+            after_leg(np.array(loaded.readings, dtype=float))
         if cycle == s.cycles:
             snap = loaded.snapshot()
             result.fx_ini, result.lx_over_l0, result.ly_over_l0 = snap.fx_ini, snap.lx_over_l0, snap.ly_over_l0
             if at_the_cut:
                 at_the_cut(snap, loaded.sim)
         loaded.move_bars(lx_min, cycle, lambda f, done=2 * cycle - 1: report(f, done))
+        if after_leg:
+            after_leg(np.array(loaded.readings, dtype=float))
     result.readings = np.array(loaded.readings, dtype=float)
     if s.fx_thr is not None:
         start = np.flatnonzero((result.readings[:, 0] == s.cycles) & (result.readings[:, 1] == HOLD))[0]
@@ -208,8 +214,8 @@ def run_cycles(knit: StretchedKnit, s: CycleSettings, dynamics: DynamicsSettings
 
 
 def run_protocol_b(ladder: LadderSettings, s: CycleSettings, cut_at_max: bool = True,
-                   progress: Callable[[str, float], None] | None = None,
-                   knit: StretchedKnit | None = None) -> tuple[CycleResult, LadderResult | None]:
+                   progress: Callable[[str, float], None] | None = None, knit: StretchedKnit | None = None,
+                   after_leg: Callable[[np.ndarray], None] | None = None) -> tuple[CycleResult, LadderResult | None]:
     """Stretch at mu = 0 to Delta x_min (``ladder.stretch``; or start from ``knit``, stretched so), cycle
     (:func:`run_cycles`), and at Delta x_max of the last cycle cut a copy and follow its ladder under
     ``ladder.dynamics`` (``cut_at_max``)."""
@@ -221,5 +227,5 @@ def run_protocol_b(ladder: LadderSettings, s: CycleSettings, cut_at_max: bool = 
         if cut_at_max:
             laddered.append(analyse(propagate(cut_cycled(snapshot, sim, ladder.dynamics), progress=progress)))
 
-    result = run_cycles(knit, s, ladder.dynamics, progress, at_the_cut)
+    result = run_cycles(knit, s, ladder.dynamics, progress, at_the_cut, after_leg)
     return result, (laddered[0] if laddered else None)
