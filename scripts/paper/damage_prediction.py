@@ -1,0 +1,84 @@
+"""Paper Fig. 4 by protocol B: the force-displacement curve (4a) and the damage against Eq. 1 (4c).
+
+    python scripts/paper/damage_prediction.py runs/fig4c [--csv docs/reference/fig4c_summary.csv]
+                                             [--png docs/fig4c.png] [--curve docs/fig4a.png]
+
+Reads every finished job of a ``cycle`` sweep (``knitlad sweep configs/fig4c.yaml``): its readings
+(``cycle/readings``) and summary. delta l is read on the uncut twin's last unloading twice: at the
+sweep's f_x^thr, and at the run's own arrest tension, f_x^fin of the courses the ladder crossed (the
+threshold of the model as it ran; the paper's f_x^fin = f_x^thr, Fig. 3f). Prints a markdown table.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pandas as pd
+
+import knitlad as kl
+from knitlad.cycling import HOLD, UNLOADING, shortening_to
+from knitlad.io.hdf5 import read_attrs
+from knitlad.plots import cycle_curve_plot, damage_prediction_plot
+
+
+def job_rows(folder: Path) -> list[dict]:
+    rows = []
+    for path in sorted((folder / "jobs").glob("*.h5")):
+        attrs = read_attrs(path)
+        if attrs.get("status") != "ok":
+            continue
+        config = attrs["cycle_config_json"]  # read_attrs decodes JSON attributes
+        with h5py.File(path) as f:
+            readings = f["cycle/readings"][()]
+        last = int(readings[:, 0].max())
+        start = np.flatnonzero((readings[:, 0] == last) & (readings[:, 1] == HOLD))[0]
+        unloading = np.vstack([readings[start, 3:5], readings[(readings[:, 0] == last) & (readings[:, 1] == UNLOADING)][:, 3:5]])
+        lx = attrs["cycle_lx_over_l0"]
+        own = attrs["fx_fin_crossed"]
+        dl_own = shortening_to(unloading, own, config["n_x"]) if np.isfinite(own) else np.nan
+        rows.append({
+            "job": path.stem, "ly": config["ly"], "lx_max": config["lx_max"], "bar_speed": config["bar_speed"],
+            "fx_ini": attrs["cycle_fx_ini"], "lx_over_l0": lx, "fx_thr": config["fx_thr"],
+            "delta_l_over_l0": attrs["cycle_delta_l_over_l0"], "predicted": attrs["cycle_predicted_damage"],
+            "fx_fin_crossed": own, "predicted_own": dl_own / (1 - lx),
+            "n_lad_over_ny": attrs["n_lad_over_ny"], "ladders_up": attrs["ladders_up"],
+            "ladders_down": attrs["ladders_down"], "reached_edge": bool(attrs["reached_edge"]),
+            "stop_reason": attrs["stop_reason"], "hold_converged": bool(attrs["cycle_hold_converged"]),
+            "wall_min": attrs.get("job_wall_s", np.nan) / 60, "readings": readings, "n_x": config["n_x"],
+        })
+    return rows
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("folder", type=Path)
+    p.add_argument("--csv", type=Path)
+    p.add_argument("--png", type=Path)
+    p.add_argument("--curve", type=Path, help="Fig. 4a of the job with the highest f_x^ini")
+    args = p.parse_args()
+    rows = job_rows(args.folder)
+    if not rows:
+        raise SystemExit(f"{args.folder}: no finished cycle job")
+    table = pd.DataFrame([{k: v for k, v in r.items() if k != "readings"} for r in rows])
+    table = table.sort_values(["ly", "lx_max", "bar_speed"])
+    shown = ["ly", "lx_max", "bar_speed", "fx_ini", "lx_over_l0", "delta_l_over_l0", "predicted", "fx_fin_crossed",
+             "predicted_own", "n_lad_over_ny", "ladders_up", "ladders_down", "reached_edge", "wall_min"]
+    print("| " + " | ".join(shown) + " |\n|" + "---|" * len(shown))
+    for _, row in table[shown].iterrows():
+        print("| " + " | ".join(f"{v:.3f}" if isinstance(v, float) else str(v) for v in row) + " |")
+    if args.csv:
+        table.drop(columns=["job"]).to_csv(args.csv, index=False, float_format="%.5g")
+    if args.png:
+        plot = table.rename(columns={"predicted": "predicted_damage", "n_lad_over_ny": "cut_n_lad_over_ny",
+                                     "reached_edge": "cut_reached_edge"})
+        damage_prediction_plot(plot[plot["bar_speed"] == plot["bar_speed"].max()], args.png)
+    if args.curve:
+        top = max(rows, key=lambda r: r["fx_ini"])
+        cycle_curve_plot(top["readings"], top["n_x"], kl.NYLON.stitch_length, top["fx_thr"], top["delta_l_over_l0"], args.curve)
+
+
+if __name__ == "__main__":
+    main()
