@@ -300,3 +300,16 @@ def damage_prediction_plot(df, path: str | Path) -> Path:
     ax.plot([0, top], [0, top], "k:", lw=0.8, label="Eq. 1")
     return _labelled(fig, ax, r"$\delta l/(l_0 - l_x)$", symbol("n_lad_over_ny"), "damage against Eq. 1 (paper Fig. 4c)",
                      path)
+
+
+def final_tension_plot(df, path: str | Path) -> Path:
+    """Paper Fig. 3f read where the arrest happens: f_x^fin against f_x^ini, the mean over every course, the
+    courses the ladder crossed and the others (a sweep's summary table, sorted by f_x^ini)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(4.5, 3.4))
+    for column, label in (("fx_fin", "every course"), ("fx_fin_crossed", "courses the ladder crossed"),
+                          ("fx_fin_intact", "the others")):
+        ax.plot(df["fx_ini"], df[column], "o-", ms=4, label=label)
+    top = float(df["fx_ini"].max())
+    ax.plot([0, top], [0, top], "k:", lw=0.8, label=f"{symbol('fx_fin')} = {symbol('fx_ini')}")
+    return _labelled(fig, ax, symbol("fx_ini"), symbol("fx_fin"), "tension after arrest (paper Fig. 3f)", path)

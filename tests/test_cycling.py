@@ -118,3 +118,13 @@ def test_a_sweep_of_protocol_b_plots_its_damage_against_eq_1(tmp_path):
                           "cut_reached_edge": [False, True, False], "fx_ini": [3.0, 6.0, np.nan]})
     paths = summary_plots(table, tmp_path)
     assert [p.name for p in paths] == ["damage_vs_prediction.png"] and paths[0].stat().st_size > 1000
+
+
+def test_the_final_tension_plot_draws_the_three_readings_of_the_arrest(tmp_path):
+    import pandas as pd
+
+    from knitlad.plots import final_tension_plot
+
+    table = pd.DataFrame({"fx_ini": [2.0, 6.0], "fx_fin": [1.8, 4.0], "fx_fin_crossed": [1.5, 2.5],
+                          "fx_fin_intact": [1.9, 5.0]})
+    assert final_tension_plot(table, tmp_path / "f.png").stat().st_size > 1000
