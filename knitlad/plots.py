@@ -298,6 +298,7 @@ def damage_prediction_plot(df, path: str | Path) -> Path:
         ax.plot(edge["predicted_damage"], edge["cut_n_lad_over_ny"], "o", ms=9, mfc="none", color=line.get_color())
     top = float(np.nanmax([df["predicted_damage"].max(), df["cut_n_lad_over_ny"].max(), 1.0]))
     ax.plot([0, top], [0, top], "k:", lw=0.8, label="Eq. 1")
+    ax.plot([], [], "o", ms=9, mfc="none", color="0.4", label="a ladder reached an edge course")
     return _labelled(fig, ax, r"$\delta l/(l_0 - l_x)$", symbol("n_lad_over_ny"), "damage against Eq. 1 (paper Fig. 4c)",
                      path)
 

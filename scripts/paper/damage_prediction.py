@@ -1,7 +1,7 @@
 """Paper Fig. 4 by protocol B: the force-displacement curve (4a) and the damage against Eq. 1 (4c).
 
     python scripts/paper/damage_prediction.py runs/fig4c [--csv docs/reference/fig4c_summary.csv]
-                                             [--png docs/fig4c.png] [--curve docs/fig4a.png]
+                                             [--png docs/fig4c.png] [--curve docs/fig4a.png [--curve-at 0.25 0.38]]
 
 Reads every finished job of a ``cycle`` sweep (``knitlad sweep configs/fig4c.yaml``): its readings
 (``cycle/readings``) and summary. delta l is read on the uncut twin's last unloading twice: at the
@@ -57,7 +57,9 @@ def main() -> None:
     p.add_argument("folder", type=Path)
     p.add_argument("--csv", type=Path)
     p.add_argument("--png", type=Path)
-    p.add_argument("--curve", type=Path, help="Fig. 4a of the job with the highest f_x^ini")
+    p.add_argument("--curve", type=Path, help="Fig. 4a of one job (--curve-at)")
+    p.add_argument("--curve-at", type=float, nargs=2, default=(0.25, 0.38), metavar=("LY", "LX_MAX"),
+                   help="the job of Fig. 4a: its l_y/l0 and Delta x_max (box l_x/l0), at the fastest bars")
     args = p.parse_args()
     rows = job_rows(args.folder)
     if not rows:
@@ -76,7 +78,8 @@ def main() -> None:
                                      "reached_edge": "cut_reached_edge"})
         damage_prediction_plot(plot[plot["bar_speed"] == plot["bar_speed"].max()], args.png)
     if args.curve:
-        top = max(rows, key=lambda r: r["fx_ini"])
+        ly, lx_max = args.curve_at
+        top = max((r for r in rows if r["ly"] == ly and r["lx_max"] == lx_max), key=lambda r: r["bar_speed"])
         cycle_curve_plot(top["readings"], top["n_x"], kl.NYLON.stitch_length, top["fx_thr"], top["delta_l_over_l0"], args.curve)
 
 
