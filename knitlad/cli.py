@@ -754,7 +754,7 @@ def _loop_line(result) -> str:
         line += f"; loops (2)/(3) from {r['first_down_ms']:.2f} ms"
     if r["ladders_up"] > 1:
         line += f"; (4)/(5) from {r['second_up_ms']:.2f} ms"
-    return line
+    return line + ("; hindered: loops (4)/(5) held" if r["hindered"] else "")
 
 
 def _fin_caveat(result) -> str:

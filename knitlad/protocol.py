@@ -794,13 +794,17 @@ class LadderResult:
 
     def loop_record(self) -> dict:
         """Summary of :meth:`ladders`: ladders up and down, when the first downward (loops (2)/(3)) and the
-        second upward (loops (4)/(5)) started [ms after the cut; NaN: never]."""
+        second upward (loops (4)/(5)) started [ms after the cut; NaN: never], and ``hindered``: the pattern
+        the paper calls hindered laddering (appendix "Hindered laddering"), one upward ladder and two or
+        more downward, the cut thread held in loops (4) and (5). Read from the cells, as the paper read its
+        photographs; the thread's topology is not tested."""
         ladders = self.ladders()
         start = {loop: next((lad["start_s"] * 1e3 for lad in ladders if lad["loop"] == loop), math.nan)
                  for loop in ("2/3", "4/5")}
-        return {"ladders_up": sum(lad["direction"] > 0 for lad in ladders),
-                "ladders_down": sum(lad["direction"] < 0 for lad in ladders),
-                "first_down_ms": start["2/3"], "second_up_ms": start["4/5"]}
+        up = sum(lad["direction"] > 0 for lad in ladders)
+        down = sum(lad["direction"] < 0 for lad in ladders)
+        return {"ladders_up": up, "ladders_down": down, "first_down_ms": start["2/3"],
+                "second_up_ms": start["4/5"], "hindered": bool(up == 1 and down >= 2)}
 
 
 def analyse(trace: LadderTrace) -> LadderResult:

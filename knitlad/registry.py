@@ -129,14 +129,14 @@ def run_stitch_job(cfg: StitchConfig, output, folder: Path | None = None, progre
 SCENES: dict[str, SweepScene] = {
     "ladder": SweepScene(CutConfig, run_ladder_job, (
         "fx_ini", "fx_fin", "fx_fin_crossed", "fx_fin_intact", "n_lad", "n_lad_over_ny", "v_lad_over_cb", "natural_curvature", "lx_over_l0", "ly_over_l0",
-        "ladders_up", "ladders_down", "first_down_ms", "second_up_ms",
+        "ladders_up", "ladders_down", "first_down_ms", "second_up_ms", "hindered",
         "box_lx_over_l0", "fx_within_tolerance", "peak_overlap_over_d", "reached_edge", "stop_reason",
         "laddering_column", "v_fit_stitches", "nodes", "steps", "relax_steps", "stretch_reused", "wall_s",
         "wall_stretch_s", "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment", stretch_of),
     "cycle": SweepScene(CycleConfig, run_cycle_job, (
         "fx_ini", "lx_over_l0", "ly_over_l0", "lx_max", "fx_thr", "delta_l_over_l0", "predicted_damage",
         "cut_n_lad_over_ny", "cut_fx_fin", "cut_fx_fin_crossed", "cut_reached_edge", "cut_ladders_up",
-        "cut_ladders_down", "cut_second_up_ms", "hold_converged", "wall_s",
+        "cut_ladders_down", "cut_second_up_ms", "cut_hindered", "hold_converged", "wall_s",
         "job_wall_s"), "`knitlad cycle`: protocol B, the damage prediction's loading", stretch_of),
     "loop": SweepScene(LoopConfig, run_loop_job, (
         "tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before", "steps",

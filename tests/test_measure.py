@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -146,3 +148,16 @@ def test_the_loop_record_names_each_ladder_by_the_freed_loop_that_started_it():
         (2, 1, "1", 3), (2, -1, "2/3", 2), (3, -1, "2/3", 3), (3, 1, "4/5", 1)]
     assert [lad["start_s"] for lad in ladders] == pytest.approx([1e-4, 5e-4, 7e-4, 1.2e-3])
     assert ladders_started(np.full((9, 6), np.nan), cut_row=4) == []
+
+
+def test_one_upward_and_two_downward_ladders_are_the_hindered_pattern():
+    """The paper's hindered laddering: the second upward ladder never starts (loops (4) and (5) held)."""
+    at = np.full((9, 6), np.nan)
+    at[5:8, 2] = 1e-4                      # loop (1): up in column 2
+    at[2:4, 2], at[1:4, 3] = 5e-4, 7e-4    # loops (2) and (3): down in columns 2 and 3
+    record = kl.LadderResult(settings=None, undone_at=at, cut_row=4).loop_record()
+    assert record["hindered"] and (record["ladders_up"], record["ladders_down"]) == (1, 2)
+    assert math.isnan(record["second_up_ms"]) and record["first_down_ms"] == pytest.approx(0.5)
+    at[5, 3] = 1.2e-3                      # loop (4)/(5) lets go: a second upward ladder
+    record = kl.LadderResult(settings=None, undone_at=at, cut_row=4).loop_record()
+    assert not record["hindered"] and record["second_up_ms"] == pytest.approx(1.2)
