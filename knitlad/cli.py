@@ -209,6 +209,29 @@ def validated(model, options: dict, names: dict | None = None):
         fail(f"{option}: {reason}")
 
 
+def _knit_run(model, options: dict, stitches: str, default_fx: float, out: str | None, name: str):
+    """A knit experiment's validated config and output folder, every check made before any compute (a run
+    of hours must not end on a full memory or an unwritable folder): --stitches, the config (force control
+    to ``default_fx`` when neither --fx nor --lx is given), the memory, the folder (default runs/<name>-<time>)."""
+    from knitlad.io.folders import FolderError, writable_folder
+    from knitlad.protocol import KnitTooLarge, require_memory
+
+    try:
+        n_x, n_y = _config.parse_stitches(stitches)
+    except ValueError as e:
+        fail(f"--stitches: {e}")
+    if options.get("fx") is None and options.get("lx") is None:
+        options["fx"] = default_fx
+    cfg = validated(model, {**options, "n_x": n_x, "n_y": n_y}, {"n_x": "--stitches", "n_y": "--stitches"})
+    out_dir = Path(out) if out else Path("runs") / time.strftime(f"{name}-%Y%m%d-%H%M%S")
+    try:
+        require_memory(cfg.memory_estimate_bytes(), f"--stitches {n_x}x{n_y} at --resolution {cfg.resolution}")
+        writable_folder(out_dir)
+    except (KnitTooLarge, FolderError) as e:
+        fail(str(e) if isinstance(e, KnitTooLarge) else f"--out {e}")
+    return cfg, out_dir
+
+
 @app.command()
 @config_options(_config.CutConfig, exclude=("n_x", "n_y"))
 def cut(
@@ -224,25 +247,12 @@ def cut(
     Without --fx or --lx, force control to f_x^ini = 13.6 (the paper's Fig. 3c,d).
     """
     import json
-    from pathlib import Path
 
-    try:
-        n_x, n_y = _config.parse_stitches(stitches)
-    except ValueError as e:
-        fail(f"--stitches: {e}")
-    if options.get("fx") is None and options.get("lx") is None:
-        options["fx"] = 13.6
-    cfg = validated(_config.CutConfig, {**options, "n_x": n_x, "n_y": n_y}, {"n_x": "--stitches", "n_y": "--stitches"})
-    from knitlad.io.folders import FolderError, writable_folder
-    from knitlad.protocol import KnitTooLarge, require_memory, run_ladder
+    from knitlad.protocol import run_ladder
 
-    out_dir = Path(out) if out else Path("runs") / time.strftime("cut-%Y%m%d-%H%M%S")
-    made = not out_dir.exists()
-    try:  # before any compute: a run of hours must not end in an unwritable folder
-        require_memory(cfg.memory_estimate_bytes(), f"--stitches {n_x}x{n_y} at --resolution {cfg.resolution}")
-        writable_folder(out_dir)
-    except (KnitTooLarge, FolderError) as e:
-        fail(str(e) if isinstance(e, KnitTooLarge) else f"--out {e}")
+    made = not (Path(out).exists() if out else False)
+    cfg, out_dir = _knit_run(_config.CutConfig, options, stitches, 13.6, out, "cut")
+    n_x, n_y = cfg.n_x, cfg.n_y
     earlier = earlier_run_outputs(out_dir)
     if earlier and not overwrite:
         fail(f"--out {out_dir}: holds an earlier run ({', '.join(p.name for p in earlier[:4])}"
@@ -305,25 +315,10 @@ def cycle(
     Without --fx or --lx, Delta x_min holds the knit at f_x = 0.68 (the experiments'). Writes cycle.csv
     (the force-displacement readings), cycle.png (Fig. 4a), cycle.h5 (readings, and the ladder of the cut).
     """
-    from pathlib import Path
-
-    try:
-        n_x, n_y = _config.parse_stitches(stitches)
-    except ValueError as e:
-        fail(f"--stitches: {e}")
-    if options.get("fx") is None and options.get("lx") is None:
-        options["fx"] = 0.68
-    cfg = validated(_config.CycleConfig, {**options, "n_x": n_x, "n_y": n_y}, {"n_x": "--stitches", "n_y": "--stitches"})
     from knitlad.cycling import run_protocol_b
-    from knitlad.io.folders import FolderError, writable_folder
-    from knitlad.protocol import KnitTooLarge, require_memory
 
-    out_dir = Path(out) if out else Path("runs") / time.strftime("cycle-%Y%m%d-%H%M%S")
-    try:
-        require_memory(cfg.memory_estimate_bytes(), f"--stitches {n_x}x{n_y} at --resolution {cfg.resolution}")
-        writable_folder(out_dir)
-    except (KnitTooLarge, FolderError) as e:
-        fail(str(e) if isinstance(e, KnitTooLarge) else f"--out {e}")
+    cfg, out_dir = _knit_run(_config.CycleConfig, options, stitches, 0.68, out, "cycle")
+    n_x, n_y = cfg.n_x, cfg.n_y
     if (out_dir / "cycle.h5").exists():
         fail(f"--out {out_dir}: holds an earlier cycle run (cycle.h5); choose another folder")
     _say_if_compiling()
