@@ -359,18 +359,10 @@ def _write_cycle_table(path, readings) -> None:
 
 def _write_cycle_outputs(out_dir, cfg, result, ladder):
     """cycle.h5 (the readings; the ladder's series and frames if cut), cycle.csv and cycle.png."""
-    import json
-
-    from knitlad.io.hdf5 import write_ladder_result, write_record
+    from knitlad.io.hdf5 import write_cycle_result
     from knitlad.plots import cycle_curve_plot
 
-    attrs = {f"cycle_{k}": v for k, v in result.summary().items()}
-    attrs["cycle_config_json"] = json.dumps(cfg.model_dump(), default=str)
-    data = {"cycle/readings": result.readings}
-    if ladder is not None:
-        h5 = write_ladder_result(out_dir / "cycle.h5", ladder, attrs=attrs, datasets=data)
-    else:
-        h5 = write_record(out_dir / "cycle.h5", attrs, datasets=data)
+    h5 = write_cycle_result(out_dir / "cycle.h5", result, ladder, cfg.model_dump())
     _write_cycle_table(out_dir / "cycle.csv", result.readings)
     png = cycle_curve_plot(result.readings, cfg.n_x, cfg.settings().material.stitch_length, cfg.fx_thr,
                            result.delta_l_over_l0, out_dir / "cycle.png")

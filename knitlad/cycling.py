@@ -31,7 +31,6 @@ import numpy as np
 
 from knitlad import units
 from knitlad.contact import carry_friction_history
-from knitlad.measure import periodicities
 from knitlad.protocol import (
     DynamicsSettings,
     LadderResult,
@@ -109,13 +108,10 @@ class LoadedKnit:
     def snapshot(self) -> StretchedKnit:
         """The knit as it is now, as the value the laddering starts from (its friction history stays in
         :attr:`sim`: :func:`cut_cycled` carries it over)."""
-        k, l0 = self.knit, self.knit.settings.material.stitch_length / units.LENGTH
         rods = self.sim.rods.copy()
-        scene = dataclasses.replace(k.knit, rods=rods)
-        gauge = dataclasses.replace(k.gauge, knit=scene)
-        lx_m, ly_m = periodicities(gauge.rows(rods.state.x)[:-1], gauge.column_centres(self.lx), self.lx * l0)
-        return dataclasses.replace(k, knit=scene, box_lx=self.lx, fx_ini=self.tension(), lx_over_l0=lx_m / l0,
-                                   ly_over_l0=ly_m / l0, dt_s=self.sim.dt_s)
+        lx, ly = self.knit.gauge.periodicities(rods.state.x, self.lx)  # node indices are those of the knit
+        return dataclasses.replace(self.knit, knit=dataclasses.replace(self.knit.knit, rods=rods), box_lx=self.lx,
+                                   fx_ini=self.tension(), lx_over_l0=lx, ly_over_l0=ly, dt_s=self.sim.dt_s)
 
 
 def cut_cycled(knit: StretchedKnit, loaded: Simulation, dynamics: DynamicsSettings) -> Laddering:

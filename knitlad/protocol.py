@@ -195,6 +195,13 @@ class KnitGauge:
         scale = box_lx * self.material.stitch_length / g.l_x
         return g.column_x(np.arange(g.n_x)) * scale / units.LENGTH
 
+    def periodicities(self, x: np.ndarray, box_lx: float) -> tuple[float, float]:
+        """(l_x, l_y)/l0 measured on the free courses at positions ``x`` in the box ``box_lx``
+        (:func:`knitlad.measure.periodicities`)."""
+        l0 = self.material.stitch_length / units.LENGTH
+        lx_m, ly_m = periodicities(self.rows(x)[:-1], self.column_centres(box_lx), box_lx * l0)
+        return lx_m / l0, ly_m / l0
+
     def laddered(self, x: np.ndarray, box_lx: float, box_ly: float) -> np.ndarray:
         l0 = self.material.stitch_length / units.LENGTH
         overlap = cell_overlap(self.rows(x), self.column_centres(box_lx), box_lx * l0)
@@ -334,12 +341,10 @@ class KnitBox:
     def stretched(self, fx: float, within_tolerance: bool, wall_s: float) -> StretchedKnit:
         """The knit as it is now, as a :class:`StretchedKnit` (its f_x measured: ``fx``); stops on a deep overlap."""
         self.guard.check(self.sim, "while stretching")
-        l0 = self.s.material.stitch_length / units.LENGTH
-        rows = self.gauge.rows(self.sim.state.x)[:-1]
-        lx_m, ly_m = periodicities(rows, self.gauge.column_centres(self.lx), self.lx * l0)
+        lx, ly = self.gauge.periodicities(self.sim.state.x, self.lx)
         return StretchedKnit(
-            settings=self.s, knit=self.knit, box_lx=self.lx, box_ly=self.ly, fx_ini=fx, lx_over_l0=lx_m / l0,
-            ly_over_l0=ly_m / l0, fx_within_tolerance=within_tolerance, relax_steps=self.relax_steps,
+            settings=self.s, knit=self.knit, box_lx=self.lx, box_ly=self.ly, fx_ini=fx, lx_over_l0=lx,
+            ly_over_l0=ly, fx_within_tolerance=within_tolerance, relax_steps=self.relax_steps,
             peak_overlap_over_d=self.guard.peak_over_d, dt_s=self.sim.dt_s, wall_s=wall_s,
             tension_history=np.array(self.readings, dtype=float).reshape(-1, 3),
         )

@@ -70,11 +70,8 @@ def run_ladder_job(cfg: CutConfig, output, folder: Path | None = None, progress=
 
 def run_cycle_job(cfg: CycleConfig, output, folder: Path | None = None, progress=None):
     """Protocol B (`knitlad cycle`): its file holds the readings and, if cut, the ladder."""
-    import json
-
     from knitlad.cycling import run_protocol_b
-    from knitlad.io.hdf5 import write_ladder_result, write_record
-
+    from knitlad.io.hdf5 import write_cycle_result
     from knitlad.io.knit_cache import cached_stretch
     from knitlad.protocol import stretch
 
@@ -83,18 +80,12 @@ def run_cycle_job(cfg: CycleConfig, output, folder: Path | None = None, progress
     cycle, ladder = run_protocol_b(cfg.settings(), cfg.cycle_settings(), cut_at_max=cfg.cut, progress=progress,
                                    knit=knit)
     summary = {**cycle.summary(), **({f"cut_{k}": v for k, v in ladder.summary().items()} if ladder else {})}
-    data = {"cycle/readings": cycle.readings}
-    compression = None if output.compression == "none" else output.compression
+    if ladder is not None and not output.frames:
+        ladder.frames, ladder.frame_times_s = [], []
 
     def write(path: Path, record: dict) -> None:
-        attrs = {**{f"cycle_{k}": v for k, v in cycle.summary().items()}, **record,
-                 "cycle_config_json": json.dumps(cfg.model_dump(), default=str)}
-        if ladder is None:
-            write_record(path, attrs, datasets=data)
-        else:
-            if not output.frames:
-                ladder.frames, ladder.frame_times_s = [], []
-            write_ladder_result(path, ladder, compression=compression, attrs=attrs, datasets=data)
+        write_cycle_result(path, cycle, ladder, cfg.model_dump(),
+                           compression=None if output.compression == "none" else output.compression, attrs=record)
 
     return summary, write
 

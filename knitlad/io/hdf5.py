@@ -293,6 +293,18 @@ def _mark_units(f: h5py.File) -> None:
             f[name].attrs["unit"] = unit
 
 
+def write_cycle_result(path: str | Path, cycle, ladder, config: dict, compression: str | None = "gzip",
+                       attrs: dict | None = None) -> Path:
+    """Protocol B's file (:class:`knitlad.cycling.CycleResult`): its summary as ``cycle_*`` attributes, the
+    config, the readings (``cycle/readings``) and, if a copy was cut (``ladder``), the ladder's run file."""
+    attrs = {**{f"cycle_{k}": v for k, v in cycle.summary().items()}, **(attrs or {}),
+             "cycle_config_json": json.dumps(config, default=str)}
+    data = {"cycle/readings": cycle.readings}
+    if ladder is None:
+        return write_record(path, attrs, datasets=data)
+    return write_ladder_result(path, ladder, compression=compression, attrs=attrs, datasets=data)
+
+
 def write_record(path: str | Path, attrs: dict, datasets: dict | None = None) -> Path:
     """A file holding attributes (a failed sweep job: its config, status and error) and any ``datasets``
     by path, atomically."""
