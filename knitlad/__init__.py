@@ -7,32 +7,33 @@ names load on first use, so that ``import knitlad`` stays light.
 
 import importlib
 
-from knitlad.contact import ContactModel, ContactPairs, ContactStats
-from knitlad.obstacles import Cylinder, Plane
-from knitlad.simulation import Simulation, SimulationBlowUp, UnstableTimeStep
-from knitlad.state import RodModel, Rods, RodState, Scene
-from knitlad.units import NYLON, Material, Scales
+from knitlad.engine.contact import ContactModel, ContactPairs, ContactStats
+from knitlad.engine.obstacles import Cylinder, Plane
+from knitlad.engine.simulation import Simulation, SimulationBlowUp, UnstableTimeStep
+from knitlad.engine.state import RodModel, Rods, RodState, Scene
+from knitlad.engine import units  # the internal unit system (knitlad.units.LENGTH, ...), as before the folders
+from knitlad.engine.units import NYLON, Material, Scales
 
-__version__ = "0.5.0"
+__version__ = "0.5.1"
 
 # the laddering experiment: name -> module that defines it (loaded on first use, PEP 562)
 _EXPERIMENT = {
-    "CutConfig": "knitlad.config",
-    "StitchConfig": "knitlad.config",
-    "LoopConfig": "knitlad.config",
-    "LADDER_PRESETS": "knitlad.presets",
-    "StretchedKnit": "knitlad.protocol",
-    "Laddering": "knitlad.protocol",
-    "LadderTrace": "knitlad.protocol",
-    "LadderResult": "knitlad.protocol",
-    "stretch": "knitlad.protocol",
-    "cut": "knitlad.protocol",
-    "propagate": "knitlad.protocol",
-    "analyse": "knitlad.protocol",
-    "run_ladder": "knitlad.protocol",
+    "CutConfig": "knitlad.experiments.config",
+    "StitchConfig": "knitlad.experiments.config",
+    "LoopConfig": "knitlad.experiments.config",
+    "LADDER_PRESETS": "knitlad.fabric.presets",
+    "StretchedKnit": "knitlad.experiments.protocol",
+    "Laddering": "knitlad.experiments.protocol",
+    "LadderTrace": "knitlad.experiments.protocol",
+    "LadderResult": "knitlad.experiments.protocol",
+    "stretch": "knitlad.experiments.protocol",
+    "cut": "knitlad.experiments.protocol",
+    "propagate": "knitlad.experiments.protocol",
+    "analyse": "knitlad.experiments.protocol",
+    "run_ladder": "knitlad.experiments.protocol",
     "read_stretched_knit": "knitlad.io.hdf5",
     "write_stretched_knit": "knitlad.io.hdf5",
-    "TrajectoryRecorder": "knitlad.observers",
+    "TrajectoryRecorder": "knitlad.fabric.observers",
     "write_trajectory": "knitlad.io.hdf5",
 }
 

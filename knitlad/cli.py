@@ -1,7 +1,7 @@
 """Command line: ``knitlad cut``, ``render``, ``movie``, ``sweep``, ``plot``, ``stitch``, ``diagram``, ``loop``, ``demo``, ``scales``.
 
 The options of ``cut``, ``loop`` and ``stitch`` are the fields of their pydantic
-configs (:mod:`knitlad.config`: default, unit and description declared once).
+configs (:mod:`knitlad.experiments.config`: default, unit and description declared once).
 Bad input gets one line on stderr naming the option and why, and exit code 2,
 before anything runs.
 """
@@ -21,8 +21,8 @@ from pathlib import Path
 import typer
 from rich.markup import escape as rich_escape
 
-from knitlad import config as _config
-from knitlad.config import cli_option, one_line
+from knitlad.experiments import config as _config
+from knitlad.experiments.config import cli_option, one_line
 
 app = typer.Typer(
     add_completion=False,
@@ -68,7 +68,7 @@ def demo(
     """Rod demo: a clamped Nylon cantilever against beam theory (a few seconds)."""
     if nodes < 6:
         fail(f"--nodes must be >= 6, got {nodes}")
-    from knitlad.demo import cantilever_demo
+    from knitlad.experiments.demo import cantilever_demo
 
     t = time.perf_counter()
     typer.echo(f"Nylon cantilever, 20 mm, {nodes} nodes (first run compiles the kernels, ~30 s)")
@@ -85,21 +85,21 @@ def demo(
 @app.command()
 def scales() -> None:
     """Print the paper's material and scales (f0, c_b, ...) in SI units."""
-    from knitlad.units import NYLON, Scales
+    from knitlad.engine.units import NYLON, Scales
 
     for key, value in Scales(NYLON).as_attributes().items():
         typer.echo(f"{key:20s} {value:.6g}")
 
 
 class _StageProgress:
-    """A progress line per stage of a run on stderr (:class:`~knitlad.progress.ProgressLine`): the stretch's
+    """A progress line per stage of a run on stderr (:class:`~knitlad.io.progress.ProgressLine`): the stretch's
     share of its target, then the ladder's reach or its time limit, whichever is further."""
 
     def __init__(self) -> None:
         self.stage, self.line = None, None
 
     def __call__(self, stage: str, fraction: float) -> None:
-        from knitlad.progress import ProgressLine
+        from knitlad.io.progress import ProgressLine
 
         if stage != self.stage:
             self.close(finished=True)  # the next stage starts when the last one is done
@@ -122,7 +122,7 @@ class _CountProgress:
         self.label, self.unit, self.line = label, unit, None
 
     def __call__(self, done: int, total: int) -> None:
-        from knitlad.progress import ProgressLine
+        from knitlad.io.progress import ProgressLine
 
         if self.line is None:
             self.line = ProgressLine(self.label, total, self.unit)
@@ -160,7 +160,7 @@ def option_panel(field: str) -> str:
 
 def config_options(model, exclude: tuple[str, ...] = ()):
     """Give a command one option per field of the pydantic config ``model`` (its default, unit and
-    description are the field's: declared once, in :mod:`knitlad.config`).
+    description are the field's: declared once, in :mod:`knitlad.experiments.config`).
 
     The command receives ``options``: the fields given on the command line (None for those
     not given, so the config's defaults apply). A bad value is one line naming the option, exit 2.
@@ -214,7 +214,7 @@ def _knit_run(model, options: dict, stitches: str, default_fx: float, out: str |
     of hours must not end on a full memory or an unwritable folder): --stitches, the config (force control
     to ``default_fx`` when neither --fx nor --lx is given), the memory, the folder (default runs/<name>-<time>)."""
     from knitlad.io.folders import FolderError, writable_folder
-    from knitlad.protocol import KnitTooLarge, require_memory
+    from knitlad.experiments.protocol import KnitTooLarge, require_memory
 
     try:
         n_x, n_y = _config.parse_stitches(stitches)
@@ -248,7 +248,7 @@ def cut(
     """
     import json
 
-    from knitlad.protocol import run_ladder
+    from knitlad.experiments.protocol import run_ladder
 
     made = not (Path(out).exists() if out else False)
     cfg, out_dir = _knit_run(_config.CutConfig, options, stitches, 13.6, out, "cut")
@@ -315,7 +315,7 @@ def cycle(
     Without --fx or --lx, Delta x_min holds the knit at f_x = 0.68 (the experiments'). Writes cycle.csv
     (the force-displacement readings), cycle.png (Fig. 4a), cycle.h5 (readings, and the ladder of the cut).
     """
-    from knitlad.cycling import run_protocol_b
+    from knitlad.experiments.cycling import run_protocol_b
 
     cfg, out_dir = _knit_run(_config.CycleConfig, options, stitches, 0.68, out, "cycle")
     n_x, n_y = cfg.n_x, cfg.n_y
@@ -360,7 +360,7 @@ def _write_cycle_table(path, readings) -> None:
 def _write_cycle_outputs(out_dir, cfg, result, ladder):
     """cycle.h5 (the readings; the ladder's series and frames if cut), cycle.csv and cycle.png."""
     from knitlad.io.hdf5 import write_cycle_result
-    from knitlad.plots import cycle_curve_plot
+    from knitlad.viz.plots import cycle_curve_plot
 
     h5 = write_cycle_result(out_dir / "cycle.h5", result, ladder, cfg.model_dump())
     _write_cycle_table(out_dir / "cycle.csv", result.readings)
@@ -381,7 +381,7 @@ def loop(
     """
     import json
 
-    from knitlad.periodic_loop import run_single_loop
+    from knitlad.experiments.periodic_loop import run_single_loop
 
     cfg = validated(_config.LoopConfig, options)
     try:
@@ -410,7 +410,7 @@ def stitch(
     """Periodised jersey stitch: tensions per thread f_x, f_y at imposed (l_x, l_y), relaxed at mu = 0."""
     import json
 
-    from knitlad.stitch_model import StitchRun
+    from knitlad.experiments.stitch_model import StitchRun
 
     cfg = validated(_config.StitchConfig, options)
     settings = cfg.settings()
@@ -440,10 +440,10 @@ def diagram(
     """The f_x = 0 curve of the periodised stitch in the (l_x/l0, l_y/l0) plane (paper, configuration diagram)."""
     import pandas as pd
 
-    from knitlad.config import StitchConfig
+    from knitlad.experiments.config import StitchConfig
     from knitlad.io.atomic import atomic_path
-    from knitlad.plots import zero_tension_curve_plot
-    from knitlad.stitch_model import zero_tension_lx
+    from knitlad.viz.plots import zero_tension_curve_plot
+    from knitlad.experiments.stitch_model import zero_tension_lx
 
     values = ly or [0.20, 0.22, 0.24, 0.26, 0.28, 0.30]
     for v in values:
@@ -494,8 +494,8 @@ def _sweep_backend(executor: str, scheduler: str | None, cluster: str | None):
         return executor, scheduler
     if scheduler:
         fail("--cluster: not with --scheduler (the cluster brings its own)")
-    from knitlad.cluster import load_cluster
-    from knitlad.sweep import SweepError
+    from knitlad.studies.cluster import load_cluster
+    from knitlad.studies.sweep import SweepError
 
     try:
         return "dask", load_cluster(cluster)
@@ -505,7 +505,7 @@ def _sweep_backend(executor: str, scheduler: str | None, cluster: str | None):
 
 def _list_jobs(cfg, jobs, scheduler) -> None:
     """--dry-run: each job's id and swept values, and a batch cluster's worker script."""
-    from knitlad.sweep import SweepError
+    from knitlad.studies.sweep import SweepError
 
     for job in jobs:
         typer.echo(f"{job.id}  " + " ".join(f"{k}={job.params[k]}" for k in cfg.sweep.axes))
@@ -519,7 +519,7 @@ def _list_jobs(cfg, jobs, scheduler) -> None:
 
 @app.command()
 def sweep(
-    config: str = typer.Argument(..., help="Sweep config (YAML); see configs/ and knitlad.sweep."),
+    config: str = typer.Argument(..., help="Sweep config (YAML); see configs/ and knitlad.studies.sweep."),
     out: str = typer.Option(None, "--out", help="Output folder; default runs/<config name>."),
     executor: str = typer.Option("pool", "--executor", help="pool (processes on this machine) or dask."),
     scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address (default: a local cluster)."),
@@ -543,7 +543,7 @@ def sweep(
     """
     from pathlib import Path
 
-    from knitlad.sweep import SweepError, load_sweep
+    from knitlad.studies.sweep import SweepError, load_sweep
 
     executor, scheduler = _sweep_backend(executor, scheduler, cluster)
     _check_sweep_options(executor, scheduler, workers, max_jobs)
@@ -556,7 +556,7 @@ def sweep(
         _list_jobs(cfg, jobs, scheduler)
         return
     from knitlad.io.folders import FolderError, FolderLock, writable_folder
-    from knitlad.runner import SchedulerError, connect, run_sweep
+    from knitlad.studies.runner import SchedulerError, connect, run_sweep
 
     if isinstance(scheduler, str):
         try:
@@ -582,7 +582,7 @@ def sweep(
         raise typer.Exit(143 if outcome.terminated else 130)
     typer.echo(f"{outcome.ran} jobs run ({outcome.failed} failed), {outcome.skipped} already done; summary: {summary}")
     if outcome.stale:
-        from knitlad.provenance import code_identity
+        from knitlad.io.provenance import code_identity
 
         typer.echo(f"knitlad: {len(outcome.stale)} finished jobs were made by another knitlad than this one "
                    f"({code_identity()}), kept (the summary's knitlad_code column); --rerun-stale runs them again",
@@ -610,8 +610,8 @@ def _sweep_table(folder):
     import pandas as pd
 
     from knitlad.io.summary import read_summary
-    from knitlad.runner import job_path, summary_row, trusted_attrs
-    from knitlad.sweep import SweepError, load_sweep
+    from knitlad.studies.runner import job_path, summary_row, trusted_attrs
+    from knitlad.studies.sweep import SweepError, load_sweep
 
     folder = Path(folder)
     problems = []
@@ -658,13 +658,13 @@ def plot(
     """
     from pathlib import Path
 
-    from knitlad.plots import (FORMATS, column_midline_diagram, job_figure_names, spatio_temporal_from_file,
+    from knitlad.viz.plots import (FORMATS, column_midline_diagram, job_figure_names, spatio_temporal_from_file,
                                summary_plots, tension_history_plot)
 
     if fmt not in FORMATS:
         fail(f"--format: one of {', '.join(FORMATS)}, got {fmt!r}")
     if (Path(folder) / "ladder.h5").is_file():
-        from knitlad.render import render_run
+        from knitlad.viz.render import render_run
 
         h5 = _run_file(folder)
         line = _CountProgress("render", "images")
@@ -680,7 +680,7 @@ def plot(
     if not (df["status"] == "ok").any():
         fail(f"{folder}: no finished job to plot yet")
     if "knitlad_code" in df:
-        from knitlad.provenance import code_identity
+        from knitlad.io.provenance import code_identity
 
         codes = sorted({str(c) for c in df.loc[df["status"] == "ok", "knitlad_code"]})
         if len(codes) > 1 or (codes and codes[0] != code_identity()):
@@ -707,7 +707,7 @@ def plot(
 
 def _render_jobs(out_dir, job_ids: list[str]) -> None:
     """The default renders (front view) of each ladder job, in ``out_dir/renders/<id>/``."""
-    from knitlad.render import render_run
+    from knitlad.viz.render import render_run
 
     for job in job_ids:
         try:
@@ -725,7 +725,7 @@ def _say_if_compiling() -> None:
     if numba.config.CACHE_DIR:  # NUMBA_CACHE_DIR: Numba keeps every cache there, in a tree of its own
         cached = any(Path(numba.config.CACHE_DIR).rglob("integrate.verlet_steps-*.nbi"))
     else:
-        cached = any((Path(__file__).resolve().parent / "kernels" / "__pycache__").glob("integrate.verlet_steps-*.nbi"))
+        cached = any((Path(__file__).resolve().parent / "engine" / "kernels" / "__pycache__").glob("integrate.verlet_steps-*.nbi"))
     if not cached:
         typer.echo("knitlad: compiling the kernels (the first run only: one to two minutes, then cached)", err=True)
 
@@ -763,11 +763,11 @@ def _experiment_or_exit(run, progress, kept: str = "nothing written"):
     """``run()`` (an experiment: run_ladder, run_protocol_b), every way it can end without a result said in
     one line: Ctrl-C (130) and SIGTERM (143), a run that failed (1), settings found infeasible once the knit
     is built (2)."""
-    from knitlad.observers import Interpenetration
-    from knitlad.protocol import InfeasibleRun
-    from knitlad.scenes.jersey import CourseTooWide
-    from knitlad.simulation import SimulationBlowUp
-    from knitlad.stretching import OutOfReach
+    from knitlad.fabric.observers import Interpenetration
+    from knitlad.experiments.protocol import InfeasibleRun
+    from knitlad.fabric.scenes.jersey import CourseTooWide
+    from knitlad.engine.simulation import SimulationBlowUp
+    from knitlad.fabric.stretching import OutOfReach
 
     previous = signal.signal(signal.SIGTERM, _on_sigterm)  # a batch system's kill: said, as Ctrl-C is
     try:
@@ -813,8 +813,8 @@ def _write_run_outputs(out_dir, result):
     nothing half-written left (temporary files removed, HDF5's complaints while closing a failed file
     kept off the terminal)."""
     from knitlad.io.hdf5 import write_ladder_result
-    from knitlad.plots import spatio_temporal_diagram
-    from knitlad.render import write_xdmf
+    from knitlad.viz.plots import spatio_temporal_diagram
+    from knitlad.io.xdmf import write_xdmf
 
     previous = sys.unraisablehook
     sys.unraisablehook = lambda info: None  # h5py's __dealloc__ of a file whose writes failed
@@ -871,7 +871,7 @@ def render(
     width: int = typer.Option(1200, "--width", help="Image width \\[pixels]; height 3/4 of it."),
 ) -> None:
     """Images of the fabric: yarns as tubes of their diameter coloured by course, the cut course black, undone cells red."""
-    from knitlad.render import render_run
+    from knitlad.viz.render import render_run
 
     h5 = _run_file(run)
     views = tuple(view or ("front", "oblique"))
@@ -902,7 +902,7 @@ def movie(
     width: int = typer.Option(960, "--width", help="Frame width \\[pixels]; height 3/4 of it."),
 ) -> None:
     """A movie of the laddering: every stored frame, front view, with a time stamp and the undone cells."""
-    from knitlad.render import movie as make_movie
+    from knitlad.viz.render import movie as make_movie
 
     h5 = _run_file(run)
     if fps < 1 or width < 64:

@@ -7,7 +7,7 @@ import dataclasses
 import os
 
 from knitlad.io.hdf5 import write_record
-from knitlad.runner import _record, job_path, summary_row
+from knitlad.studies.runner import _record, job_path, summary_row
 
 
 def fake_runner(job, jobs_dir: str, threads: int = 1, token=None) -> dict:
@@ -26,7 +26,7 @@ def fake_runner(job, jobs_dir: str, threads: int = 1, token=None) -> dict:
 @contextlib.contextmanager
 def fast_ladder_scene():
     """In this process, the ladder scene's runner returns at once (a summary and a writer of a record)."""
-    from knitlad import registry
+    from knitlad.studies import registry
 
     def instant(cfg, output, folder=None, progress=None):
         return {"fx_ini": 1.0}, lambda path, record: write_record(path, record)

@@ -89,9 +89,9 @@ def test_a_run_that_fails_is_reported_in_one_line_with_exit_code_1(tmp_path, mon
     force-control failure itself is tested in test_protocol."""
     from typer.testing import CliRunner
 
-    from knitlad import protocol
+    from knitlad.experiments import protocol
     from knitlad.cli import app
-    from knitlad.stretching import OutOfReach
+    from knitlad.fabric.stretching import OutOfReach
 
     def fail(settings, progress=None):
         raise OutOfReach("at l_x/l0 = 0.300 the relaxed knit already carries f_x = 0.40 > 0.05: use position control (--lx)")
@@ -112,7 +112,7 @@ def test_loop_prints_the_release_as_json():
 
 
 def test_presets_set_their_settings_and_an_explicit_one_wins():
-    from knitlad.config import CutConfig, LoopConfig, StitchConfig
+    from knitlad.experiments.config import CutConfig, LoopConfig, StitchConfig
 
     assert [CutConfig(fx=4, preset=p).resolution for p in ("fast", "default", "accurate")] == [24, 48, 96]
     assert [CutConfig(fx=4, preset=p).sagitta_radius for p in ("fast", "default", "accurate")] == [0, 11, 11]
@@ -127,7 +127,7 @@ def test_presets_set_their_settings_and_an_explicit_one_wins():
 
 
 def test_the_drag_of_cut_reaches_the_laddering_settings_and_defaults_to_none():
-    from knitlad.config import CutConfig
+    from knitlad.experiments.config import CutConfig
 
     assert CutConfig(fx=4).dynamics_settings().drag_per_s == 0.0
     assert CutConfig(fx=4, drag_per_s=2e3).dynamics_settings().drag_per_s == 2e3
@@ -136,7 +136,7 @@ def test_the_drag_of_cut_reaches_the_laddering_settings_and_defaults_to_none():
 
 
 def test_natural_curvature_turns_twist_on_and_needs_the_tiled_stretch():
-    from knitlad.config import CutConfig
+    from knitlad.experiments.config import CutConfig
 
     assert CutConfig(fx=4, natural_curvature=2).twist
     assert not CutConfig(fx=4).twist
@@ -220,7 +220,7 @@ def test_replace_validates_as_a_new_config_does():
     """The README taught model_copy(update=...), which took mu = -1 and dt_safety = 5."""
     from pydantic import ValidationError
 
-    from knitlad.config import CutConfig
+    from knitlad.experiments.config import CutConfig
 
     cfg = CutConfig(fx=4, preset="fast")
     assert cfg.replace(mu=0.8).mu == 0.8 and cfg.replace(mu=0.8).resolution == 24

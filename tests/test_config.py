@@ -1,12 +1,12 @@
-"""knitlad.config: the one declaration of each setting, its checks and its presets."""
+"""knitlad.experiments.config: the one declaration of each setting, its checks and its presets."""
 
 from __future__ import annotations
 
 import pytest
 from pydantic import ValidationError
 
-from knitlad.config import CutConfig, one_line
-from knitlad.presets import LADDER_PRESETS
+from knitlad.experiments.config import CutConfig, one_line
+from knitlad.fabric.presets import LADDER_PRESETS
 
 
 def test_a_preset_fills_what_is_not_given_and_a_given_value_wins():

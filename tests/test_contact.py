@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import knitlad as kl
-from knitlad.contact import ContactModel, contact_time_step, make_contacts
-from knitlad.kernels.contact import NORMAL_FORCE_SUM, TOUCHING, segment_closest_points
-from knitlad.scenes.weave import plain_weave
+from knitlad.engine.contact import ContactModel, contact_time_step, make_contacts
+from knitlad.engine.kernels.contact import NORMAL_FORCE_SUM, TOUCHING, segment_closest_points
+from knitlad.fabric.scenes.weave import plain_weave
 
 D = kl.NYLON.diameter
 
@@ -67,7 +67,7 @@ def test_contact_forces_obey_newtons_third_law_and_exert_no_torque():
 
 def brute_force_touching(rods, exclusion):
     """Touching edge pairs by an all-pairs search (the reference for the broad phase)."""
-    from knitlad.contact import edge_topology
+    from knitlad.engine.contact import edge_topology
 
     edge_yarn, edge_local, _, _ = edge_topology(rods.model)
     x = rods.state.x
@@ -87,7 +87,7 @@ def brute_force_touching(rods, exclusion):
 
 def touching_in_broad_phase(rods):
     """The touching pairs among the broad phase's candidates, and the exclusion it used."""
-    from knitlad.kernels.contact import refresh_contacts, segment_distance
+    from knitlad.engine.kernels.contact import refresh_contacts, segment_distance
 
     c = make_contacts(rods, ContactModel(stiffness=1e3))
     assert refresh_contacts(rods.state.x, rods.model.edge_a, rods.model.edge_b, rods.model.edge_shift, c)
@@ -108,7 +108,7 @@ def test_broad_phase_finds_exactly_the_pairs_of_an_all_pairs_search():
 
 def test_a_yarn_flung_far_away_coarsens_the_grid_and_no_touching_pair_is_missed():
     """The grid spans the bounding box: 10 m away, one yarn would make 1e10 cells of the reach."""
-    from knitlad.kernels.contact import MAX_CELLS_PER_EDGE
+    from knitlad.engine.kernels.contact import MAX_CELLS_PER_EDGE
 
     rods = pressed_weave()
     first = slice(int(rods.model.yarn_start[0]), int(rods.model.yarn_start[1]))
@@ -122,7 +122,7 @@ def test_a_yarn_flung_far_away_coarsens_the_grid_and_no_touching_pair_is_missed(
 
 
 def test_a_non_finite_position_finds_no_pair_for_its_edges_and_crashes_nothing():
-    from knitlad.kernels.contact import refresh_contacts
+    from knitlad.engine.kernels.contact import refresh_contacts
 
     rods = pressed_weave()
     rods.state.x[3] = np.nan
@@ -213,7 +213,7 @@ def test_union_counts_a_crossing_at_a_node_once_all_pairs_once_per_edge_of_the_n
 def test_counting_every_pair_halves_the_stable_contact_step():
     """all_pairs may put four pairs' stiffness on one node (a crossing at a node of both
     yarns), so its contact time-step limit is half that of union counting."""
-    from knitlad.contact import contact_time_step
+    from knitlad.engine.contact import contact_time_step
 
     rods = pressed_weave()
     union = contact_time_step(rods.model, ContactModel(stiffness=1e3))
@@ -227,9 +227,9 @@ def test_contact_forces_are_bit_for_bit_the_same_on_one_and_two_threads():
     """The pairs are evaluated in parallel blocks but added to the forces in pair order."""
     import numba
 
-    from knitlad import units
-    from knitlad.kernels.contact import MIN_PAIRS_PER_THREAD
-    from knitlad.simulation import numba_threads
+    from knitlad.engine import units
+    from knitlad.engine.kernels.contact import MIN_PAIRS_PER_THREAD
+    from knitlad.engine.simulation import numba_threads
 
     if numba.config.NUMBA_NUM_THREADS < 2:
         pytest.skip("needs two Numba threads")
@@ -256,7 +256,7 @@ def test_contact_forces_are_bit_for_bit_the_same_on_one_and_two_threads():
 def test_the_sagitta_correction_is_the_mean_offset_of_an_arc_from_its_chord():
     """On a circle of radius R, the arc over a chord of length l lies l^2 s (1 - s) / (2 R) from it at s
     along the chord, l^2 / (12 R) on average (to O(l/R)^2): exactly what the correction takes off."""
-    from knitlad.contact import sagitta_corrected_radius
+    from knitlad.engine.contact import sagitta_corrected_radius
 
     R, l, r = 11.0, 2.9, 0.5  # in diameters: the default preset's R, the fast preset's segment
     x = (np.linspace(0.0, 1.0, 200001) - 0.5) * l
@@ -294,8 +294,8 @@ def test_the_two_ends_of_a_cut_do_not_push_each_other_apart():
     """Segments of d/2 (140 nodes per stitch): the capsules on either side of a cut edge overlap by d/2.
     The pieces stay one yarn for the contact (RodModel.yarn_parent), so the new ends are neighbours
     along it and do not touch; two yarns built end to end at the same gap do."""
-    from knitlad.simulation import Simulation
-    from knitlad.state import cut_edge
+    from knitlad.engine.simulation import Simulation
+    from knitlad.engine.state import cut_edge
 
     scene = kl.Scene(kl.NYLON)
     straight_yarn(scene, 41, 0.5 * D)
@@ -357,7 +357,7 @@ def test_skipping_pairs_whose_stored_gap_rules_them_out_changes_no_bit():
     """The narrow phase skips candidate pairs whose gap at the list's rebuild exceeds their edges'
     displacements since: a shaken, pressed weave with friction steps to the same bits as with every
     pair tested at every evaluation (the stored gaps forgotten before each step)."""
-    from knitlad.kernels.contact import GAPS_KNOWN
+    from knitlad.engine.kernels.contact import GAPS_KNOWN
 
     def shaken(forget_gaps: bool) -> np.ndarray:
         rods = pressed_weave()

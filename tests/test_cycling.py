@@ -1,4 +1,4 @@
-"""Protocol B (knitlad.cycling): the cycles, delta l, the cut of a cycled knit, `knitlad cycle`."""
+"""Protocol B (knitlad.experiments.cycling): the cycles, delta l, the cut of a cycled knit, `knitlad cycle`."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from knitlad.config import CycleConfig
-from knitlad.cycling import HOLD, LOADING, UNLOADING, cut_cycled, run_cycles, shortening_to
-from knitlad.protocol import cut, stretch
+from knitlad.experiments.config import CycleConfig
+from knitlad.experiments.cycling import HOLD, LOADING, UNLOADING, cut_cycled, run_cycles, shortening_to
+from knitlad.experiments.protocol import cut, stretch
 
 
 def test_delta_l_is_read_between_readings_where_the_unloading_crosses_the_threshold():
@@ -111,7 +111,7 @@ def test_the_cycle_does_not_depend_on_the_bars_speed():
 def test_a_sweep_of_protocol_b_plots_its_damage_against_eq_1(tmp_path):
     import pandas as pd
 
-    from knitlad.plots import summary_plots
+    from knitlad.viz.plots import summary_plots
 
     table = pd.DataFrame({"status": ["ok", "ok", "failed"], "scene": ["cycle"] * 3, "ly": [0.25, 0.3, 0.3],
                           "predicted_damage": [0.5, 1.2, np.nan], "cut_n_lad_over_ny": [0.6, 1.0, np.nan],
@@ -123,7 +123,7 @@ def test_a_sweep_of_protocol_b_plots_its_damage_against_eq_1(tmp_path):
 def test_the_final_tension_plot_draws_the_three_readings_of_the_arrest(tmp_path):
     import pandas as pd
 
-    from knitlad.plots import final_tension_plot
+    from knitlad.viz.plots import final_tension_plot
 
     table = pd.DataFrame({"fx_ini": [2.0, 6.0], "fx_fin": [1.8, 4.0], "fx_fin_crossed": [1.5, 2.5],
                           "fx_fin_intact": [1.9, 5.0]})

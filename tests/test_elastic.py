@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import knitlad as kl
-from knitlad.kernels.elastic import edge_vectors, implicit_stretching_forces
-from knitlad.state import Workspace
-from knitlad.timestep import critical_time_steps
+from knitlad.engine.kernels.elastic import edge_vectors, implicit_stretching_forces
+from knitlad.engine.state import Workspace
+from knitlad.engine.timestep import critical_time_steps
 
 
 def two_wavy_yarns_one_held_in_the_middle():

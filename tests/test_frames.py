@@ -1,4 +1,4 @@
-"""Reference frames (knitlad.kernels.frames): the signed angle that advances the reference twist, the
+"""Reference frames (knitlad.engine.kernels.frames): the signed angle that advances the reference twist, the
 reference twist by the holonomy of the tangents, and the frames rebuilt from anchors and that twist."""
 
 import math
@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from knitlad.kernels.frames import (
+from knitlad.engine.kernels.frames import (
     _signed_angle,
     bishop_reference_directors,
     parallel_transport,

@@ -56,9 +56,9 @@ def test_the_summary_reads_back_as_written(tmp_path):
 
 
 def test_a_stretched_knit_reads_back_to_the_bit(tmp_path):
-    from knitlad.config import CutConfig
+    from knitlad.experiments.config import CutConfig
     from knitlad.io.hdf5 import read_stretched_knit, write_stretched_knit
-    from knitlad.protocol import stretch
+    from knitlad.experiments.protocol import stretch
 
     knit = stretch(CutConfig(n_x=4, n_y=6, lx=0.36, preset="fast", resolution=12, steps_per_increment=5).stretch_settings())
     back = read_stretched_knit(write_stretched_knit(tmp_path / "k.h5", knit))
@@ -67,3 +67,20 @@ def test_a_stretched_knit_reads_back_to_the_bit(tmp_path):
     for a, b in zip(knit.knit.rods.model, back.knit.rods.model):
         np.testing.assert_array_equal(a, b)
     assert back.fx_ini == knit.fx_ini
+
+
+def test_outputs_name_the_commit_of_the_checkout_they_came_from():
+    """io.provenance: run from a git checkout, the code identity is version+commit (the commit git names)."""
+    import subprocess
+    from pathlib import Path
+
+    from knitlad import __version__
+    from knitlad.io.provenance import code_commit, code_identity
+
+    root = Path(__file__).resolve().parents[1]
+    if not (root / ".git").exists():
+        pytest.skip("not a git checkout")
+    head = subprocess.run(["git", "-C", str(root), "rev-parse", "--short=12", "HEAD"], capture_output=True,
+                          text=True).stdout.strip()
+    assert code_commit().startswith(head)
+    assert code_identity().startswith(f"{__version__}+{head}")

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import knitlad as kl
-from knitlad.contact import ContactModel, make_contacts
-from knitlad.kernels.contact import refresh_contacts, segment_distance
-from knitlad.scenes.jersey import Jersey, build_jersey
-from knitlad.topology import piercings
+from knitlad.engine.contact import ContactModel, make_contacts
+from knitlad.engine.kernels.contact import refresh_contacts, segment_distance
+from knitlad.fabric.scenes.jersey import Jersey, build_jersey
+from knitlad.fabric.topology import piercings
 
 D = kl.NYLON.diameter
 L0 = kl.NYLON.stitch_length

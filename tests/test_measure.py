@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import knitlad as kl
-from knitlad.measure import (
+from knitlad.fabric.measure import (
     cell_overlap,
     ladder_front,
     ladders_started,
@@ -18,8 +18,8 @@ from knitlad.measure import (
     periodicities,
     tension_per_thread,
 )
-from knitlad.scenes.jersey import Jersey, build_jersey
-from knitlad.state import cut_edge
+from knitlad.fabric.scenes.jersey import Jersey, build_jersey
+from knitlad.engine.state import cut_edge
 
 L0 = kl.NYLON.stitch_length
 
@@ -122,7 +122,7 @@ def test_each_course_carries_its_own_tension_and_their_mean_is_the_knit_s():
     """Three courses clamped by two nodes at each end, pulled by 2, 4 and 6 f0 (the right ends along +x,
     the left along -x, split unevenly over the clamp's two nodes): course_tensions gives 2, 4, 6 and
     tension_per_thread their mean, 4."""
-    from knitlad.measure import course_tensions, tension_per_thread
+    from knitlad.fabric.measure import course_tensions, tension_per_thread
 
     f0 = 0.0148
     left, right = np.array([[0, 1], [2, 3], [4, 5]]), np.array([[6, 7], [8, 9], [10, 11]])

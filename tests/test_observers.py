@@ -1,11 +1,11 @@
-"""The stop rules and recorders of knitlad.observers."""
+"""The stop rules and recorders of knitlad.fabric.observers."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from knitlad.observers import TOP_ROWS_HELD, Arrested, EdgeReached
+from knitlad.fabric.observers import TOP_ROWS_HELD, Arrested, EdgeReached
 
 
 def test_the_top_edge_is_the_row_below_the_held_course():
@@ -38,8 +38,8 @@ def test_a_pair_that_separated_is_not_read_as_sliding():
 
     import numpy as np
 
-    from knitlad.kernels.contact import OVERLAP, PAIR_RESULTS, SLIDING as SLIDING_COLUMN
-    from knitlad.observers import FREE, SLIDING, TOUCHING, node_contact_state
+    from knitlad.engine.kernels.contact import OVERLAP, PAIR_RESULTS, SLIDING as SLIDING_COLUMN
+    from knitlad.fabric.observers import FREE, SLIDING, TOUCHING, node_contact_state
 
     results = np.zeros((3, PAIR_RESULTS))
     results[0, OVERLAP], results[0, SLIDING_COLUMN] = 1e-3, 1.0  # touching and sliding
@@ -57,7 +57,7 @@ def test_the_progress_of_a_ladder_is_how_far_its_front_has_gone():
     ladders stop at an edge course long before."""
     import numpy as np
 
-    from knitlad.observers import FrontRecorder
+    from knitlad.fabric.observers import FrontRecorder
 
     n_y, cut = 10, 5
     fronts = FrontRecorder((2, 3), cut)

@@ -1,4 +1,4 @@
-"""knitlad.obstacles: rigid planes and cylinders, their checks, their motion (the contact law: tests/test_examples.py)."""
+"""knitlad.engine.obstacles: rigid planes and cylinders, their checks, their motion (the contact law: tests/test_examples.py)."""
 
 from __future__ import annotations
 

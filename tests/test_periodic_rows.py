@@ -1,5 +1,5 @@
-"""Rows periodic along the course (knitlad.scenes.rows) and the period under an imposed tension
-(knitlad.periodic_loop.TensionBox): checked on straight rows, whose tension is EA times the strain."""
+"""Rows periodic along the course (knitlad.fabric.scenes.rows) and the period under an imposed tension
+(knitlad.experiments.periodic_loop.TensionBox): checked on straight rows, whose tension is EA times the strain."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 import knitlad as kl
-from knitlad.contact import ContactModel
-from knitlad.periodic_loop import TensionBox
-from knitlad.scenes.rows import IMAGES_X, build_periodic_rows
+from knitlad.engine.contact import ContactModel
+from knitlad.experiments.periodic_loop import TensionBox
+from knitlad.fabric.scenes.rows import IMAGES_X, build_periodic_rows
 
 M = kl.NYLON
 REST = 3.0  # period at rest [internal length, mm]

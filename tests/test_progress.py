@@ -1,4 +1,4 @@
-"""Progress lines (knitlad.progress) and the sweep's line that moves inside a running job."""
+"""Progress lines (knitlad.io.progress) and the sweep's line that moves inside a running job."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import io
 
 import pytest
 
-from knitlad import progress as pg
-from knitlad.progress import ProgressFile, ProgressLine, duration, job_fraction
+from knitlad.io import progress as pg
+from knitlad.io.progress import ProgressFile, ProgressLine, duration, job_fraction
 
 
 def test_durations_read_as_seconds_minutes_or_hours():
@@ -67,7 +67,7 @@ def test_a_job_is_a_tenth_done_when_its_stretch_ends():
 
 
 def test_the_sweep_line_counts_the_running_jobs_own_progress(tmp_path):
-    from knitlad.runner import SweepProgress
+    from knitlad.studies.runner import SweepProgress
 
     ProgressFile(tmp_path / "a.progress", every_s=0.0)("propagate", 0.5)
     ProgressFile(tmp_path / "b.progress", every_s=0.0)("stretch", 1.0)
@@ -83,8 +83,8 @@ def test_the_sweep_line_counts_the_running_jobs_own_progress(tmp_path):
 
 def test_a_laddering_job_reports_its_stages_and_leaves_no_progress_file(tmp_path, monkeypatch):
     """run_job hands the scene a progress file; the stretch and the ladder report through it."""
-    from knitlad import runner
-    from knitlad.sweep import Job, Output
+    from knitlad.studies import runner
+    from knitlad.studies.sweep import Job, Output
 
     seen = []
 

@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from knitlad import units
-from knitlad.config import CutConfig
-from knitlad.protocol import KnitBox, analyse, build_width, cut, propagate, stretch
-from knitlad.scenes.jersey import BUILD_LX
-from knitlad.stretching import OutOfReach, stretch_to
-from knitlad.timestep import DEFAULT_SAFETY
-from knitlad.units import NYLON
+from knitlad.engine import units
+from knitlad.experiments.config import CutConfig
+from knitlad.experiments.protocol import KnitBox, analyse, build_width, cut, propagate, stretch
+from knitlad.fabric.scenes.jersey import BUILD_LX
+from knitlad.fabric.stretching import OutOfReach, stretch_to
+from knitlad.engine.timestep import DEFAULT_SAFETY
+from knitlad.engine.units import NYLON
 
 
 def config(**kw) -> CutConfig:
@@ -168,7 +168,7 @@ def test_a_stretched_knit_written_and_read_back_ladders_the_same(tmp_path):
 
 def test_observers_and_stop_rules_are_handed_to_the_run_loop():
     """propagate calls the observers it is given with (t, run, undone cells) and stops by the rules."""
-    from knitlad.observers import TimeLimit
+    from knitlad.fabric.observers import TimeLimit
 
     cfg = config(n_x=4, n_y=4, resolution=16, lx=0.34)
     seen = []
@@ -220,7 +220,7 @@ def test_a_heavier_spin_softens_only_the_friction_couples_share_of_the_contact_l
 def test_cut_edge_cuts_every_array_along_its_axis():
     """cut_edge removes one entry of every edge array and the hinges of that edge, whatever the
     fields: each field of the model and the state declares its axis once (MODEL_AXES, STATE_AXES)."""
-    from knitlad.state import EDGE, HINGE, MODEL_AXES, STATE_AXES, RodModel, RodState, cut_edge
+    from knitlad.engine.state import EDGE, HINGE, MODEL_AXES, STATE_AXES, RodModel, RodState, cut_edge
 
     assert set(MODEL_AXES) == set(RodModel._fields) and set(STATE_AXES) == set(RodState._fields)
     knit = stretch(config(n_x=4, n_y=4, resolution=16, lx=0.32).stretch_settings())

@@ -1,4 +1,4 @@
-"""knitlad.quasistatic: equilibrium through damped dynamics, friction included."""
+"""knitlad.engine.quasistatic: equilibrium through damped dynamics, friction included."""
 
 from __future__ import annotations
 

@@ -1,11 +1,11 @@
-"""knitlad.registry: each scene names its config, runner and summary columns once."""
+"""knitlad.studies.registry: each scene names its config, runner and summary columns once."""
 
 from __future__ import annotations
 
 import inspect
 
-from knitlad.config import CutConfig
-from knitlad.registry import SCENES, stretch_of
+from knitlad.experiments.config import CutConfig
+from knitlad.studies.registry import SCENES, stretch_of
 
 
 def test_every_scene_has_a_runner_taking_the_progress_and_distinct_summary_columns():

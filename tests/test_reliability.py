@@ -19,8 +19,8 @@ import yaml
 
 from knitlad.io.folders import LOCK_NAME, FolderError, FolderLock
 from knitlad.io.summary import read_summary
-from knitlad.runner import ABANDONED, job_path, run_job, run_sweep, trusted_attrs
-from knitlad.sweep import SweepError, load_sweep
+from knitlad.studies.runner import ABANDONED, job_path, run_job, run_sweep, trusted_attrs
+from knitlad.studies.sweep import SweepError, load_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 KNITLAD = [sys.executable, "-m", "knitlad.cli"]
@@ -93,7 +93,7 @@ def test_an_output_path_that_cannot_be_a_folder_is_refused_before_any_compute(tm
 def test_a_job_whose_file_cannot_be_written_fails_alone(tmp_path, monkeypatch):
     """A full disk or an I/O error while writing: the job is failed, with the reason; the
     sweep goes on (below, in a pool)."""
-    from knitlad import registry
+    from knitlad.studies import registry
 
     job = fake_jobs(tmp_path, [0.4])[0]
     (tmp_path / "jobs").mkdir()
@@ -138,7 +138,7 @@ def test_a_rerun_that_leaves_failed_jobs_exits_1_and_names_them(tmp_path):
 def _real_job_file(tmp_path: Path, job):
     """A job file written as a finished ladder job's is, with datasets (and their checksums)."""
     from knitlad.io.hdf5 import _set_attrs
-    from knitlad.runner import _record
+    from knitlad.studies.runner import _record
 
     path = job_path(tmp_path / "jobs", job)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -260,7 +260,7 @@ def test_sigterm_ends_a_sweep_with_exit_code_143(tmp_path):
 
 def test_a_sigterm_during_a_submit_arrives_after_it():
     """The pool's submit runs with Ctrl-C and SIGTERM held, and the signal comes after the block."""
-    from knitlad.runner import _interrupts_deferred
+    from knitlad.studies.runner import _interrupts_deferred
 
     seen = []
 
@@ -307,7 +307,7 @@ def test_a_validation_error_never_formats_the_whole_input(monkeypatch):
     most of the 58 s of an alias bomb's one-line error."""
     from pydantic import ValidationError
 
-    from knitlad.config import CutConfig, one_line
+    from knitlad.experiments.config import CutConfig, one_line
 
     with pytest.raises(ValidationError) as info:
         CutConfig(lx=0.4, n_x=list(range(1000)))
@@ -332,8 +332,8 @@ def test_a_run_of_absurdly_many_steps_is_refused_before_its_first_step(option, t
 
 def test_a_step_longer_than_the_observation_interval_is_refused():
     """d/l0 = 1e-6 gave a 1.2 ms step against 20 us between observations: the run 'finished' in 2 steps."""
-    from knitlad.config import CutConfig
-    from knitlad.protocol import InfeasibleRun, check_feasible
+    from knitlad.experiments.config import CutConfig
+    from knitlad.experiments.protocol import InfeasibleRun, check_feasible
 
     dynamics = CutConfig(lx=0.38, preset="fast").dynamics_settings()
     check_feasible(1e-8, dynamics)
@@ -344,8 +344,8 @@ def test_a_step_longer_than_the_observation_interval_is_refused():
 # ------------------------------------------------------------------ the stretched-knit cache
 @pytest.fixture(scope="module")
 def tiny_knit():
-    from knitlad.config import CutConfig
-    from knitlad.protocol import stretch
+    from knitlad.experiments.config import CutConfig
+    from knitlad.experiments.protocol import stretch
 
     settings = CutConfig(n_x=4, n_y=4, lx=0.34, preset="fast", resolution=16).stretch_settings()
     return settings, stretch(settings)
@@ -467,7 +467,7 @@ def test_an_address_that_answers_but_is_no_dask_scheduler_is_one_line_in_seconds
     import threading
 
     pytest.importorskip("distributed")
-    from knitlad.runner import SCHEDULER_TIMEOUT_S, SchedulerError, connect
+    from knitlad.studies.runner import SCHEDULER_TIMEOUT_S, SchedulerError, connect
 
     server = socket.socket()
     server.bind(("127.0.0.1", 0))
@@ -499,7 +499,7 @@ def test_an_address_that_answers_but_is_no_dask_scheduler_is_one_line_in_seconds
 def test_a_job_file_written_while_the_sweep_stopped_is_in_the_summary(tmp_path):
     """After Ctrl-C on Dask, tasks already past the cancel wrote their files 1-2 s later, and the summary
     still listed them as pending: the rows are taken from the trusted files once the workers are stopped."""
-    from knitlad.runner import SweepOutcome, _take_late_files, summary_row
+    from knitlad.studies.runner import SweepOutcome, _take_late_files, summary_row
     from tests.sweep_helpers import fast_ladder_scene
 
     jobs = fake_jobs(tmp_path, [0.1, 0.2])
@@ -514,7 +514,7 @@ def test_a_job_file_written_while_the_sweep_stopped_is_in_the_summary(tmp_path):
 
 def test_the_summary_is_not_rewritten_after_every_job_and_is_whole_at_the_end(tmp_path, monkeypatch):
     """A 10,000-job sweep rewrote summary.csv after each job (0.22 s each, 36 min in all)."""
-    from knitlad import runner
+    from knitlad.studies import runner
     from tests.sweep_helpers import fake_runner
 
     writes = []
@@ -537,7 +537,7 @@ def test_a_knit_stretched_until_it_comes_apart_is_no_result(tmp_path):
 
 def test_force_stretches_again(tmp_path):
     """--force reran every job but reused the cached stretched knits."""
-    from knitlad.runner import run_sweep as sweep
+    from knitlad.studies.runner import run_sweep as sweep
 
     cached = tmp_path / "out" / "stretched"
     cached.mkdir(parents=True)

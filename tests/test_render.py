@@ -27,7 +27,7 @@ def run_folder(tmp_path_factory):
 def test_a_render_shows_the_fabric_as_tubes_with_the_cut_course_marked(run_folder):
     import imageio.v2 as imageio
 
-    from knitlad.render import render_run
+    from knitlad.viz.render import render_run
 
     paths = render_run(run_folder / "ladder.h5", run_folder / "render", [0.0, 0.2e-3], ("front", "oblique"), (320, 240))
     assert len(paths) == 4
@@ -51,7 +51,7 @@ def test_the_first_frame_is_the_knit_just_cut_and_the_last_the_stop(run_folder):
 def test_a_movie_has_every_frame(run_folder):
     import imageio.v2 as imageio
 
-    from knitlad.render import movie
+    from knitlad.viz.render import movie
 
     seen = []
     path = movie(run_folder / "ladder.h5", run_folder / "ladder.gif", size=(160, 120),

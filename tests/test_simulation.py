@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import knitlad as kl
-from knitlad.scenes.rod import Cantilever
+from knitlad.fabric.scenes.rod import Cantilever
 
 
 def test_time_step_limit_matches_the_textbook_stretching_bound():
@@ -98,7 +98,7 @@ def _free_rod():
 
 def test_the_twist_path_is_framed_only_where_the_yarn_has_natural_curvature():
     """Twist through material frames for natural curvature (or when asked), else the frame-free path."""
-    from knitlad.kernels.integrate import TWIST_FRAMED, TWIST_OFF, TWIST_STRAIGHT
+    from knitlad.engine.kernels.integrate import TWIST_FRAMED, TWIST_OFF, TWIST_STRAIGHT
 
     s = np.linspace(0.0, 3e-3, 13)
     arc = np.column_stack([s, 0.2 * s**2 / 3e-3, 0 * s])
@@ -117,9 +117,9 @@ def test_the_twist_path_is_framed_only_where_the_yarn_has_natural_curvature():
 @pytest.mark.parametrize("predicted", [False, True])
 def test_the_damped_limit_factor_is_the_integrators_stability_limit(predicted):
     """A mass on a spring and dashpot (zeta 0.3), stepped by the kernels at 2 % below and above
-    2 f(zeta) / omega (:func:`knitlad.timestep.damped_limit_factor`): bounded below, growing above."""
-    from knitlad.kernels.integrate import DASHPOTS_HALF_STEP, DASHPOTS_PREDICTED, compute_forces, verlet_steps
-    from knitlad.timestep import damped_limit_factor
+    2 f(zeta) / omega (:func:`knitlad.engine.timestep.damped_limit_factor`): bounded below, growing above."""
+    from knitlad.engine.kernels.integrate import DASHPOTS_HALF_STEP, DASHPOTS_PREDICTED, compute_forces, verlet_steps
+    from knitlad.engine.timestep import damped_limit_factor
 
     mode = DASHPOTS_PREDICTED if predicted else DASHPOTS_HALF_STEP
     amplitudes = []
@@ -147,9 +147,9 @@ def test_a_twisting_yarn_straight_at_rest_hands_back_complete_frames():
     a kernel returns: after steps of a springing helix, an open yarn cut in two and a ring, every frame is
     unit, normal to its tangent, and agrees with the reference twist (update_reference_twist, which
     adds the angle between the transported frame turned by the twist and the stored one, adds nothing)."""
-    from knitlad.kernels.frames import update_reference_twist
-    from knitlad.kernels.integrate import TWIST_STRAIGHT
-    from knitlad.state import cut_edge
+    from knitlad.engine.kernels.frames import update_reference_twist
+    from knitlad.engine.kernels.integrate import TWIST_STRAIGHT
+    from knitlad.engine.state import cut_edge
 
     s = np.linspace(0.0, 4.0 * np.pi, 41)
     helix = 1e-3 * np.column_stack([np.cos(s), np.sin(s), 0.3 * s])
@@ -232,7 +232,7 @@ def _governed(g, chunks: int, seconds_per_step, idle=None) -> list[int]:
 
 
 def test_the_thread_governor_keeps_the_faster_count_and_tries_two_only_where_a_core_is_free():
-    from knitlad.simulation import ThreadGovernor
+    from knitlad.engine.simulation import ThreadGovernor
 
     def governor():
         g = ThreadGovernor()
@@ -257,9 +257,9 @@ def test_the_thread_governor_keeps_the_faster_count_and_tries_two_only_where_a_c
 def test_switching_thread_counts_mid_run_changes_no_bit():
     """The governor may change the count every chunk: the positions are those of a one-thread run."""
     counts = []
-    from knitlad.contact import ContactModel
-    from knitlad.scenes.weave import plain_weave
-    from knitlad.simulation import numba_threads
+    from knitlad.engine.contact import ContactModel
+    from knitlad.fabric.scenes.weave import plain_weave
+    from knitlad.engine.simulation import numba_threads
 
     def run(threads: int, probe_often: bool):
         rods = plain_weave(4, spacing=4 * kl.NYLON.diameter, nodes_per_spacing=6,
@@ -280,7 +280,7 @@ def test_switching_thread_counts_mid_run_changes_no_bit():
 def test_a_relaxation_takes_the_chunks_choice_or_one_thread_when_the_load_says_the_cores_are_taken(monkeypatch):
     import os
 
-    from knitlad.simulation import ThreadGovernor
+    from knitlad.engine.simulation import ThreadGovernor
 
     g = ThreadGovernor()
     g.cpus = (0, 1)

@@ -54,6 +54,29 @@ def test_natural_curvature_needs_twist():
         scene.build(twist=False)
 
 
+def test_the_framed_mode_is_said_never_read_from_the_arrays():
+    """A yarn built with its curved rest shape is framed (the kernels' framed DER); one straight at rest is
+    not, even with twist; a natural curvature handed over without the mode is refused, not guessed."""
+    bent = line(5) + np.array([[0, 0, 0], [0, 1e-4, 0], [0, 0, 0], [0, 1e-4, 0], [0, 0, 0]])
+    scene = kl.Scene()
+    scene.add_yarn(bent, natural_curvature="rest")
+    rods = scene.build()
+    assert rods.twist and rods.framed and np.any(rods.model.kappa_bar)
+    assert kl.Simulation(rods).twist_mode == kl.engine.kernels.integrate.TWIST_FRAMED
+    straight = kl.Scene()
+    straight.add_yarn(bent)
+    plain = straight.build(twist=True)
+    assert plain.twist and not plain.framed
+    assert kl.Simulation(plain).twist_mode == kl.engine.kernels.integrate.TWIST_STRAIGHT
+    unsaid = plain.replace_model(kappa_bar=rods.model.kappa_bar)
+    with pytest.raises(ValueError, match="framed"):
+        kl.Simulation(unsaid)
+    assert kl.Simulation(plain.replace_model(kappa_bar=rods.model.kappa_bar, framed=True)).twist_mode == \
+        kl.engine.kernels.integrate.TWIST_FRAMED
+    with pytest.raises(ValueError, match="need twist"):
+        kl.Rods(rods.model, rods.state, twist=False, framed=True)
+
+
 def test_hold_out_of_range_is_refused():
     scene = kl.Scene()
     y = scene.add_yarn(line(4))
@@ -85,8 +108,8 @@ def test_a_node_on_a_rail_moves_only_along_it():
 def test_a_softer_yarn_keeps_its_tensions_and_takes_a_longer_step():
     """with_axial_stiffness: EA' = EA/4 with the rest lengths reset, so every force of a stretched,
     bent rod is unchanged to round-off, and the stretching limit of the step doubles (1/sqrt(factor))."""
-    from knitlad.state import with_axial_stiffness
-    from knitlad.timestep import critical_time_steps
+    from knitlad.engine.state import with_axial_stiffness
+    from knitlad.engine.timestep import critical_time_steps
 
     n = 21
     s = np.linspace(0.0, 1.0, n)
@@ -110,7 +133,7 @@ def test_a_softer_yarn_keeps_its_tensions_and_takes_a_longer_step():
 def test_frame_anchors_are_the_yarn_starts_and_the_cut_ends_and_need_hinges_in_order():
     """The edges whose reference frame the frame-free twist carries: each yarn's first edge and an edge
     no hinge ends on; the rebuild of the others needs the hinges stored along the yarn (refused if not)."""
-    from knitlad.state import cut_edge, frame_anchors
+    from knitlad.engine.state import cut_edge, frame_anchors
 
     scene = kl.Scene()
     scene.add_yarn(line(9) + np.array([[0, 1e-4 * (i % 2), 0] for i in range(9)]))  # a zigzag

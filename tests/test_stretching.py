@@ -1,10 +1,10 @@
-"""knitlad.stretching against a box whose mechanics are known: a linear knit that creeps to equilibrium."""
+"""knitlad.fabric.stretching against a box whose mechanics are known: a linear knit that creeps to equilibrium."""
 
 from __future__ import annotations
 
 import pytest
 
-from knitlad.stretching import OutOfReach, force_control, relax_to_steady_tension, stretch_to
+from knitlad.fabric.stretching import OutOfReach, force_control, relax_to_steady_tension, stretch_to
 
 
 class CreepingBox:

@@ -17,8 +17,8 @@ import yaml
 
 from knitlad.io.hdf5 import read_attrs
 from knitlad.io.summary import TIMING_COLUMNS, read_summary
-from knitlad.runner import run_sweep
-from knitlad.sweep import Job, SweepConfig, SweepError, expand, job_id, load_sweep
+from knitlad.studies.runner import run_sweep
+from knitlad.studies.sweep import Job, SweepConfig, SweepError, expand, job_id, load_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 KNITLAD = [sys.executable, "-m", "knitlad.cli"]
@@ -111,7 +111,7 @@ def test_a_finished_job_written_before_a_field_was_added_is_still_trusted(tmp_pa
     import json
 
     from knitlad.io.hdf5 import write_record
-    from knitlad.runner import job_path, trusted_attrs
+    from knitlad.studies.runner import job_path, trusted_attrs
 
     job = expand(SweepConfig.model_validate({"scene": "ladder", "fixed": {**TINY, "lx": 0.35},
                                              "sweep": {"axes": {"mu": [0.4]}}}))[0]
@@ -218,7 +218,7 @@ def test_plot_writes_the_format_asked_and_refuses_an_unknown_one(smoke, tmp_path
 
 
 def test_job_figures_are_named_by_what_varies_and_told_apart_by_id_when_that_is_not_enough():
-    from knitlad.plots import job_figure_names
+    from knitlad.viz.plots import job_figure_names
 
     df = pd.DataFrame({"job_id": ["a1", "b2", "c3"], "scene": "ladder", "n_x": 16, "mu": [0.4, 0.4, 0.0],
                        "fx": [2.0, 2.0, 4.5], "status": "ok", "fx_ini": [2.01, 1.99, 4.49]})
@@ -314,7 +314,7 @@ def test_a_stitch_sweep_maps_the_tension_sign(tmp_path):
 def test_jobs_that_share_a_stretch_stretch_once_and_ladder_as_fresh_runs(tmp_path):
     """A sweep over the dynamics (here mu) stretches its knit once (`<out>/stretched/`); the job
     that reuses it gives the very ladder a fresh run gives."""
-    from knitlad.protocol import run_ladder
+    from knitlad.experiments.protocol import run_ladder
 
     cfg = {"fixed": {**TINY, "lx": 0.38, "max_time_ms": 0.5}, "sweep": {"axes": {"mu": [0.4, 0.0]}}}
     _, jobs = load_sweep(write_config(tmp_path / "c.yaml", cfg))

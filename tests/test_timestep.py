@@ -1,4 +1,4 @@
-"""knitlad.timestep: the damped oscillator's stability limit under this code's Verlet, against the map itself."""
+"""knitlad.engine.timestep: the damped oscillator's stability limit under this code's Verlet, against the map itself."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from knitlad.timestep import damped_limit_factor
+from knitlad.engine.timestep import damped_limit_factor
 
 
 def grows(h: float, zeta: float, predicted: bool, steps: int = 4000) -> bool:

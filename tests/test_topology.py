@@ -1,4 +1,4 @@
-"""knitlad.topology: piercings of a ring's spanning surface, against hand-built curves."""
+"""knitlad.fabric.topology: piercings of a ring's spanning surface, against hand-built curves."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from knitlad.topology import piercings
+from knitlad.fabric.topology import piercings
 
 
 def ring(n: int = 24, r: float = 1.0) -> np.ndarray:

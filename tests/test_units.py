@@ -2,8 +2,8 @@ import math
 
 import pytest
 
-from knitlad import units
-from knitlad.units import NYLON, Material, Scales
+from knitlad.engine import units
+from knitlad.engine.units import NYLON, Material, Scales
 
 
 def test_paper_scales_within_its_rounding():

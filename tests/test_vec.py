@@ -1,8 +1,8 @@
-"""Scalar vector helpers (knitlad.kernels.vec): the sine and cosine the frames use."""
+"""Scalar vector helpers (knitlad.engine.kernels.vec): the sine and cosine the frames use."""
 
 import numpy as np
 
-from knitlad.kernels.vec import sincos
+from knitlad.engine.kernels.vec import sincos
 
 
 def test_sincos_is_libm_to_an_ulp():

@@ -27,10 +27,10 @@ A trajectory of one's own scene (:func:`write_trajectory`) has ``/frames`` (no `
     /contacts/points, normal_force, friction_force   (n_pairs, 3) float32 [m], [N], [N] (on the first edge)
     /contacts/sliding   (n_pairs,) uint8: 1 at the Coulomb limit
 
-A stretched knit (:class:`knitlad.protocol.StretchedKnit`, ``stretched.h5``): its scalars
+A stretched knit (:class:`knitlad.experiments.protocol.StretchedKnit`, ``stretched.h5``): its scalars
 and settings as attributes, ``/model/*`` and ``/state/*`` (the arrays of
-:class:`knitlad.state.RodModel` and :class:`~knitlad.state.RodState`, internal units)
-and ``/knit/*`` (the course bookkeeping of :class:`knitlad.scenes.jersey.KnitScene`).
+:class:`knitlad.engine.state.RodModel` and :class:`~knitlad.engine.state.RodState`, internal units)
+and ``/knit/*`` (the course bookkeeping of :class:`knitlad.fabric.scenes.jersey.KnitScene`).
 """
 
 from __future__ import annotations
@@ -49,8 +49,9 @@ import numpy as np
 
 from knitlad import __version__
 from knitlad.io.atomic import atomic_path
-from knitlad.provenance import code_identity
-from knitlad.units import Scales
+from knitlad.io.kinds import TRAJECTORY_KIND, is_trajectory
+from knitlad.io.provenance import code_identity
+from knitlad.engine.units import Scales
 
 
 def jsonable(obj):
@@ -79,8 +80,8 @@ def checksummed_dataset(group, name: str, data, compression: str | None = None) 
 
 def _node_fields(group, frames: np.ndarray, edges: np.ndarray, compression) -> None:
     """Per node and frame: axial strain (against the edge lengths of the first frame, the knit
-    at rest just cut) and curvature [1/m], float32 (for ParaView: knitlad.render.write_xdmf)."""
-    from knitlad.measure import node_strain_and_curvature
+    at rest just cut) and curvature [1/m], float32 (for ParaView: knitlad.io.xdmf.write_xdmf)."""
+    from knitlad.fabric.measure import node_strain_and_curvature
 
     rest = np.linalg.norm(frames[0][edges[:, 1]].astype(float) - frames[0][edges[:, 0]], axis=1)
     fields = [node_strain_and_curvature(np.asarray(x, dtype=float), edges, rest) for x in frames]
@@ -119,17 +120,8 @@ class RunFileError(ValueError):
 RUN_ATTRIBUTES = ("settings_json", "scale_l0_m", "scale_d_m", "box_lx_over_l0", "ly_over_l0")
 RUN_DATASETS = ("frames/positions", "frames/time", "frames/laddered", "topology/edges", "topology/node_course",
                 "cells/centres", "series/time", "series/fx")
-TRAJECTORY_KIND = "trajectory of one's own scene"  # settings_json of a write_trajectory file
 TRAJECTORY_ATTRIBUTES = ("settings_json", "scale_d_m")
 TRAJECTORY_DATASETS = ("frames/positions", "frames/time", "topology/edges", "topology/node_course")
-
-
-def is_trajectory(f: h5py.File) -> bool:
-    """Whether an open run file is a trajectory of one's own scene (:func:`write_trajectory`), not a laddering run."""
-    try:
-        return json.loads(f.attrs.get("settings_json", "{}")).get("kind") == TRAJECTORY_KIND
-    except (ValueError, AttributeError):
-        return False
 
 
 def check_run_file(path: str | Path) -> None:
@@ -179,7 +171,7 @@ def _extra_datasets(f: h5py.File, datasets: dict | None) -> None:
 
 def write_ladder_result(path: str | Path, result, compression: str | None = "gzip", attrs: dict | None = None,
                         datasets: dict | None = None) -> Path:
-    """Write one run (:class:`knitlad.protocol.LadderResult`); ``attrs`` adds file attributes (a sweep's job
+    """Write one run (:class:`knitlad.experiments.protocol.LadderResult`); ``attrs`` adds file attributes (a sweep's job
     record), ``datasets`` more datasets by path (``{"cycle/readings": array}``: the loading before the cut)."""
     path = Path(path)
     with atomic_hdf5(path) as f:
@@ -245,10 +237,10 @@ RUN_UNITS = {
 
 def write_trajectory(path: str | Path, recorder, material=None, compression: str | None = "gzip",
                      xdmf: bool = True) -> Path:
-    """The frames of a :class:`knitlad.observers.TrajectoryRecorder` as a run file is written (``/frames``,
+    """The frames of a :class:`knitlad.fabric.observers.TrajectoryRecorder` as a run file is written (``/frames``,
     ``/fields``, ``/topology``; ``node_course`` holds each node's yarn), with units, checksums, the code's
     identity and the material's scales; with ``xdmf`` the XDMF beside it for ParaView. Returns ``path``."""
-    from knitlad.units import Material
+    from knitlad.engine.units import Material
 
     if not recorder.positions:
         raise ValueError("no frame recorded: call the recorder (or pass it as observe=) first")
@@ -270,7 +262,7 @@ def write_trajectory(path: str | Path, recorder, material=None, compression: str
             _contact_pairs(f.create_group("contacts"), recorder.pairs)
         _mark_units(f)
     if xdmf:
-        from knitlad.render import write_xdmf
+        from knitlad.io.xdmf import write_xdmf
 
         write_xdmf(path)
     return path
@@ -295,7 +287,7 @@ def _mark_units(f: h5py.File) -> None:
 
 def write_cycle_result(path: str | Path, cycle, ladder, config: dict, compression: str | None = "gzip",
                        attrs: dict | None = None) -> Path:
-    """Protocol B's file (:class:`knitlad.cycling.CycleResult`): its summary as ``cycle_*`` attributes, the
+    """Protocol B's file (:class:`knitlad.experiments.cycling.CycleResult`): its summary as ``cycle_*`` attributes, the
     config, the readings (``cycle/readings``) and, if a copy was cut (``ladder``), the ladder's run file."""
     attrs = {**{f"cycle_{k}": v for k, v in cycle.summary().items()}, **(attrs or {}),
              "cycle_config_json": json.dumps(config, default=str)}
@@ -353,7 +345,7 @@ _KNIT_SCALARS = ("box_lx", "box_ly", "fx_ini", "lx_over_l0", "ly_over_l0", "fx_w
 
 
 def write_stretched_knit(path: str | Path, knit) -> Path:
-    """Write a :class:`knitlad.protocol.StretchedKnit` so that :func:`read_stretched_knit` gives it back exactly."""
+    """Write a :class:`knitlad.experiments.protocol.StretchedKnit` so that :func:`read_stretched_knit` gives it back exactly."""
     path = Path(path)
     k = knit.knit
     with atomic_hdf5(path) as f:
@@ -361,6 +353,7 @@ def write_stretched_knit(path: str | Path, knit) -> Path:
         f.attrs["geometry_json"] = json.dumps(jsonable(k.geometry))
         f.attrs["H"] = k.H
         f.attrs["rods_twist"] = bool(k.rods.twist)
+        f.attrs["rods_framed"] = bool(k.rods.framed)
         for name in _KNIT_SCALARS:
             f.attrs[name] = getattr(knit, name)
         for group, arrays in (("model", k.rods.model), ("state", k.rods.state)):
@@ -376,11 +369,11 @@ def write_stretched_knit(path: str | Path, knit) -> Path:
 
 
 def read_stretched_knit(path: str | Path):
-    """The :class:`knitlad.protocol.StretchedKnit` of a file of :func:`write_stretched_knit`."""
-    from knitlad.protocol import StretchedKnit, StretchSettings
-    from knitlad.scenes.jersey import Jersey, KnitScene
-    from knitlad.state import RodModel, Rods, RodState
-    from knitlad.units import Material
+    """The :class:`knitlad.experiments.protocol.StretchedKnit` of a file of :func:`write_stretched_knit`."""
+    from knitlad.experiments.protocol import StretchedKnit, StretchSettings
+    from knitlad.fabric.scenes.jersey import Jersey, KnitScene
+    from knitlad.engine.state import RodModel, Rods, RodState
+    from knitlad.engine.units import Material
 
     with h5py.File(path, "r") as f:
         if "attrs_sha256" in f.attrs and f.attrs["attrs_sha256"] != attributes_checksum(f):
@@ -398,7 +391,10 @@ def read_stretched_knit(path: str | Path):
         model = RodModel(**stored)
         state = RodState(**{name: f["state"][name][()] for name in RodState._fields})
         g = f["knit"]
-        knit = KnitScene(geometry=Jersey(**geometry), rods=Rods(model, state, twist=bool(f.attrs.get("rods_twist", False))), H=float(f.attrs["H"]),
+        twist = bool(f.attrs.get("rods_twist", False))
+        # knits stored before 0.5.1 did not say whether they are framed; theirs was the model's natural curvature
+        framed = bool(f.attrs["rods_framed"]) if "rods_framed" in f.attrs else twist and bool(np.any(model.kappa_bar))
+        knit = KnitScene(geometry=Jersey(**geometry), rods=Rods(model, state, twist, framed), H=float(f.attrs["H"]),
                          courses=[int(c) for c in g["courses"][()]], bars=[int(b) for b in g["bars"][()]],
                          node_t=g["node_t"][()], left_end=g["left_end"][()], right_end=g["right_end"][()])
         scalars = {name: f.attrs[name].item() if isinstance(f.attrs[name], np.generic) else f.attrs[name]

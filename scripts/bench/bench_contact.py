@@ -17,10 +17,10 @@ import time
 import numpy as np
 
 import knitlad as kl
-from knitlad.contact import ContactModel
-from knitlad.kernels.contact import STALE, refresh_contacts
-from knitlad.kernels.integrate import verlet_steps
-from knitlad.scenes.weave import plain_weave
+from knitlad.engine.contact import ContactModel
+from knitlad.engine.kernels.contact import STALE, refresh_contacts
+from knitlad.engine.kernels.integrate import verlet_steps
+from knitlad.fabric.scenes.weave import plain_weave
 
 
 def timed_steps(sim: kl.Simulation, steps: int) -> float:

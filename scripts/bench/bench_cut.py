@@ -23,9 +23,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).parent))
 from bench_rod import build, measure  # noqa: E402
 
-from knitlad.config import CutConfig  # noqa: E402
-from knitlad.protocol import run_ladder  # noqa: E402
-from knitlad.simulation import numba_threads  # noqa: E402
+from knitlad.experiments.config import CutConfig  # noqa: E402
+from knitlad.experiments.protocol import run_ladder  # noqa: E402
+from knitlad.engine.simulation import numba_threads  # noqa: E402
 
 
 def lean_rate() -> float:

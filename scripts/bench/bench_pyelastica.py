@@ -70,7 +70,7 @@ def ensure_pyelastica() -> None:
 # --------------------------------------------------------------------------- knitlad
 def knitlad_rod(n_elements: int, element: float, dt_factor: float = 1.0):
     import knitlad as kl
-    from knitlad import units
+    from knitlad.engine import units
 
     pts = np.zeros((n_elements + 1, 3))
     pts[:, 0] = np.arange(n_elements + 1) * element
@@ -85,7 +85,7 @@ def knitlad_rod(n_elements: int, element: float, dt_factor: float = 1.0):
 
 
 def run_knitlad(n_elements: int, duration_s: float, element: float = ELEMENT, dt_factor: float = 1.0):
-    from knitlad.kernels.integrate import verlet_steps
+    from knitlad.engine.kernels.integrate import verlet_steps
 
     sim = knitlad_rod(n_elements, element, dt_factor)
     x0 = sim.positions_m().copy()

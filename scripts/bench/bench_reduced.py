@@ -11,10 +11,10 @@ from __future__ import annotations
 import argparse
 import time
 
-from knitlad.config import LoopConfig
-from knitlad.loop_model import LoopRun
-from knitlad.config import StitchConfig
-from knitlad.stitch_model import StitchRun
+from knitlad.experiments.config import LoopConfig
+from knitlad.experiments.loop_model import LoopRun
+from knitlad.experiments.config import StitchConfig
+from knitlad.experiments.stitch_model import StitchRun
 
 
 def timed(make, repeat: int) -> tuple[float, object]:

@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 import knitlad as kl
-from knitlad.kernels.integrate import TWIST_FRAMED, TWIST_OFF, TWIST_STRAIGHT, verlet_steps
+from knitlad.engine.kernels.integrate import TWIST_FRAMED, TWIST_OFF, TWIST_STRAIGHT, verlet_steps
 
 
 def build(n_nodes: int, twist: bool = False) -> kl.Simulation:

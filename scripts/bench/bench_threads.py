@@ -25,9 +25,9 @@ from pathlib import Path
 WORKER = """
 import json, sys, time
 import numba
-from knitlad.config import CutConfig
+from knitlad.experiments.config import CutConfig
 from knitlad.io.hdf5 import read_stretched_knit
-from knitlad.protocol import cut
+from knitlad.experiments.protocol import cut
 knit = read_stretched_knit(sys.argv[1])
 cfg = CutConfig(n_x=knit.settings.n_x, n_y=knit.settings.n_y, fx=4.0, preset=sys.argv[2])
 run = cut(knit, cfg.dynamics_settings())
@@ -44,9 +44,9 @@ BUSY = "while True: pass"
 
 
 def make_knit(path: Path, stitches: int, preset: str) -> None:
-    from knitlad.config import CutConfig
+    from knitlad.experiments.config import CutConfig
     from knitlad.io.hdf5 import write_stretched_knit
-    from knitlad.protocol import stretch
+    from knitlad.experiments.protocol import stretch
 
     if not path.exists():
         cfg = CutConfig(n_x=stitches, n_y=stitches, fx=4.0, preset=preset)

@@ -3,10 +3,12 @@
     python scripts/bench/bitwise_check.py --save runs/bitwise.npz      # before a change
     python scripts/bench/bitwise_check.py --compare runs/bitwise.npz   # after it: identical, or where it differs
     python scripts/bench/bitwise_check.py --twist --save runs/bitwise_twist.npz   # the yarns carrying twist
+    python scripts/bench/bitwise_check.py --natural-curvature 0.1 --save runs/bitwise_k.npz   # framed DER
 
 The knit is stretched to f_x^ini = 8 by force control (preset fast: 24 nodes per stitch), cut, and
 stepped 3,000 times. A change that only moves code must leave every position and
-velocity identical (same machine, same Numba version and threads).
+velocity identical (same machine, same Numba version and threads). It imports only knitlad's public
+names, so that a reference saved by one layout of the package compares with another.
 """
 
 from __future__ import annotations
@@ -16,12 +18,12 @@ import time
 
 import numpy as np
 
-from knitlad.config import CutConfig
-from knitlad.protocol import cut, stretch
+from knitlad import CutConfig, cut, stretch
 
 
-def ladder_after_3000_steps(twist: bool) -> dict:
-    cfg = CutConfig(n_x=16, n_y=16, fx=8.0, twist=twist, preset="fast")  # 24 nodes per stitch, capsules of r
+def ladder_after_3000_steps(twist: bool, natural_curvature: float = 0.0) -> dict:
+    cfg = CutConfig(n_x=16, n_y=16, fx=8.0, twist=twist or natural_curvature > 0, preset="fast",  # 24 nodes per stitch
+                    natural_curvature=natural_curvature)
     knit = stretch(cfg.stretch_settings())
     run = cut(knit, cfg.dynamics_settings())
     run.sim.step(3000)
@@ -34,10 +36,12 @@ def main() -> None:
     group = p.add_mutually_exclusive_group(required=True)
     group.add_argument("--save", help="write the reference (.npz)")
     group.add_argument("--compare", help="compare with a reference (.npz)")
-    p.add_argument("--twist", action="store_true", help="the yarns carry twist (framed DER)")
+    p.add_argument("--twist", action="store_true", help="the yarns carry twist (frame-free, straight at rest)")
+    p.add_argument("--natural-curvature", type=float, default=0.0,
+                   help="the yarn's memory K (> 0: twist on, framed DER)")
     args = p.parse_args()
     t = time.perf_counter()
-    now = ladder_after_3000_steps(args.twist)
+    now = ladder_after_3000_steps(args.twist, args.natural_curvature)
     if args.save:
         np.savez(args.save, **now)
         print(f"saved {args.save} ({time.perf_counter() - t:.0f} s)")

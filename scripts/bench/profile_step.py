@@ -20,21 +20,21 @@ import time
 
 from numba import njit, prange
 
-from knitlad.config import CutConfig
-from knitlad.kernels.contact import GAPS_KNOWN, STALE, contact_forces, refresh_contacts
-from knitlad.kernels.elastic import (
+from knitlad.experiments.config import CutConfig
+from knitlad.engine.kernels.contact import GAPS_KNOWN, STALE, contact_forces, refresh_contacts
+from knitlad.engine.kernels.elastic import (
     edge_vectors,
     framed_bending_twisting_forces,
     straight_bending_twisting_forces,
     stretching_forces,
 )
-from knitlad.kernels.frames import (
+from knitlad.engine.kernels.frames import (
     material_frames,
     reference_twist_by_holonomy,
     transport_reference_frames,
     update_reference_twist,
 )
-from knitlad.kernels.integrate import (
+from knitlad.engine.kernels.integrate import (
     _drift,
     elastic_forces_by_yarn,
     framed_forces_by_yarn,
@@ -43,9 +43,9 @@ from knitlad.kernels.integrate import (
     straight_twisting_forces_by_yarn,
     verlet_steps,
 )
-from knitlad.kernels.options import PARALLEL_OPTS
-from knitlad.protocol import cut, stretch
-from knitlad.simulation import numba_threads
+from knitlad.engine.kernels.options import PARALLEL_OPTS
+from knitlad.experiments.protocol import cut, stretch
+from knitlad.engine.simulation import numba_threads
 
 
 @njit(**PARALLEL_OPTS)

@@ -71,8 +71,8 @@ def variations(static: bool = False, only: list[str] | None = None) -> list[dict
 
 
 def stitch_run(cfg: dict) -> dict:
-    from knitlad.config import StitchConfig
-    from knitlad.stitch_model import StitchRun
+    from knitlad.experiments.config import StitchConfig
+    from knitlad.experiments.stitch_model import StitchRun
 
     t = time.perf_counter()
     res = StitchRun(StitchConfig(preset="fast", lx=0.35, ly=0.25, resolution=cfg["nodes_per_stitch"]).settings(
@@ -81,8 +81,8 @@ def stitch_run(cfg: dict) -> dict:
 
 
 def loop_run(cfg: dict) -> dict:
-    from knitlad.config import LoopConfig
-    from knitlad.loop_model import LoopRun
+    from knitlad.experiments.config import LoopConfig
+    from knitlad.experiments.loop_model import LoopRun
 
     t = time.perf_counter()
     res = LoopRun(LoopConfig(fx=4.0, mu=0.4, resolution=cfg["nodes_per_stitch"]).settings(
@@ -92,8 +92,8 @@ def loop_run(cfg: dict) -> dict:
 
 def knit_runs(cfg: dict, size: int, tensions: list[float], nominal: float | None = None) -> list[dict]:
     """v_lad and n_lad at each target; ``nominal``: the tension named in the labels (default: the target)."""
-    from knitlad.config import CutConfig
-    from knitlad.protocol import run_ladder
+    from knitlad.experiments.config import CutConfig
+    from knitlad.experiments.protocol import run_ladder
 
     rows = []
     for fx in tensions:
@@ -141,8 +141,8 @@ def model_runs(size: int, tensions: list[float], csv: Path, study: dict[str, lis
     one tension ladder from one stretched knit (cut once per setting). There is no finest value to converge
     to: the change against the default run is what is reported, to be read against the
     run-to-run scatter. Resumable."""
-    from knitlad.config import CutConfig
-    from knitlad.protocol import analyse, cut, propagate, stretch
+    from knitlad.experiments.config import CutConfig
+    from knitlad.experiments.protocol import analyse, cut, propagate, stretch
 
     defaults = {name: f.default for name, f in CutConfig.model_fields.items()}
     rows = pd.read_csv(csv, dtype={"setting_value": str}).to_dict("records") if csv.exists() else []

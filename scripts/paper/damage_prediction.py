@@ -19,9 +19,9 @@ import numpy as np
 import pandas as pd
 
 import knitlad as kl
-from knitlad.cycling import HOLD, UNLOADING, shortening_to
+from knitlad.experiments.cycling import HOLD, UNLOADING, shortening_to
 from knitlad.io.hdf5 import read_attrs
-from knitlad.plots import cycle_curve_plot, damage_prediction_plot
+from knitlad.viz.plots import cycle_curve_plot, damage_prediction_plot
 
 
 def job_rows(folder: Path) -> list[dict]:

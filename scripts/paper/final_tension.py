@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from knitlad.plots import final_tension_plot
+from knitlad.viz.plots import final_tension_plot
 
 COLUMNS = ["fx_ini", "fx_fin", "fx_fin_crossed", "fx_fin_intact", "n_lad_over_ny", "ladders_up", "ladders_down",
            "reached_edge", "stop_reason", "wall_s"]

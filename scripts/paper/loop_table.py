@@ -3,8 +3,8 @@
     python scripts/paper/loop_table.py [--geometry tails|periodic|periodic-sinkers|strip] [--columns 8]
                                  [--fx 1 2 4 8 12 16 20] [--mu 0 0.4 0.8] [--max-time-ms 1]
 
-``tails`` is ``knitlad loop`` (:mod:`knitlad.loop_model`); the others are the rows
-periodic along the course (:mod:`knitlad.periodic_loop`): one stitch per period under
+``tails`` is ``knitlad loop`` (:mod:`knitlad.experiments.loop_model`); the others are the rows
+periodic along the course (:mod:`knitlad.experiments.periodic_loop`): one stitch per period under
 an imposed tension, free in y (``periodic``) or with the loop row's sinkers held in y
 (``periodic-sinkers``), or a strip of ``--columns`` columns at fixed period (``strip``;
 with ``--force-controlled`` its period follows the tension).
@@ -26,10 +26,10 @@ import time
 
 import numpy as np
 
-from knitlad.config import LoopConfig
-from knitlad.loop_model import LoopRun
-from knitlad.periodic_loop import PeriodicLoopRun, PeriodicLoopSettings
-from knitlad.plots import PAPER_DER_VELOCITY
+from knitlad.experiments.config import LoopConfig
+from knitlad.experiments.loop_model import LoopRun
+from knitlad.experiments.periodic_loop import PeriodicLoopRun, PeriodicLoopSettings
+from knitlad.viz.plots import PAPER_DER_VELOCITY
 
 
 def paper_fabric(fx: float) -> float:

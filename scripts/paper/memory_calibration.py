@@ -8,7 +8,7 @@ stitches. Here, for each K (knitlad's mean of (kappa_bar/kappa0)^2 over the yarn
 a 4 x 4 knit with that memory is stretched to f_x^ini 4, a middle course is freed of its holds and of
 contact and relaxed (FIRE, twist on), and its relaxed shape is read three ways: the 3-D mean of
 (kappa/kappa0)^2 (which should give K back), and the outline laid flat on its best plane
-(knitlad.natural_curvature.flattened_curvature): mean and maximum of (kappa/kappa0)^2, the maximum as
+(knitlad.fabric.natural_curvature.flattened_curvature): mean and maximum of (kappa/kappa0)^2, the maximum as
 the paper's "at most over four stitches" (the course spans four). Prints a markdown table.
 """
 
@@ -20,10 +20,10 @@ import numpy as np
 import pandas as pd
 
 import knitlad as kl
-from knitlad.config import CutConfig
-from knitlad.natural_curvature import flattened_curvature, positional_curvature
-from knitlad.protocol import stretch
-from knitlad.simulation import Simulation
+from knitlad.experiments.config import CutConfig
+from knitlad.fabric.natural_curvature import flattened_curvature, positional_curvature
+from knitlad.experiments.protocol import stretch
+from knitlad.engine.simulation import Simulation
 
 
 def freed_course(K: float, preset: str, fx: float = 4.0, peak_ratio: float | None = None):

@@ -1,7 +1,7 @@
 """The converged reference of the laddering knit: observables against the resolution, over ensembles of knits.
 
 For each target tension f_x^ini and each resolution (nodes per stitch), an ensemble of
-knits (force-control targets 0.5 % apart, as in knitlad/ensemble.py) is stretched and
+knits (force-control targets 0.5 % apart, as in knitlad/studies/ensemble.py) is stretched and
 cut with the default dynamics. Every observable is kept per run: f_x^ini, the measured
 l_x/l0 at that tension, v_lad/c_b, n_lad/n_y, f_x^fin, the last f_x sample, the step
 count and the wall time. One Numba thread per run (run two of these at once on two cores,
@@ -21,12 +21,12 @@ import time
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
-from knitlad.config import CutConfig  # noqa: E402
-from knitlad.observers import Interpenetration  # noqa: E402
-from knitlad.protocol import analyse, cut, propagate, stretch  # noqa: E402
-from knitlad.simulation import SimulationBlowUp  # noqa: E402
+from knitlad.experiments.config import CutConfig  # noqa: E402
+from knitlad.fabric.observers import Interpenetration  # noqa: E402
+from knitlad.experiments.protocol import analyse, cut, propagate, stretch  # noqa: E402
+from knitlad.engine.simulation import SimulationBlowUp  # noqa: E402
 
-from knitlad.ensemble import resumed_rows, save_rows, target_offsets  # noqa: E402
+from knitlad.studies.ensemble import resumed_rows, save_rows, target_offsets  # noqa: E402
 
 
 KEY = ("fx_nominal", "resolution", "member", "variant")  # one row per run: merged with other writers of the file

@@ -21,10 +21,10 @@ import time
 
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
-from knitlad.config import StitchConfig  # noqa: E402
-from knitlad.stitch_model import StitchRun  # noqa: E402
+from knitlad.experiments.config import StitchConfig  # noqa: E402
+from knitlad.experiments.stitch_model import StitchRun  # noqa: E402
 
-from knitlad.ensemble import resumed_rows, save_rows  # noqa: E402
+from knitlad.studies.ensemble import resumed_rows, save_rows  # noqa: E402
 
 # l_x/l0 grids: dense near the f_x = 0 width of each l_y, sparser above it
 GRIDS = {

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import knitlad as kl
-from knitlad.contact import ContactModel
+from knitlad.engine.contact import ContactModel
 
 D = kl.NYLON.diameter
 PRESS = 1e-3  # N, normal load on the slider

@@ -16,10 +16,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from knitlad.config import CutConfig, StitchConfig
-from knitlad.protocol import run_ladder
-from knitlad.simulation import numba_threads
-from knitlad.stitch_model import StitchRun, stitch_tensions, zero_tension_lx
+from knitlad.experiments.config import CutConfig, StitchConfig
+from knitlad.experiments.protocol import run_ladder
+from knitlad.engine.simulation import numba_threads
+from knitlad.experiments.stitch_model import StitchRun, stitch_tensions, zero_tension_lx
 
 REFERENCE = Path(__file__).parents[2] / "docs" / "reference" / "stitch.csv"
 # the default preset's promised error at fixed (l_x, l_y) where f_x > 1 (docs/accuracy.md: measured

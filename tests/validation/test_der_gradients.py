@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import knitlad as kl
-from knitlad.contact import make_contacts
-from knitlad.kernels.integrate import TWIST_FRAMED, TWIST_OFF, TWIST_STRAIGHT, compute_forces, potential_energy
-from knitlad.state import Workspace
+from knitlad.engine.contact import make_contacts
+from knitlad.engine.kernels.integrate import TWIST_FRAMED, TWIST_OFF, TWIST_STRAIGHT, compute_forces, potential_energy
+from knitlad.engine.state import Workspace
 
 
 def wiggly_rod(n: int = 9, seed: int = 0) -> np.ndarray:

@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 import knitlad as kl
-from knitlad import units
-from knitlad.contact import ContactModel
-from knitlad.state import Scene, with_twist
+from knitlad.engine import units
+from knitlad.engine.contact import ContactModel
+from knitlad.engine.state import Scene, with_twist
 
 D = kl.NYLON.diameter
 R = 0.5 * D
@@ -76,10 +76,10 @@ def test_a_yarn_rolling_on_another_feels_no_friction_one_skidding_does(direction
 def test_switching_twist_on_leaves_every_force_unchanged(mode):
     """Either twist path (framed DER; the frame-free path of yarns straight at rest) gives the
     twist-free forces at the cut, where the reference frames are Bishop's and theta = 0."""
-    from knitlad.contact import make_contacts
-    from knitlad.kernels.integrate import TWIST_FRAMED, TWIST_OFF, TWIST_STRAIGHT, compute_forces, potential_energy
-    from knitlad.scenes.jersey import Jersey, build_jersey
-    from knitlad.state import Workspace
+    from knitlad.engine.contact import make_contacts
+    from knitlad.engine.kernels.integrate import TWIST_FRAMED, TWIST_OFF, TWIST_STRAIGHT, compute_forces, potential_energy
+    from knitlad.fabric.scenes.jersey import Jersey, build_jersey
+    from knitlad.engine.state import Workspace
 
     l0 = kl.NYLON.stitch_length
     knit = build_jersey(Jersey(n_x=3, n_y=4, l_x=0.33 * l0, l_y=0.25 * l0, nodes_per_stitch=24))

@@ -12,12 +12,12 @@ import numpy as np
 import pytest
 
 import knitlad as kl
-from knitlad.config import CutConfig
-from knitlad.contact import ContactModel
-from knitlad.observers import Interpenetration
-from knitlad.protocol import analyse, cut, propagate, stretch, stretch_contact
-from knitlad.scenes.weave import plain_weave
-from knitlad.simulation import energy_history, numba_threads
+from knitlad.experiments.config import CutConfig
+from knitlad.engine.contact import ContactModel
+from knitlad.fabric.observers import Interpenetration
+from knitlad.experiments.protocol import analyse, cut, propagate, stretch, stretch_contact
+from knitlad.fabric.scenes.weave import plain_weave
+from knitlad.engine.simulation import energy_history, numba_threads
 
 # The contact is designed to overlap 5 % of d under 20 f0; a quarter of d is five times that.
 OVERLAP_BOUND = 0.25

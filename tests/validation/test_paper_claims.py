@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import pytest
 
-from knitlad.config import CutConfig
-from knitlad.protocol import analyse, cut, propagate, stretch
-from knitlad.simulation import numba_threads
+from knitlad.experiments.config import CutConfig
+from knitlad.experiments.protocol import analyse, cut, propagate, stretch
+from knitlad.engine.simulation import numba_threads
 
 
 def velocities(fx: float, mus: list[float]) -> list[float]:

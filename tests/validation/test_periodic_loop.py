@@ -1,4 +1,4 @@
-"""The single loop in rows periodic along the course (knitlad.periodic_loop): what the periodised
+"""The single loop in rows periodic along the course (knitlad.experiments.periodic_loop): what the periodised
 geometry does, and the paper's claims it does not reproduce (strict expected failures).
 
 Measured (2026-12-02, scripts/paper/loop_table.py, docs/single_loop.md): with one stitch per period and
@@ -15,8 +15,8 @@ import math
 import numpy as np
 import pytest
 
-from knitlad.periodic_loop import PeriodicLoopRun, PeriodicLoopSettings
-from knitlad.simulation import numba_threads
+from knitlad.experiments.periodic_loop import PeriodicLoopRun, PeriodicLoopSettings
+from knitlad.engine.simulation import numba_threads
 from tests.validation.references import paper_der_line
 
 

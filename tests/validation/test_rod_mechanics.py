@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 import knitlad as kl
-from knitlad.scenes.rod import Cantilever
+from knitlad.fabric.scenes.rod import Cantilever
 from tests.validation.references import elastica_tip
 
 B = kl.NYLON.bending_stiffness

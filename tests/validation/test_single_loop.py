@@ -11,9 +11,9 @@ import math
 import numpy as np
 import pytest
 
-from knitlad.config import LoopConfig
-from knitlad.loop_model import LoopRun
-from knitlad.topology import piercings
+from knitlad.experiments.config import LoopConfig
+from knitlad.experiments.loop_model import LoopRun
+from knitlad.fabric.topology import piercings
 from tests.validation.references import paper_der_line
 
 

@@ -1,0 +1,481 @@
+"""Contact model (parameters in SI) and its buffers (internal units).
+
+See :mod:`knitlad.engine.kernels.contact` for the physics. Stiffness is set from the
+working force of a scene: ``ContactModel.for_force(F, overlap_fraction=0.05)``
+gives the k_n at which a contact carrying F overlaps by 5 % of the diameter.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+from enum import Enum
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from knitlad.engine import units
+from knitlad.engine.deprecation import renamed_field
+from knitlad.engine.kernels.contact import (
+    GAPS_KNOWN,
+    MAX_OVERLAP,
+    N_STATS,
+    NORMAL_FORCE_SUM,
+    PAIR_RESULTS,
+    PEAK_OVERLAP,
+    SLIDING_PAIRS,
+    STALE,
+    TOUCHING,
+    ContactParams,
+)
+from knitlad.engine.state import RodModel, Rods
+from knitlad.engine.timestep import damped_limit_factor
+
+
+class Counting(str, Enum):
+    """How touching capsules of two yarns count (see :mod:`knitlad.engine.kernels.contact`).
+
+    UNION: a yarn is the union of its capsules, a contact at a node shared by two edges
+    counts once (exact friction; not conservative where a crossing sits at a node).
+    ALL_PAIRS: every touching edge pair counts (a sum of pair potentials, conservative).
+    """
+
+    UNION = "union"
+    ALL_PAIRS = "all_pairs"
+
+
+COUNTING = tuple(c.value for c in Counting)
+
+
+def check_friction_coefficient(mu: float) -> None:
+    """The one check of a Coulomb coefficient, wherever one is given (contact, obstacles, a run's switch)."""
+    if not (mu >= 0 and math.isfinite(mu)):
+        raise ValueError(f"mu (the friction coefficient) must be >= 0, got {mu!r}")
+
+
+@renamed_field("friction", "mu", since="0.5.0")
+@dataclass(frozen=True)
+class ContactModel:
+    """Yarn-yarn contact parameters (SI).
+
+    stiffness       k_n [N/m]   normal penalty stiffness
+    mu              [-]         Coulomb coefficient (changeable during a run; ``friction`` before 0.5.0)
+    damping_ratio   zeta_n [-]  normal dashpot as a fraction of critical (per contact)
+    tangential_stiffness_ratio  k_t / k_n [-]
+    tangential_damping_ratio    zeta_t [-]
+    skin            [m]         neighbour-list margin (default: the smallest yarn diameter)
+    exclusion_diameters [-]     same-yarn edges closer than this many diameters of arc
+                                (and at least the adjacent edge) never interact
+    contacts_per_node [-]       contacts one node may carry at once, for the time-step limit
+    capacity_per_edge [-]       initial pair-buffer size per edge (grown on overflow)
+    counting                    "union" (default): a yarn is the union of its capsules, a
+                                contact at a node shared by two edges counts once; "all_pairs":
+                                every touching edge pair counts (a conservative energy, stiffer
+                                where a crossing sits at a node; see docs/accuracy.md)
+    sagitta_radius  R_s [m]     the capsule chain's sagitta correction: each edge's contact radius
+                                is r - l^2/(12 R_s), l its rest length (:func:`sagitta_corrected_radius`);
+                                None: capsules of the yarn's radius
+    pair_stiffness  [N/m]       ``((material_a, material_b, k_n), ...)``: the normal stiffness of contacts
+                                between a yarn of material a and one of material b (either order; the
+                                tangential spring keeps its ratio); every other pair has ``stiffness``.
+                                A yarn's material is known to the contact by its diameter and Young's
+                                modulus (what sets a contact's stiffness)
+    """
+
+    stiffness: float
+    mu: float = 0.0
+    damping_ratio: float = 0.3
+    tangential_stiffness_ratio: float = 0.5
+    tangential_damping_ratio: float = 0.3
+    skin: float | None = None
+    exclusion_diameters: float = 2.5
+    contacts_per_node: int = 2
+    capacity_per_edge: int = 4
+    counting: Counting = Counting.UNION
+    sagitta_radius: float | None = None
+    pair_stiffness: tuple = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "pair_stiffness", tuple(tuple(entry) for entry in self.pair_stiffness))
+        for entry in self.pair_stiffness:
+            if len(entry) != 3 or not all(isinstance(m, units.Material) for m in entry[:2]):
+                raise ValueError(f"pair_stiffness entries are (Material, Material, k_n [N/m]), got {entry!r}")
+            if not (entry[2] > 0 and math.isfinite(entry[2])):
+                raise ValueError(f"pair_stiffness: k_n must be > 0 N/m, got {entry[2]!r}")
+        if not (self.stiffness > 0 and math.isfinite(self.stiffness)):
+            raise ValueError(f"contact stiffness must be > 0 N/m, got {self.stiffness!r}")
+        check_friction_coefficient(self.mu)
+        for name in ("damping_ratio", "tangential_damping_ratio", "exclusion_diameters"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+        if not self.tangential_stiffness_ratio > 0:
+            raise ValueError("tangential_stiffness_ratio must be > 0")
+        if self.counting not in COUNTING:
+            raise ValueError(f"counting must be one of {', '.join(COUNTING)}, got {self.counting!r}")
+        object.__setattr__(self, "counting", Counting(self.counting))
+        if self.skin is not None and not self.skin > 0:
+            raise ValueError(f"skin must be > 0 m, got {self.skin!r}")
+        if self.sagitta_radius is not None and not (self.sagitta_radius > 0 and math.isfinite(self.sagitta_radius)):
+            raise ValueError(f"sagitta_radius must be > 0 m or None, got {self.sagitta_radius!r}")
+
+    @staticmethod
+    def for_force(force_N: float, diameter_m: float, overlap_fraction: float = 0.05, **kwargs) -> "ContactModel":
+        """k_n such that a contact carrying ``force_N`` overlaps by ``overlap_fraction`` x d."""
+        if not 0 < overlap_fraction < 1:
+            raise ValueError("overlap_fraction must lie in (0, 1)")
+        return ContactModel(stiffness=force_N / (overlap_fraction * diameter_m), **kwargs)
+
+    @staticmethod
+    def for_knit(material, contact_force_f0: float = 20.0, overlap_fraction: float = 0.05,
+                 sagitta_radius_d: float = 0.0, **kwargs) -> "ContactModel":
+        """The knit scenes' contact: a contact carrying ``contact_force_f0`` f0 overlaps by ``overlap_fraction`` d;
+        ``sagitta_radius_d`` > 0: the sagitta correction for a yarn curved on that many diameters."""
+        sagitta = sagitta_radius_d * material.diameter if sagitta_radius_d > 0 else None
+        return ContactModel.for_force(contact_force_f0 * material.f0, material.diameter,
+                                      overlap_fraction=overlap_fraction, sagitta_radius=sagitta, **kwargs)
+
+
+def sagitta_corrected_radius(radius: np.ndarray, rest_length: np.ndarray, curvature_radius: float) -> np.ndarray:
+    """Contact radius r - l^2 / (12 R) of edges of rest length l on a yarn curved on radius R (any one unit).
+
+    A straight capsule stands for an arc of its yarn; on an arc of curvature 1/R the chord lies
+    on the concave side, by l^2 s (1 - s) / (2 R) at s along it, l^2 / (12 R) on average. Where
+    a yarn wraps another (a loop's head round the legs of the next course) the other yarn is on
+    that side, so a chain of capsules of the yarn's radius touches it sooner than the smooth
+    yarn would: the stitch behaves as if the yarn were thicker, and its tension at fixed
+    periodicities is too high (by 50 % at l_x/l0 = 0.37 with 24 nodes per stitch, where l = 2.9 d).
+    Taking the mean sagitta off the radius removes most of that at no cost; R is the typical
+    radius of curvature at the stitch's contacts, measured through the converged stitch
+    (``docs/accuracy.md``). The correction vanishes as l^2 when the yarn is refined.
+    """
+    corrected = radius - rest_length**2 / (12.0 * curvature_radius)
+    if np.any(corrected < 0.5 * radius):
+        raise ValueError(f"edges up to {float(rest_length.max()):.3g} long are too long for the sagitta correction "
+                         f"on a radius of curvature {curvature_radius:.3g}: it would take over half their radius; "
+                         "refine the yarn")
+    return corrected
+
+
+class Contacts(NamedTuple):
+    """Buffers of the contact kernels (internal units). Rebuilt by :func:`make_contacts`."""
+
+    pairs: np.ndarray  # (cap, 2) candidate edge pairs, i < j, sorted
+    keys: np.ndarray  # (cap,) i * ne + j
+    slip: np.ndarray  # (cap, 3) tangential spring elongation u_t per pair
+    n_pairs: np.ndarray  # (1,) valid pairs
+    status: np.ndarray  # (2,) slots STALE (the list must be rebuilt), PAIRS_NEEDED (at the last overflow)
+    x_ref: np.ndarray  # (n, 3) positions at the last rebuild
+    edge_radius: np.ndarray
+    edge_prev: np.ndarray  # previous edge along the yarn, -1 at an open end
+    edge_next: np.ndarray  # next edge along the yarn, -1 at an open end
+    union: bool  # Counting.UNION (else ALL_PAIRS)
+    edge_yarn: np.ndarray  # physical yarn (see contact_topology)
+    edge_local: np.ndarray  # arc index along the physical yarn
+    yarn_edges: np.ndarray
+    yarn_closed: np.ndarray  # arc indices wrap (rings)
+    exclusion: np.ndarray  # (n_yarns,) edges excluded either side along a yarn
+    edge_image: np.ndarray  # (ne,) bool: edge of a periodic image (image-image pairs are skipped)
+    params: ContactParams  # stiffnesses, dashpots, mu, skin (internal units)
+    stats: np.ndarray  # (N_STATS,) slots TOUCHING ... PEAK_OVERLAP of knitlad.engine.kernels.contact
+    threads: np.ndarray  # (1,) blocks the broad phase and the pair forces are split into (Numba threads)
+    pair_results: np.ndarray  # (cap, PAIR_RESULTS) scratch of contact_forces
+    gap_ref: np.ndarray  # (cap,) each pair's gap at the list's first evaluation (a lower bound at its rebuild)
+    edge_moved: np.ndarray  # (ne,) each edge's largest end displacement since the rebuild (scratch)
+    edge_class: np.ndarray  # (ne,) int64 row of ``stiffness`` for each edge's material (0: the default)
+    stiffness: np.ndarray  # (c, c, 2) k_n and k_t of a pair of edge classes [mN/mm]
+
+
+def edge_topology(m: RodModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Yarn of each edge, its index within the yarn, edges per yarn, closed flags."""
+    edge_yarn = m.node_yarn[m.edge_a]
+    n_yarns = m.n_yarns
+    yarn_edges = np.bincount(edge_yarn, minlength=n_yarns).astype(np.int64)
+    first = np.concatenate([[0], np.cumsum(yarn_edges)[:-1]])
+    edge_local = np.arange(edge_yarn.shape[0]) - first[edge_yarn]
+    yarn_nodes = np.diff(m.yarn_start)
+    yarn_closed = yarn_edges == yarn_nodes
+    return edge_yarn.astype(np.int64), edge_local.astype(np.int64), yarn_edges, yarn_closed
+
+
+def contact_topology(m: RodModel):
+    """What the contact kernels need to know about the yarns, periodic images included.
+
+    Returns (edge_yarn, edge_arc, yarn_edges, yarn_wraps, edge_prev, edge_next, edge_image):
+
+    * ``edge_yarn``: the *physical* yarn of each edge. An image of a yarn
+      periodised along its own period P by k P is the same physical yarn k
+      periods further along, so its edges carry the master's id and the arc
+      index local + k n_edges: the same-yarn exclusion then also works across
+      the seam. Other images (another course, say) are yarns of their own. The
+      pieces of a cut yarn (``RodModel.yarn_parent``) are one physical yarn whose
+      arc index skips the cut edge, so the exclusion also holds across the cut.
+    * ``yarn_wraps``: arc indices wrap around (true rings only; a periodised
+      yarn continues into its images instead).
+    * ``edge_prev``/``edge_next``: the neighbouring edge along the yarn, into
+      the next image across a periodised yarn's seam, -1 at an open end or
+      where that image is not in the scene.
+    * ``edge_image``: the edge belongs to a periodic image.
+    """
+    edge_yarn, edge_local, yarn_edges, yarn_closed = edge_topology(m)
+    n_yarns = m.n_yarns
+    parent = m.yarn_parent
+    first_edge = np.concatenate([[0], np.cumsum(yarn_edges)[:-1]]).astype(np.int64)
+    last_edge = first_edge + yarn_edges - 1
+    period = np.zeros((n_yarns, 3))
+    period[yarn_closed] = m.edge_shift[last_edge[yarn_closed]]
+    periodised = yarn_closed & np.any(period != 0, axis=1)
+    master = np.arange(n_yarns)
+    shift = np.zeros((n_yarns, 3))
+    is_image = np.zeros(n_yarns, dtype=bool)
+    if m.image_node.size:
+        first_node = m.yarn_start[:-1]
+        where = {int(n): g for g, n in enumerate(m.image_node)}
+        for y in range(n_yarns):
+            g = where.get(int(first_node[y]))
+            if g is not None:
+                is_image[y] = True
+                master[y] = m.node_yarn[m.image_master[g]]
+                shift[y] = m.image_shift[g]
+    key = {}  # (master, lattice shift) -> yarn
+    for y in range(n_yarns):
+        key[(int(master[y]), tuple(np.round(shift[y], 9)))] = y
+    physical = np.arange(n_yarns)
+    arc_offset = np.zeros(n_yarns, dtype=np.int64)
+    for y in np.flatnonzero(is_image):
+        m = master[y]
+        if periodised[m]:
+            P = period[m]
+            k = float(shift[y] @ P / (P @ P))
+            if abs(k - round(k)) < 1e-9 and np.allclose(shift[y], round(k) * P, atol=1e-9 * np.linalg.norm(P)):
+                physical[y] = m
+                arc_offset[y] = int(round(k)) * yarn_edges[m]
+    for y in range(1, n_yarns):
+        if parent[y] == parent[y - 1] and not is_image[y]:  # the next piece of a cut yarn
+            physical[y] = physical[y - 1]
+            arc_offset[y] = arc_offset[y - 1] + yarn_edges[y - 1] + 1
+    e = np.arange(edge_yarn.shape[0])
+    out_yarn = physical[edge_yarn].astype(np.int64)
+    edge_arc = (edge_local + arc_offset[edge_yarn]).astype(np.int64)
+    wraps = yarn_closed & ~periodised
+    prev = np.where(edge_local > 0, e - 1, -1).astype(np.int64)
+    nxt = np.where(edge_local < yarn_edges[edge_yarn] - 1, e + 1, -1).astype(np.int64)
+    for y in range(n_yarns):
+        m = master[y]
+        if wraps[m]:
+            prev[first_edge[y]] = last_edge[y]
+            nxt[last_edge[y]] = first_edge[y]
+        elif periodised[m]:
+            before = key.get((int(m), tuple(np.round(shift[y] - period[m], 9))))
+            after = key.get((int(m), tuple(np.round(shift[y] + period[m], 9))))
+            prev[first_edge[y]] = last_edge[before] if before is not None else -1
+            nxt[last_edge[y]] = first_edge[after] if after is not None else -1
+    return out_yarn, edge_arc, yarn_edges, wraps, prev, nxt, is_image[edge_yarn]
+
+
+def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None = None,
+                  previous: Contacts | None = None) -> Contacts:
+    """Contact buffers for ``rods``; empty (capacity 0) when ``model`` is None.
+
+    With ``previous`` (a buffer that overflowed), its valid pairs, slips and
+    parameters are copied so the friction history and a changed mu survive the
+    growth; the new buffer is rebuilt at the next step.
+    """
+    m = rods.model
+    ne = m.edge_a.shape[0]
+    edge_yarn, edge_local, yarn_edges, yarn_closed, edge_prev, edge_next, edge_image = contact_topology(m)
+    yarn_radius = 0.5 * (m.radius[m.edge_a] + m.radius[m.edge_b])
+    edge_radius = yarn_radius  # what the contact sees; the skin and the exclusion keep the yarn's
+    if model is not None and model.sagitta_radius is not None:
+        edge_radius = sagitta_corrected_radius(yarn_radius, m.rest_length, model.sagitta_radius / units.LENGTH)
+    if model is None:
+        cap = 0
+        params = ContactParams(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        exclusion = np.zeros(m.n_yarns, dtype=np.int64)
+    else:
+        cap = capacity if capacity is not None else max(16, model.capacity_per_edge * ne)
+        d_min = 2.0 * float(yarn_radius.min())
+        skin = model.skin / units.LENGTH if model.skin is not None else d_min
+        params = ContactParams(
+            k_n=model.stiffness * units.LENGTH / units.FORCE,
+            damping_n=float(model.damping_ratio),
+            k_t=model.stiffness * model.tangential_stiffness_ratio * units.LENGTH / units.FORCE,
+            damping_t=float(model.tangential_damping_ratio),
+            mu=float(model.mu),
+            skin=float(skin),
+        )
+        # exclusion: edges within `exclusion_diameters` d of arc, and always the adjacent edge
+        # (per state yarn: an image is a copy of its master, whose id it carries as its physical yarn)
+        own_yarn = m.node_yarn[m.edge_a]
+        seg = np.bincount(own_yarn, weights=m.rest_length, minlength=m.n_yarns) / np.maximum(yarn_edges, 1)
+        d_yarn = 2.0 * np.bincount(own_yarn, weights=yarn_radius, minlength=m.n_yarns) / np.maximum(yarn_edges, 1)
+        exclusion = np.maximum(1, np.ceil(model.exclusion_diameters * d_yarn / seg)).astype(np.int64)
+    contacts = Contacts(
+        pairs=np.zeros((cap, 2), dtype=np.int64),
+        keys=np.zeros(cap, dtype=np.int64),
+        slip=np.zeros((cap, 3)),
+        n_pairs=np.zeros(1, dtype=np.int64),
+        status=np.array([1, 0, 0], dtype=np.int64),  # STALE, PAIRS_NEEDED, GAPS_KNOWN
+        x_ref=rods.state.x.copy(),
+        edge_radius=edge_radius,
+        edge_prev=edge_prev,
+        edge_next=edge_next,
+        union=model is None or model.counting == Counting.UNION,
+        edge_yarn=edge_yarn,
+        edge_local=edge_local,
+        yarn_edges=yarn_edges,
+        yarn_closed=yarn_closed,
+        exclusion=exclusion,
+        edge_image=edge_image,
+        params=params,
+        stats=np.zeros(N_STATS),
+        threads=np.array([numba.get_num_threads()], dtype=np.int64),
+        pair_results=np.zeros((cap, PAIR_RESULTS)),
+        gap_ref=np.zeros(cap),
+        edge_moved=np.zeros(ne),
+        **pair_stiffness_table(m, model, params),
+    )
+    if previous is not None:
+        m = int(previous.n_pairs[0])
+        contacts.pairs[:m] = previous.pairs[:m]
+        contacts.keys[:m] = previous.keys[:m]
+        contacts.slip[:m] = previous.slip[:m]
+        contacts.n_pairs[0] = m
+        contacts.stats[PEAK_OVERLAP] = previous.stats[PEAK_OVERLAP]
+        contacts = contacts._replace(params=previous.params)
+    return contacts
+
+
+def carry_friction_history(old: Contacts, new: Contacts, edge_map: np.ndarray) -> bool:
+    """Give ``new`` (the buffers of a changed model) the candidate pairs and tangential springs of ``old``:
+    old edge k is new edge ``edge_map[k]``, -1 where it is gone (its pairs go with it). The list is
+    rebuilt at the next evaluation, which keeps the springs of the pairs still candidates. False, with
+    nothing changed, when ``new`` is too small to hold them."""
+    n = int(old.n_pairs[0])
+    pairs = edge_map[old.pairs[:n]]
+    kept = np.all(pairs >= 0, axis=1)
+    pairs = np.sort(pairs[kept], axis=1)
+    keys = pairs[:, 0] * new.edge_moved.shape[0] + pairs[:, 1]
+    order = np.argsort(keys, kind="stable")
+    m = order.size
+    if m > new.pairs.shape[0]:
+        return False
+    new.pairs[:m], new.keys[:m], new.slip[:m] = pairs[order], keys[order], old.slip[:n][kept][order]
+    new.n_pairs[0] = m
+    new.status[STALE], new.status[GAPS_KNOWN] = 1, 0
+    return True
+
+
+def pair_stiffness_table(m: RodModel, model: ContactModel | None, params: ContactParams) -> dict:
+    """``edge_class`` and ``stiffness`` of :class:`Contacts`: class 0 has the model's k_n and k_t
+    (``params``), class c > 0 the edges of the c-th material named in ``model.pair_stiffness``."""
+    edge_class = np.zeros(m.edge_a.shape[0], dtype=np.int64)
+    materials = []
+    for entry in () if model is None else model.pair_stiffness:
+        materials += [mat for mat in entry[:2] if mat not in materials]
+    table = np.empty((len(materials) + 1, len(materials) + 1, 2))
+    table[:, :, 0], table[:, :, 1] = params.k_n, params.k_t
+    radius = 0.5 * (m.radius[m.edge_a] + m.radius[m.edge_b])
+    for c, mat in enumerate(materials, start=1):
+        same = (np.isclose(radius, 0.5 * mat.diameter / units.LENGTH, rtol=1e-9, atol=0.0)
+                & np.isclose(m.EA, mat.stretching_stiffness / units.FORCE, rtol=1e-9, atol=0.0))
+        edge_class[same] = c
+    for mat_a, mat_b, k in () if model is None else model.pair_stiffness:
+        a, b = materials.index(mat_a) + 1, materials.index(mat_b) + 1
+        k_n = k * units.LENGTH / units.FORCE
+        table[a, b] = table[b, a] = (k_n, k * model.tangential_stiffness_ratio * units.LENGTH / units.FORCE)
+    return dict(edge_class=edge_class, stiffness=table)
+
+
+class ContactStats(NamedTuple):
+    """What the contact kernel saw at its last evaluation (SI)."""
+
+    touching: int  # counted touching pairs
+    max_overlap_m: float
+    normal_force_sum_N: float
+    sliding: int  # pairs sliding (friction at the Coulomb limit)
+    candidates: int  # pairs in the candidate list
+
+    def __getitem__(self, key):
+        """``stats["touching"]``: the dict of 0.1.0, deprecated in 0.2.0 (use ``stats.touching``)."""
+        if isinstance(key, str):
+            warnings.warn("contact_stats()[name] is deprecated since knitlad 0.2.0: use contact_stats().name",
+                          DeprecationWarning, stacklevel=2)
+            return getattr(self, key)
+        return tuple.__getitem__(self, key)
+
+    @staticmethod
+    def of(contacts: Contacts) -> "ContactStats":
+        st = contacts.stats
+        return ContactStats(int(st[TOUCHING]), float(st[MAX_OVERLAP] * units.LENGTH),
+                            float(st[NORMAL_FORCE_SUM] * units.FORCE), int(st[SLIDING_PAIRS]), int(contacts.n_pairs[0]))
+
+
+class ContactPairs(NamedTuple):
+    """The touching pairs at the last force evaluation, one row each (SI). Forces act on the first
+    edge of the pair; the second feels their opposite."""
+
+    edges: np.ndarray  # (m, 2) edge indices
+    yarns: np.ndarray  # (m, 2) the edges' yarns (a cut yarn's pieces count as one)
+    points_m: np.ndarray  # (m, 3) contact point: midway between the two axes' closest points
+    normal_N: np.ndarray  # (m, 3) normal force on the first edge (penalty and its dashpot)
+    friction_N: np.ndarray  # (m, 3) tangential force on the first edge
+    overlap_m: np.ndarray  # (m,) d minus the axes' distance (sagitta-corrected radii)
+    sliding: np.ndarray  # (m,) bool: friction at the Coulomb limit
+
+    @staticmethod
+    def of(contacts: Contacts, x: np.ndarray, edge_a: np.ndarray, edge_b: np.ndarray,
+           edge_shift: np.ndarray) -> "ContactPairs":
+        """From the kernel's per-pair scratch (:func:`knitlad.engine.kernels.contact.contact_forces`), internal units in."""
+        from knitlad.engine.kernels.contact import FORCE_X, FORCE_Z, OVERLAP, S_PAIR, SLIDING, T_PAIR
+
+        n = int(contacts.n_pairs[0])
+        results, pairs = contacts.pair_results[:n], contacts.pairs[:n]
+        touching = results[:, OVERLAP] > 0.0  # separated pairs keep stale scratch: only touching rows count
+        results, pairs = results[touching], pairs[touching]
+        i, j = pairs[:, 0], pairs[:, 1]
+
+        def on_axis(edge, frac):
+            a = x[edge_a[edge]]
+            return a + frac[:, None] * (x[edge_b[edge]] + edge_shift[edge] - a)
+
+        pi, pj = on_axis(i, results[:, S_PAIR]), on_axis(j, results[:, T_PAIR])
+        gap = pi - pj
+        dist = np.linalg.norm(gap, axis=1)
+        n_hat = np.divide(gap, dist[:, None], out=np.zeros_like(gap), where=dist[:, None] > 0)
+        force = results[:, FORCE_X:FORCE_Z + 1]
+        normal = np.where(dist[:, None] > 0, np.sum(force * n_hat, axis=1)[:, None] * n_hat, force)
+        return ContactPairs(
+            edges=pairs.copy(), yarns=contacts.edge_yarn[pairs], points_m=0.5 * (pi + pj) * units.LENGTH,
+            normal_N=normal * units.FORCE, friction_N=(force - normal) * units.FORCE,
+            overlap_m=results[:, OVERLAP] * units.LENGTH, sliding=results[:, SLIDING] > 0,
+        )
+
+
+def contact_time_step(m: RodModel, model: ContactModel | None, spin: bool = False, predicted: bool = False) -> float:
+    """Critical time step [ms] of the contact springs: 2/omega with omega^2 = 2 z (k_n + k_t) / m_min.
+
+    ``spin``: the yarns carry twist, so the tangential spring also turns each edge about
+    its axis: omega^2 gains 2 z k_t max(r^2 / I) over edges free to twist (for a solid
+    cylinder r^2 / I = 2 / m_edge: k_t then counts about three times). ``predicted``: the dashpots act
+    on predicted velocities (:func:`knitlad.engine.timestep.damped_limit_factor`).
+    """
+    if model is None:
+        return math.inf
+    k_n = max([model.stiffness] + [entry[2] for entry in model.pair_stiffness]) * units.LENGTH / units.FORCE
+    k_t = k_n * model.tangential_stiffness_ratio
+    # counting every pair, a contact at a node shared by two edges of each yarn is four pairs,
+    # each with its full lever weight on that node: four times the stiffness union counting puts there
+    z = model.contacts_per_node * (4 if model.counting == Counting.ALL_PAIRS else 1)
+    free = ~m.held
+    omega2 = 2.0 * z * (k_n + k_t) / float(m.mass[free].min()) if np.any(free) else 0.0
+    if spin:
+        turning = ~m.theta_held
+        if np.any(turning):
+            r = 0.5 * (m.radius[m.edge_a] + m.radius[m.edge_b])
+            omega2 += 2.0 * z * k_t * float(np.max(r[turning] ** 2 / m.twist_inertia[turning]))
+    if omega2 == 0.0:
+        return math.inf
+    zeta = max(model.damping_ratio, model.tangential_damping_ratio)
+    return 2.0 / math.sqrt(omega2) * damped_limit_factor(zeta, predicted)

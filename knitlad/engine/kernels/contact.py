@@ -1,0 +1,710 @@
+"""Yarn-yarn contact: capsules, O(N) broad phase, penalty normal force, Coulomb friction.
+
+Every edge is a capsule (a cylinder of its yarn's radius with spherical caps).
+
+* Narrow phase: closest points P(s), Q(t) of two segments, s, t in [0, 1]
+  (Ericson, *Real-Time Collision Detection*, sec. 5.1.9); for near-parallel
+  segments the midpoint of their overlap, so the contact point moves
+  continuously when two yarns lie side by side.
+* Broad phase: edge midpoints binned in a grid of cells of size >= the longest
+  interaction reach; candidate pairs closer than r_a + r_b + skin go to a
+  fixed-capacity buffer. A count past the capacity is reported so the caller
+  can grow the buffer and rebuild (the kernel never allocates). The list stays
+  valid until some node has moved by skin / 2.
+* Normal force (overlap delta = r_a + r_b - |P - Q|): f_n = k_n delta + gamma_n d(delta)/dt,
+  never pulling. Tangential force (Cundall & Strack 1979): a spring stretched by
+  the tangential slip u_t accumulated per persistent pair, plus a dashpot,
+  capped by Coulomb |f_t| <= mu f_n; when capped, u_t is reset to the slipping
+  value. u_t is reset when the pair separates and carried across rebuilds.
+* A yarn is the *union* of its capsules, so a contact at a node shared by two
+  edges of a yarn is counted once (:func:`counted_overlaps`): without this, a yarn
+  sliding over a chain of capsules feels a bump at every node (two pairs share
+  the load there), and the normal dashpot turns the bumps into a drag. The rule
+  is not conservative (a count that jumps where two distance minima merge). With
+  ``Contacts.union`` False every touching pair counts: a sum of pair potentials,
+  which is (``counting="all_pairs"``).
+* Forces go to the two nodes of each segment by the lever rule ((1 - s), s),
+  which keeps the force and its moment about the contact point.
+"""
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit, prange
+
+from knitlad.engine.kernels.options import INLINE_OPTS, NUMBA_OPTS, PARALLEL_OPTS
+from knitlad.engine.kernels.vec import cross, dot
+
+
+PARALLEL_EPS = 1e-10
+
+
+class ContactParams(NamedTuple):
+    """Contact parameters in internal units (:class:`knitlad.engine.contact.ContactModel` in SI)."""
+
+    k_n: float  # normal stiffness [mN/mm]
+    damping_n: float  # normal dashpot, fraction of critical per contact [-]
+    k_t: float  # tangential (Cundall-Strack) stiffness [mN/mm]
+    damping_t: float  # tangential dashpot, fraction of critical [-]
+    mu: float  # Coulomb coefficient [-]
+    skin: float  # neighbour-list margin [mm]
+
+
+# slots of Contacts.stats, written by contact_forces at every evaluation
+TOUCHING, MAX_OVERLAP, NORMAL_FORCE_SUM, SLIDING_PAIRS, PEAK_OVERLAP = range(5)
+N_STATS = 5  # PEAK_OVERLAP is the deepest overlap since the caller last zeroed it
+# slots of Contacts.status: STALE = 1 when the candidate list must be rebuilt at the next
+# evaluation (set at start and on overflow); PAIRS_NEEDED = the pairs the last overflowing build found
+STALE, PAIRS_NEEDED, GAPS_KNOWN = range(3)
+N_STATUS = 3  # GAPS_KNOWN = 1 once the narrow phase after a rebuild has stored each pair's gap (Contacts.gap_ref)
+# modes of counted_overlaps: every pair; every pair, storing its gap; pairs the stored gaps cannot rule out
+ALL_PAIRS_PLAIN, ALL_PAIRS_RECORD_GAPS, SKIP_BY_GAPS = range(3)
+# a pair is skipped only when its gap exceeds its edges' displacements by more than this [mm], far above round-off
+GAP_MARGIN = 1e-9
+# columns of the per-pair results of :func:`pair_contact_forces`
+FORCE_X, FORCE_Y, FORCE_Z, S_PAIR, T_PAIR, OVERLAP, NORMAL, SLIDING, TORQUE_I, TORQUE_J = range(10)
+PAIR_RESULTS = 10
+
+
+@njit(**INLINE_OPTS)
+def _clamp01(v):
+    return 0.0 if v < 0.0 else (1.0 if v > 1.0 else v)
+
+
+@njit(**INLINE_OPTS)
+def segment_closest_points(p0x, p0y, p0z, d1x, d1y, d1z, q0x, q0y, q0z, d2x, d2y, d2z):
+    """Parameters (s, t) of the closest points of P(s) = p0 + s d1 and Q(t) = q0 + t d2."""
+    rx, ry, rz = p0x - q0x, p0y - q0y, p0z - q0z
+    a = dot(d1x, d1y, d1z, d1x, d1y, d1z)
+    e = dot(d2x, d2y, d2z, d2x, d2y, d2z)
+    f = dot(d2x, d2y, d2z, rx, ry, rz)
+    c = dot(d1x, d1y, d1z, rx, ry, rz)
+    b = dot(d1x, d1y, d1z, d2x, d2y, d2z)
+    denom = a * e - b * b
+    if denom > PARALLEL_EPS * a * e:
+        s = _clamp01((b * f - c * e) / denom)
+    else:
+        # (near) parallel: centre of the overlap of Q's projection on P
+        s0 = -c / a
+        s1 = (b - c) / a
+        lo = min(s0, s1)
+        hi = max(s0, s1)
+        lo = max(lo, 0.0)
+        hi = min(hi, 1.0)
+        s = 0.5 * (lo + hi) if lo <= hi else (0.0 if max(s0, s1) < 0.0 else 1.0)
+    t = _clamp01((b * s + f) / e)
+    s = _clamp01((b * t - c) / a)
+    return s, t
+
+
+@njit(**INLINE_OPTS)
+def _segment(x, edge_a, edge_b, edge_shift, k):
+    a = edge_a[k]
+    b = edge_b[k]
+    return (
+        x[a, 0], x[a, 1], x[a, 2],
+        x[b, 0] + edge_shift[k, 0] - x[a, 0],
+        x[b, 1] + edge_shift[k, 1] - x[a, 1],
+        x[b, 2] + edge_shift[k, 2] - x[a, 2],
+    )
+
+
+@njit(**INLINE_OPTS)
+def segment_distance(x, edge_a, edge_b, edge_shift, i, j):
+    """Distance between the axes of edges i and j, and the closest-point parameters."""
+    p0x, p0y, p0z, d1x, d1y, d1z = _segment(x, edge_a, edge_b, edge_shift, i)
+    q0x, q0y, q0z, d2x, d2y, d2z = _segment(x, edge_a, edge_b, edge_shift, j)
+    s, t = segment_closest_points(p0x, p0y, p0z, d1x, d1y, d1z, q0x, q0y, q0z, d2x, d2y, d2z)
+    dx = p0x + s * d1x - q0x - t * d2x
+    dy = p0y + s * d1y - q0y - t * d2y
+    dz = p0z + s * d1z - q0z - t * d2z
+    return math.sqrt(dx * dx + dy * dy + dz * dz), s, t
+
+
+@njit(**NUMBA_OPTS)
+def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out,
+                     mode, gap_ref, edge_moved):
+    """Narrow phase of the pairs p in [lo, hi): overlap, s, t into ``out[p, OVERLAP]``, ``out[p, S_PAIR]``,
+    ``out[p, T_PAIR]``. The overlap is 0 when apart or, with ``union`` counting, when the contact
+    belongs to a neighbouring edge (else every touching pair counts: ``all_pairs``).
+
+    The union rule: at an interior node the capsules of edges i and i' (its neighbour) overlap.
+    A closest point clamped at the start node (s = 0) belongs to the predecessor; one clamped at
+    the end node (s = 1) belongs to i unless the successor reaches the same place from its
+    interior (then its own closest point is not the node).
+
+    The rule is written out in this loop, not in a helper: as a helper over the arrays (compiled
+    or inlined) it made the narrow phase 4 to 7 x slower on a 42 x 42 knit (docs/history.md).
+
+    ``mode`` ALL_PAIRS_RECORD_GAPS also stores each pair's gap (axis distance less the two radii)
+    in ``gap_ref``; SKIP_BY_GAPS writes an overlap of 0 without a distance test for a pair whose
+    stored gap exceeds the largest displacements of its two edges since (``edge_moved``): every
+    point of a segment moves by at most its ends' largest displacement, so the axes' distance
+    shrinks by at most the sum and the pair is still apart. The forces are the same to the bit;
+    the parameters s, t of a skipped pair are left as they were (nothing reads them when apart).
+    """
+    for p in range(lo, hi):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        if mode == SKIP_BY_GAPS and gap_ref[p] > edge_moved[i] + edge_moved[j] + GAP_MARGIN:
+            out[p, OVERLAP] = 0.0
+            continue
+        dist, s, t = segment_distance(x, edge_a, edge_b, edge_shift, i, j)
+        overlap = edge_radius[i] + edge_radius[j] - dist
+        if mode == ALL_PAIRS_RECORD_GAPS:  # the gap at the rebuild's positions, at least (a bound if moved since)
+            gap_ref[p] = -overlap - edge_moved[i] - edge_moved[j]
+        if union and overlap > 0.0:
+            if s <= 0.0:
+                owned = edge_prev[i] < 0
+            elif s >= 1.0 and edge_next[i] >= 0:
+                _, s_next, _ = segment_distance(x, edge_a, edge_b, edge_shift, edge_next[i], j)
+                owned = s_next <= 0.0
+            else:
+                owned = True
+            if owned:
+                if t <= 0.0:
+                    owned = edge_prev[j] < 0
+                elif t >= 1.0 and edge_next[j] >= 0:
+                    _, t_next, _ = segment_distance(x, edge_a, edge_b, edge_shift, edge_next[j], i)
+                    owned = t_next <= 0.0
+            if not owned:
+                overlap = 0.0
+        out[p, OVERLAP] = max(overlap, 0.0)
+        out[p, S_PAIR] = s
+        out[p, T_PAIR] = t
+
+
+# a grid of more cells than this per edge is coarsened (a yarn flung far away must not
+# make the grid huge); cells larger than the reach only cost more distance tests
+MAX_CELLS_PER_EDGE = 8
+
+
+@njit(**PARALLEL_OPTS)
+def build_candidate_pairs(
+    x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion,
+    edge_image, cell_size, skin, pairs, keys, n_threads=1,
+):
+    """Fill ``pairs`` (cap, 2) with candidate edge pairs (i < j), sorted; return how many were found.
+
+    Edge midpoints are binned in a dense grid of cells of at least ``cell_size``
+    over their bounding box, numbered x fastest, so the three cells along x of a
+    neighbourhood are one contiguous run of the binned edges: nine runs per edge.
+    A return value above ``pairs.shape[0]`` means the buffer overflowed (the
+    buffer's content is then undefined): grow it and call again. Blocks of edges
+    are searched in parallel.
+    """
+    ne = edge_a.shape[0]
+    cap = pairs.shape[0]
+    mid = np.empty((ne, 3))
+    reach = np.empty(ne)  # bounding-sphere radius of the capsule plus half the skin
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
+    for k in range(ne):
+        a = edge_a[k]
+        b = edge_b[k]
+        half2 = 0.0
+        for d in range(3):
+            xb = x[b, d] + edge_shift[k, d]
+            mid[k, d] = 0.5 * (x[a, d] + xb)
+            half2 += 0.25 * (xb - x[a, d]) ** 2
+            if math.isfinite(mid[k, d]):  # a non-finite edge stays out of the box
+                lo[d] = min(lo[d], mid[k, d])
+                hi[d] = max(hi[d], mid[k, d])
+        reach[k] = math.sqrt(half2) + edge_radius[k] + 0.5 * skin
+    extent = np.maximum(hi - lo, 0.0)  # 0 along an axis with no finite midpoint (hi - lo = -inf)
+    cell = cell_size
+    # counted as a float: a far-flung yarn must not overflow the count
+    while np.prod(np.floor(extent / cell) + 1.0) > MAX_CELLS_PER_EDGE * ne + 64:
+        cell *= 1.5
+    dims = (extent / cell).astype(np.int64) + 1
+    n_cells = dims[0] * dims[1] * dims[2]
+    inv = 1.0 / cell
+    cells = np.empty((ne, 3), dtype=np.int64)
+    start = np.zeros(n_cells + 1, dtype=np.int64)
+    linear = np.empty(ne, dtype=np.int64)
+    for k in range(ne):
+        for d in range(3):
+            c = (mid[k, d] - lo[d]) * inv
+            # clamped: a non-finite midpoint lands somewhere in the grid and fails every distance test
+            cells[k, d] = min(max(int(c), 0), dims[d] - 1) if c == c else 0
+        linear[k] = (cells[k, 2] * dims[1] + cells[k, 1]) * dims[0] + cells[k, 0]
+        start[linear[k] + 1] += 1
+    for h in range(n_cells):
+        start[h + 1] += start[h]
+    fill = start[:-1].copy()
+    order = np.empty(ne, dtype=np.int64)
+    for k in range(ne):
+        order[fill[linear[k]]] = k
+        fill[linear[k]] += 1
+    # candidates of each block of edges, found in parallel, then concatenated in order
+    n_blocks = max(1, min(n_threads, ne))
+    block_cap = cap  # blocks can be very unequal (e.g. all partners j > i on the first yarns)
+    local = np.empty((n_blocks, block_cap, 2), dtype=np.int64)
+    found = np.zeros(n_blocks, dtype=np.int64)
+    for blk in prange(n_blocks):
+        found[blk] = _candidates_of_block(
+            blk * ne // n_blocks, (blk + 1) * ne // n_blocks, x, edge_a, edge_b, edge_shift, edge_radius,
+            edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion, edge_image, skin, cells, dims, mid, reach,
+            start, order, local[blk],
+        )
+    n = 0
+    for blk in range(n_blocks):
+        n += found[blk]
+    if n > cap or np.any(found > block_cap):
+        return max(n, cap + 1)
+    p = 0
+    for blk in range(n_blocks):
+        for q in range(found[blk]):
+            pairs[p, 0] = local[blk, q, 0]
+            pairs[p, 1] = local[blk, q, 1]
+            keys[p] = pairs[p, 0] * ne + pairs[p, 1]
+            p += 1
+    # blocks run in edge order and each edge's partners are sorted below: keys end up sorted
+    return n
+
+
+@njit(**NUMBA_OPTS)
+def _candidates_of_block(
+    lo, hi, x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed,
+    exclusion, edge_image, skin, cells, dims, mid, reach, start, order, out,
+):
+    """Candidate pairs (i, j > i) for edges i in [lo, hi) into ``out``; partners of each i sorted.
+
+    Two edges of periodic images never pair: the image of that pair is already a
+    pair of a real edge with an image.
+
+    Returns how many were found (may exceed ``out``'s size: then only the count is valid).
+    """
+    cap = out.shape[0]
+    n = 0
+    for i in range(lo, hi):
+        first = n
+        x0 = max(cells[i, 0] - 1, 0)
+        x1 = min(cells[i, 0] + 1, dims[0] - 1)
+        for cz in range(max(cells[i, 2] - 1, 0), min(cells[i, 2] + 1, dims[2] - 1) + 1):
+            for cy in range(max(cells[i, 1] - 1, 0), min(cells[i, 1] + 1, dims[1] - 1) + 1):
+                row = (cz * dims[1] + cy) * dims[0]
+                for idx in range(start[row + x0], start[row + x1 + 1]):
+                    j = order[idx]
+                    if j <= i:
+                        continue
+                    if edge_image[i] and edge_image[j]:
+                        continue
+                    # bounding spheres first: most neighbours in the 27 cells are far
+                    r = reach[i] + reach[j]
+                    dm = (mid[i, 0] - mid[j, 0]) ** 2 + (mid[i, 1] - mid[j, 1]) ** 2 + (mid[i, 2] - mid[j, 2]) ** 2
+                    if dm > r * r:
+                        continue
+                    # excluded: same yarn and at most `exclusion` edges apart along it (cyclically if
+                    # closed); written out here, as a call it costs a fifth of the search
+                    y = edge_yarn[i]
+                    if y == edge_yarn[j]:
+                        gap = abs(edge_local[i] - edge_local[j])
+                        if yarn_closed[y]:
+                            gap = min(gap, yarn_edges[y] - gap)
+                        if gap <= exclusion[y]:
+                            continue
+                    dist, _, _ = segment_distance(x, edge_a, edge_b, edge_shift, i, j)
+                    if dist < edge_radius[i] + edge_radius[j] + skin:
+                        if n < cap:
+                            out[n, 0] = i
+                            out[n, 1] = j
+                        n += 1
+        # insertion sort of this edge's partners (a handful)
+        if n <= cap:
+            for a in range(first + 1, n):
+                v = out[a, 1]
+                b = a - 1
+                while b >= first and out[b, 1] > v:
+                    out[b + 1, 1] = out[b, 1]
+                    b -= 1
+                out[b + 1, 1] = v
+    return n
+
+
+@njit(**NUMBA_OPTS)
+def carry_history(old_keys, old_slip, n_old, new_keys, new_slip, n_new):
+    """Copy the tangential slip of pairs present in both sorted lists; zero the new ones."""
+    p = 0
+    for q in range(n_new):
+        while p < n_old and old_keys[p] < new_keys[q]:
+            p += 1
+        if p < n_old and old_keys[p] == new_keys[q]:
+            new_slip[q, 0] = old_slip[p, 0]
+            new_slip[q, 1] = old_slip[p, 1]
+            new_slip[q, 2] = old_slip[p, 2]
+        else:
+            new_slip[q, 0] = 0.0
+            new_slip[q, 1] = 0.0
+            new_slip[q, 2] = 0.0
+
+
+@njit(**PARALLEL_OPTS)
+def max_displacement(x, x_ref):
+    """Largest |x - x_ref| over the nodes."""
+    m = 0.0
+    for i in prange(x.shape[0]):
+        m = max(m, (x[i, 0] - x_ref[i, 0]) ** 2 + (x[i, 1] - x_ref[i, 1]) ** 2 + (x[i, 2] - x_ref[i, 2]) ** 2)
+    return math.sqrt(m)
+
+
+# below this many candidate pairs per thread, starting the threads costs more than they save
+MIN_PAIRS_PER_THREAD = 1000
+
+
+@njit(**INLINE_OPTS)
+def coulomb_spring(ux, uy, uz, nx, ny, nz, vtx, vty, vtz, sx, sy, sz, dt, k_t, gamma_t, limit):
+    """The tangential force of a touching contact (Cundall & Strack 1979; module docstring), shared by the
+    yarn-yarn pairs and the obstacles: the slip u (kept in the tangent plane of normal n with its length)
+    grows by the slip velocity s over dt; f_t = -k_t u - gamma_t v_t (v_t: the dashpot's tangential
+    velocity), capped at ``limit`` = mu f_n, when u is set to the slipping value.
+    Returns (f_t, the new u, sliding)."""
+    u_len = math.sqrt(ux * ux + uy * uy + uz * uz)
+    un = dot(ux, uy, uz, nx, ny, nz)
+    ux -= un * nx
+    uy -= un * ny
+    uz -= un * nz
+    u_new = math.sqrt(ux * ux + uy * uy + uz * uz)
+    if u_new > 0.0:
+        ux *= u_len / u_new
+        uy *= u_len / u_new
+        uz *= u_len / u_new
+    ux += sx * dt
+    uy += sy * dt
+    uz += sz * dt
+    ftx = -k_t * ux - gamma_t * vtx
+    fty = -k_t * uy - gamma_t * vty
+    ftz = -k_t * uz - gamma_t * vtz
+    ft = math.sqrt(ftx * ftx + fty * fty + ftz * ftz)
+    sliding = False
+    if ft > limit:
+        # sliding: Coulomb force along the trial direction, spring set to match it
+        scale = limit / ft if ft > 0.0 else 0.0
+        ftx *= scale
+        fty *= scale
+        ftz *= scale
+        if k_t > 0.0:
+            ux = -(ftx + gamma_t * vtx) / k_t
+            uy = -(fty + gamma_t * vty) / k_t
+            uz = -(ftz + gamma_t * vtz) / k_t
+        sliding = True
+    return ftx, fty, ftz, ux, uy, uz, sliding
+
+
+@njit(**NUMBA_OPTS)
+def pair_contact_forces(
+    lo, hi, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
+    edge_prev, edge_next, union, pairs, slip, edge_class, stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref,
+    edge_moved,
+):
+    """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``
+    (the narrow phase in ``mode``, :func:`counted_overlaps`).
+
+    The buffers and parameters of :class:`knitlad.engine.contact.Contacts`, passed one by one:
+    Numba's parallel regions (:func:`_pair_contact_forces_in_blocks`) take no named tuple.
+
+    ``out[p]``: the force (FORCE_X..Z), the closest-point parameters (S_PAIR, T_PAIR),
+    the overlap (OVERLAP, 0 when apart or owned by a neighbouring edge), the normal
+    force and 1 if sliding. Advances the slip history of each pair. Pairs are
+    independent here, so blocks of pairs can run on different threads.
+
+    ``spin``: the yarns carry twist (spin rate ``omega`` per edge). The contact point
+    then sits on the two surfaces, C = P - r_i n = Q + r_j n, and each surface moves with
+    its yarn's spin: v_C,i = v_P + omega_i t_i x (-r_i n). The friction force, applied
+    there, twists each edge about its axis (TORQUE_I, TORQUE_J): the friction couple.
+    Its moment about the other two axes (lever r << edge length) is dropped.
+
+    ``predicted``: the dashpots act on ``v_damp``, ``omega_damp`` (the velocities predicted at the end
+    of the step, :func:`knitlad.engine.kernels.integrate.predict_velocities`), the slip on the half-step
+    ``v``, ``omega``; else both on ``v``, ``omega``.
+    """
+    counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out,
+                     mode, gap_ref, edge_moved)
+    for p in range(lo, hi):
+        i = pairs[p, 0]
+        j = pairs[p, 1]
+        overlap = out[p, OVERLAP]
+        if overlap <= 0.0:
+            slip[p, 0] = 0.0
+            slip[p, 1] = 0.0
+            slip[p, 2] = 0.0
+            continue
+        s = out[p, S_PAIR]
+        t = out[p, T_PAIR]
+        dist = edge_radius[i] + edge_radius[j] - overlap
+        a0 = edge_a[i]
+        a1 = edge_b[i]
+        b0 = edge_a[j]
+        b1 = edge_b[j]
+        p0x, p0y, p0z, d1x, d1y, d1z = _segment(x, edge_a, edge_b, edge_shift, i)
+        q0x, q0y, q0z, d2x, d2y, d2z = _segment(x, edge_a, edge_b, edge_shift, j)
+        nx = p0x + s * d1x - q0x - t * d2x
+        ny = p0y + s * d1y - q0y - t * d2y
+        nz = p0z + s * d1z - q0z - t * d2z
+        if dist > 1e-12 * (edge_radius[i] + edge_radius[j]):
+            nx /= dist
+            ny /= dist
+            nz /= dist
+        else:
+            # axes intersect: push apart along the common normal of the two segments
+            nx, ny, nz = cross(d1x, d1y, d1z, d2x, d2y, d2z)
+            nn = math.sqrt(nx * nx + ny * ny + nz * nz) + 1e-300
+            nx /= nn
+            ny /= nn
+            nz /= nn
+        # relative velocity of the contact points (material points of the two axes)
+        vrx = (1 - s) * v[a0, 0] + s * v[a1, 0] - (1 - t) * v[b0, 0] - t * v[b1, 0]
+        vry = (1 - s) * v[a0, 1] + s * v[a1, 1] - (1 - t) * v[b0, 1] - t * v[b1, 1]
+        vrz = (1 - s) * v[a0, 2] + s * v[a1, 2] - (1 - t) * v[b0, 2] - t * v[b1, 2]
+        if predicted:
+            dvx = (1 - s) * v_damp[a0, 0] + s * v_damp[a1, 0] - (1 - t) * v_damp[b0, 0] - t * v_damp[b1, 0]
+            dvy = (1 - s) * v_damp[a0, 1] + s * v_damp[a1, 1] - (1 - t) * v_damp[b0, 1] - t * v_damp[b1, 1]
+            dvz = (1 - s) * v_damp[a0, 2] + s * v_damp[a1, 2] - (1 - t) * v_damp[b0, 2] - t * v_damp[b1, 2]
+        li = 1.0
+        lj = 1.0
+        if spin:
+            # surfaces at the contact point: - r_i omega_i (t_i x n) on i, + r_j omega_j (t_j x n) on j
+            li = math.sqrt(d1x * d1x + d1y * d1y + d1z * d1z)
+            lj = math.sqrt(d2x * d2x + d2y * d2y + d2z * d2z)
+            wi = edge_radius[i] * omega[i] / li
+            wj = edge_radius[j] * omega[j] / lj
+            cix, ciy, ciz = cross(d1x, d1y, d1z, nx, ny, nz)
+            cjx, cjy, cjz = cross(d2x, d2y, d2z, nx, ny, nz)
+            vrx -= wi * cix + wj * cjx
+            vry -= wi * ciy + wj * cjy
+            vrz -= wi * ciz + wj * cjz
+            if predicted:
+                wi = edge_radius[i] * omega_damp[i] / li
+                wj = edge_radius[j] * omega_damp[j] / lj
+                dvx -= wi * cix + wj * cjx
+                dvy -= wi * ciy + wj * cjy
+                dvz -= wi * ciz + wj * cjz
+        if not predicted:
+            dvx, dvy, dvz = vrx, vry, vrz
+        vn = dot(dvx, dvy, dvz, nx, ny, nz)  # > 0: separating
+        m_a = (1 - s) * mass[a0] + s * mass[a1]
+        m_b = (1 - t) * mass[b0] + t * mass[b1]
+        m_eff = m_a * m_b / (m_a + m_b)
+        k_n = stiffness[edge_class[i], edge_class[j], 0]
+        k_t = stiffness[edge_class[i], edge_class[j], 1]
+        fn = k_n * overlap - 2.0 * damping_n * math.sqrt(k_n * m_eff) * vn
+        if fn < 0.0:
+            fn = 0.0
+        vtx = dvx - vn * nx  # of the dashpot
+        vty = dvy - vn * ny
+        vtz = dvz - vn * nz
+        if predicted:  # the slip grows with the half-step velocity (midpoint rule)
+            vn_slip = dot(vrx, vry, vrz, nx, ny, nz)
+            sx, sy, sz = vrx - vn_slip * nx, vry - vn_slip * ny, vrz - vn_slip * nz
+        else:
+            sx, sy, sz = vtx, vty, vtz
+        gamma_t = 2.0 * damping_t * math.sqrt(k_t * m_eff)
+        ftx, fty, ftz, ux, uy, uz, slides = coulomb_spring(slip[p, 0], slip[p, 1], slip[p, 2], nx, ny, nz, vtx, vty,
+                                                           vtz, sx, sy, sz, dt, k_t, gamma_t, mu * fn)
+        sliding = 1.0 if slides else 0.0
+        slip[p, 0] = ux
+        slip[p, 1] = uy
+        slip[p, 2] = uz
+        out[p, FORCE_X] = fn * nx + ftx
+        out[p, FORCE_Y] = fn * ny + fty
+        out[p, FORCE_Z] = fn * nz + ftz
+        out[p, NORMAL] = fn
+        out[p, SLIDING] = sliding
+        if spin:
+            # torque about each axis of the friction force at the surface: t . (-r n x f_t) on i,
+            # t . (r n x (-f_t)) on j: the same expression for both
+            mx, my, mz = cross(nx, ny, nz, ftx, fty, ftz)
+            out[p, TORQUE_I] = -edge_radius[i] * dot(d1x, d1y, d1z, mx, my, mz) / li
+            out[p, TORQUE_J] = -edge_radius[j] * dot(d2x, d2y, d2z, mx, my, mz) / lj
+
+
+@njit(**PARALLEL_OPTS)
+def _pair_contact_forces_in_blocks(
+    n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
+    edge_prev, edge_next, union, pairs, slip, edge_class, stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref,
+    edge_moved,
+):
+    for blk in prange(n_blocks):
+        pair_contact_forces(
+            blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, omega, v_damp, omega_damp, predicted,
+            spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, slip, edge_class,
+            stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref, edge_moved,
+        )
+
+
+@njit(**PARALLEL_OPTS)
+def edge_displacements(x, x_ref, edge_a, edge_b, out):
+    """Largest displacement of each edge's two ends since ``x_ref`` (the last rebuild) into ``out``."""
+    for k in prange(edge_a.shape[0]):
+        a = edge_a[k]
+        b = edge_b[k]
+        da = (x[a, 0] - x_ref[a, 0]) ** 2 + (x[a, 1] - x_ref[a, 1]) ** 2 + (x[a, 2] - x_ref[a, 2]) ** 2
+        db = (x[b, 0] - x_ref[b, 0]) ** 2 + (x[b, 1] - x_ref[b, 1]) ** 2 + (x[b, 2] - x_ref[b, 2]) ** 2
+        out[k] = math.sqrt(max(da, db))
+
+
+@njit(**NUMBA_OPTS)
+def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F, torque, v_damp, omega_damp,
+                   predicted):
+    """Add the contact forces of the candidate pairs of ``c`` (:class:`knitlad.engine.contact.Contacts`) to F
+    (and, with ``spin``, the friction couples to ``torque``); advance the slip history. ``predicted``:
+    the dashpots act on ``v_damp``, ``omega_damp`` (:func:`pair_contact_forces`).
+
+    The damping parameters are damping ratios of the contact springs (gamma =
+    2 zeta sqrt(k m_eff)). ``c.stats`` receives, at slots TOUCHING, MAX_OVERLAP,
+    NORMAL_FORCE_SUM and SLIDING_PAIRS, the state of this evaluation, and keeps at
+    PEAK_OVERLAP the deepest overlap since the caller last zeroed it. The pairs are
+    evaluated on up to ``c.threads[0]`` threads into ``c.pair_results``, then added
+    to F one by one in pair order, so the forces are bit for bit the same on any
+    number of threads.
+    """
+    n_pairs = c.n_pairs[0]
+    n_blocks = min(c.threads[0], n_pairs // MIN_PAIRS_PER_THREAD)
+    p = c.params
+    # most candidate pairs stay apart between two rebuilds: after the first evaluation of a list, a pair
+    # its stored gap rules out skips the distance test (counted_overlaps, SKIP_BY_GAPS)
+    mode = SKIP_BY_GAPS if c.status[GAPS_KNOWN] == 1 else ALL_PAIRS_RECORD_GAPS
+    edge_displacements(x, c.x_ref, edge_a, edge_b, c.edge_moved)
+    if n_blocks > 1:
+        _pair_contact_forces_in_blocks(
+            n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
+            c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.stiffness, p.damping_n,
+            p.damping_t,
+            p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved,
+        )
+    else:
+        pair_contact_forces(
+            0, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
+            c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.stiffness, p.damping_n,
+            p.damping_t,
+            p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved,
+        )
+    c.status[GAPS_KNOWN] = 1
+    pairs, pair_results, stats = c.pairs, c.pair_results, c.stats
+    n_touch = 0
+    max_overlap = 0.0
+    fn_sum = 0.0
+    n_slide = 0
+    for p in range(n_pairs):
+        overlap = pair_results[p, OVERLAP]
+        if overlap <= 0.0:
+            continue
+        a0 = edge_a[pairs[p, 0]]
+        a1 = edge_b[pairs[p, 0]]
+        b0 = edge_a[pairs[p, 1]]
+        b1 = edge_b[pairs[p, 1]]
+        s = pair_results[p, S_PAIR]
+        t = pair_results[p, T_PAIR]
+        fx = pair_results[p, FORCE_X]
+        fy = pair_results[p, FORCE_Y]
+        fz = pair_results[p, FORCE_Z]
+        F[a0, 0] += (1 - s) * fx
+        F[a0, 1] += (1 - s) * fy
+        F[a0, 2] += (1 - s) * fz
+        F[a1, 0] += s * fx
+        F[a1, 1] += s * fy
+        F[a1, 2] += s * fz
+        F[b0, 0] -= (1 - t) * fx
+        F[b0, 1] -= (1 - t) * fy
+        F[b0, 2] -= (1 - t) * fz
+        F[b1, 0] -= t * fx
+        F[b1, 1] -= t * fy
+        F[b1, 2] -= t * fz
+        if spin:
+            torque[pairs[p, 0]] += pair_results[p, TORQUE_I]
+            torque[pairs[p, 1]] += pair_results[p, TORQUE_J]
+        n_touch += 1
+        fn_sum += pair_results[p, NORMAL]
+        n_slide += int(pair_results[p, SLIDING])
+        if overlap > max_overlap:
+            max_overlap = overlap
+    stats[TOUCHING] = n_touch
+    stats[MAX_OVERLAP] = max_overlap
+    stats[NORMAL_FORCE_SUM] = fn_sum
+    stats[SLIDING_PAIRS] = n_slide
+    # the peak over every evaluation since the caller last zeroed it: an interpenetration
+    # lasting a few steps between two observations must not go unseen
+    if max_overlap > stats[PEAK_OVERLAP]:
+        stats[PEAK_OVERLAP] = max_overlap
+
+
+@njit(**NUMBA_OPTS)
+def contact_energy(x, edge_a, edge_b, edge_shift, c, pairs, slip):
+    """Stored contact energy: sum of k_n delta^2 / 2 + k_t |u_t|^2 / 2 over the counted touching
+    ``pairs`` (m, 2) with their ``slip`` (m, 3) (``c.pairs[:n]``, ``c.slip[:n]``, or a subset)."""
+    n_pairs = pairs.shape[0]
+    narrow = np.empty((n_pairs, PAIR_RESULTS))
+    counted_overlaps(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, c.union, pairs, 0, n_pairs,
+                     narrow, ALL_PAIRS_PLAIN, c.gap_ref, c.edge_moved)
+    total = 0.0
+    for p in range(n_pairs):
+        overlap = narrow[p, OVERLAP]
+        if overlap > 0.0:
+            k_n = c.stiffness[c.edge_class[pairs[p, 0]], c.edge_class[pairs[p, 1]], 0]
+            k_t = c.stiffness[c.edge_class[pairs[p, 0]], c.edge_class[pairs[p, 1]], 1]
+            total += 0.5 * k_n * overlap * overlap
+            total += 0.5 * k_t * (slip[p, 0] ** 2 + slip[p, 1] ** 2 + slip[p, 2] ** 2)
+    return total
+
+
+@njit(**NUMBA_OPTS)
+def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
+    """Rebuild the candidate list of ``c`` (a :class:`knitlad.engine.contact.Contacts`) if stale
+    or if a node moved by more than skin/2 since the last build (two segments then
+    may have approached by up to skin). Returns False on overflow: the old list is
+    kept, ``c.status[PAIRS_NEEDED]`` holds the pairs needed, and the caller must grow the buffer.
+    """
+    skin = c.params.skin
+    if c.status[STALE] == 0 and max_displacement(x, c.x_ref) <= 0.5 * skin:
+        return True
+    n_old = c.n_pairs[0]
+    old_pairs = c.pairs[:n_old].copy()
+    old_keys = c.keys[:n_old].copy()
+    old_slip = c.slip[:n_old].copy()
+    longest = 0.0
+    for k in range(edge_a.shape[0]):
+        a = edge_a[k]
+        b = edge_b[k]
+        l2 = 0.0
+        for d in range(3):
+            l2 += (x[b, d] + edge_shift[k, d] - x[a, d]) ** 2
+        longest = max(longest, math.sqrt(l2))
+    r_max = 0.0
+    for k in range(c.edge_radius.shape[0]):
+        r_max = max(r_max, c.edge_radius[k])
+    cell = longest + 2.0 * r_max + skin
+    n = build_candidate_pairs(
+        x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_yarn, c.edge_local, c.yarn_edges,
+        c.yarn_closed, c.exclusion, c.edge_image, cell, skin, c.pairs, c.keys, c.threads[0],
+    )
+    if n > c.pairs.shape[0]:
+        c.pairs[:n_old] = old_pairs
+        c.keys[:n_old] = old_keys
+        c.slip[:n_old] = old_slip
+        c.status[STALE] = 1
+        c.status[PAIRS_NEEDED] = n
+        return False
+    carry_history(old_keys, old_slip, n_old, c.keys, c.slip, n)
+    c.n_pairs[0] = n
+    c.x_ref[:] = x
+    c.status[STALE] = 0
+    c.status[GAPS_KNOWN] = 0
+    return True
+
+
+@njit(**NUMBA_OPTS)
+def touching_pairs_among(x, edge_a, edge_b, edge_shift, c, in_a, in_b):
+    """Number of counted touching pairs of ``c`` between an edge of the set ``in_a`` and one of the
+    set ``in_b`` (boolean masks over the edges: a part of a yarn and its images, say)."""
+    n_pairs = c.n_pairs[0]
+    narrow = np.empty((n_pairs, PAIR_RESULTS))
+    counted_overlaps(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, 0,
+                     n_pairs, narrow, ALL_PAIRS_PLAIN, c.gap_ref, c.edge_moved)
+    n = 0
+    for p in range(n_pairs):
+        i = c.pairs[p, 0]
+        j = c.pairs[p, 1]
+        if ((in_a[i] and in_b[j]) or (in_a[j] and in_b[i])) and narrow[p, OVERLAP] > 0.0:
+            n += 1
+    return n

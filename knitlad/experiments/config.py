@@ -1,0 +1,413 @@
+"""Validated configuration (pydantic v2, extra="forbid"): units in every field's description.
+
+Dimensionless inputs follow the paper: lengths as l/l0, tension as f_x = F_x/(n_y f0).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import ClassVar, Literal, get_args, get_origin
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from knitlad.fabric.observers import AUTO_FRAMES
+from knitlad.fabric.presets import LADDER_PRESETS, LOOP_PRESETS, PRESET_HELP, STITCH_PRESETS
+
+Preset = Literal["fast", "default", "accurate"]
+
+
+class _WithPreset(BaseModel):
+    """A run whose resolution (and the settings beside it in ``PRESETS``) default to its accuracy preset's."""
+
+    # no NaN or infinity in any number: a bad value is named as such, not as out of range
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+    PRESETS: ClassVar[dict[str, dict]] = LADDER_PRESETS
+
+    preset: Preset = Field("default", description=PRESET_HELP)
+
+    def replace(self, **changes):
+        """A copy with ``changes``, validated as a new config is (``model_copy(update=...)`` skips validation:
+        ``mu=-1`` would pass). A new ``preset`` brings its own settings in place of the old preset's (a
+        setting that differs from the old preset's value was given, and stays)."""
+        data = self.model_dump()
+        if "preset" in changes and changes["preset"] != self.preset:
+            old = self.PRESETS.get(self.preset, {})
+            data = {k: v for k, v in data.items() if not (k in old and v == old[k] and k not in changes)}
+        return type(self).model_validate({**data, **changes})
+
+    @model_validator(mode="before")
+    @classmethod
+    def preset_settings(cls, data):
+        """Fill each setting of the preset not given, so a resolved config names what it ran with."""
+        if isinstance(data, dict) and data.get("preset", "default") in cls.PRESETS:
+            chosen = cls.PRESETS[data.get("preset", "default")]
+            data = {**data, **{k: v for k, v in chosen.items() if data.get(k) is None}}
+        return data
+
+    @model_validator(mode="before")
+    @classmethod
+    def no_bool_for_numbers(cls, data):
+        """``n_x: true`` is a mistake, not 1, and ``mu: "0.4"`` or ``twist: "yes"`` (quoted in YAML) are text:
+        a yes/no is taken only where the field is one, text only where it is a choice of words."""
+        if isinstance(data, dict):
+            for name, value in data.items():
+                field = cls.model_fields.get(name)
+                if field is None:
+                    continue
+                kinds = (field.annotation, *get_args(field.annotation))
+                if isinstance(value, bool) and bool not in kinds:
+                    raise ValueError(f"{name}: a number is needed, got {value!r}")
+                if isinstance(value, str) and str not in kinds and not any(get_origin(k) is Literal for k in kinds):
+                    wanted = "true or false" if bool in kinds else "a number"
+                    raise ValueError(f"{name}: {wanted} is needed, got the text {value!r}")
+        return data
+
+
+class CutConfig(_WithPreset):
+    """One laddering run (``knitlad cut``, sweep scene ``ladder``): the one declaration of each of its settings.
+
+    The first group are the options of ``knitlad cut``; the second the model's choices,
+    each a measurement (README, docs/accuracy.md), settable from Python and sweeps.
+    """
+
+    # fields added after sweeps of this scene were first run: at their default they stay out
+    # of a job's id (knitlad.studies.sweep.job_id), so a finished job keeps its id and is not run again
+    ADDED_LATER: ClassVar[tuple[str, ...]] = (
+        "drag_per_s", "twist", "d_over_l0", "contact_force_f0", "overlap_fraction", "contact_counting", "edge",
+        "contact_damping_ratio", "stretch_damping_ratio", "stretch_increment", "steps_per_increment",
+        "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor",
+        "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
+        "stop_at_edge")
+
+    fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
+    lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
+    ly: float = Field(0.25, gt=0.2, lt=0.5, description="stretch l_y/l0 [-]")
+    mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient during laddering [-]")
+    n_x: int = Field(42, ge=4, le=200, description="stitches per course [-]")
+    n_y: int = Field(42, ge=4, le=200, description="courses [-]")
+    resolution: int | None = Field(None, ge=12, le=280, description="nodes per stitch (segment = l0/resolution) [-]; default: the preset's")
+    max_time_ms: float = Field(30.0, gt=0, description="longest laddering time simulated after the cut [ms]")
+    arrest_ms: float = Field(2.0, gt=0, description="the ladder has stopped when no cell changed for this long [ms]")
+    observe_every_us: float = Field(20.0, gt=0, description="interval between front/tension samples [us]")
+    frame_every_us: float | None = Field(None, gt=0, description=(
+        "interval between stored frames (positions, velocities, laddered cells) [us]; default: 1/60 of the "
+        "ladder's expected duration, n_y l_y / 2 over the paper's velocity 0.1 f_x^ini c_b, for a movie of 50+ frames"))
+    drag_per_s: float = Field(0.0, ge=0, le=1e5, json_schema_extra={"cli": "--drag"}, description=(
+        "global drag -gamma m v on every node during the laddering [1/s]; 0 is the physics (its effect on v_lad: "
+        "docs/accuracy.md)"))
+    twist: bool = Field(False, description=(
+        "the yarns carry twist during the laddering, so friction also turns them (the friction couple) [-]; "
+        "costs more (docs/performance.md)"))
+    # --- the model's choices
+    d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description=(
+        "yarn diameter over stitch length d/l0 [-]; 1/70, the paper's rounded value and the default, means its "
+        "Nylon itself: d = 0.14 mm with l0 = 9.74 mm, d/l0 = 0.01437 (knitlad.experiments.config.material_for)"))
+    contact_force_f0: float = Field(20.0, gt=0, description=(
+        "contact stiffness: a contact carrying this force overlaps by overlap_fraction d [f0]"))
+    overlap_fraction: float = Field(0.05, gt=0, lt=1, description="overlap at contact_force_f0, over d [-]")
+    sagitta_radius: float | None = Field(None, ge=0, le=1000, description=(
+        "the contact's sagitta correction: each segment's contact radius is r - l^2/(12 R), R this many yarn "
+        "diameters (the stitch's contacts' radius of curvature), l the segment; 0: capsules of the yarn's "
+        "radius [d]; default: the preset's"))
+    contact_counting: Literal["union", "all_pairs"] = Field("union", description=(
+        "contact counting of the laddering dynamics: union (exact friction) or all_pairs (conserves energy) [-]"))
+    edge: Literal["clamped", "tail"] = Field("clamped", description=(
+        "course ends: clamped at the edge sinkers (position and tangent) or held at straight tails [-]"))
+    contact_damping_ratio: float = Field(0.3, ge=0, description=(
+        "normal and tangential contact dashpots of the laddering dynamics, fraction of critical [-]"))
+    stretch_damping_ratio: float = Field(0.2, ge=0, description=(
+        "the yarn's axial dashpot during the laddering, fraction of critical [-]"))
+    stretch_increment: float = Field(0.005, gt=0, le=0.05, description="affine stretch per relaxation round [l/l0]")
+    steps_per_increment: int = Field(750, ge=1, description="FIRE steps per relaxation round [-]")
+    fx_tolerance: float = Field(0.02, gt=0, lt=1, description="force control: accepted relative error of f_x^ini [-]")
+    natural_curvature: float = Field(0.0, ge=0, le=20, description=(
+        "the yarn's memory of its knitted shape: mean (kappa_bar/kappa0)^2 of its natural curvature, a "
+        "fraction of the unloaded fabric's curvature (the paper measures ~1, up to 3.5) [-]; > 0 turns twist on"))
+    memory_peak_ratio: float | None = Field(None, ge=1, le=50, description=(
+        "the memory concentrated at the most bent places (the loop heads): max/mean of (kappa_bar/kappa0)^2 "
+        "over the stitch (the paper's thread: about 3.5; default: the scaled copy's own, 1.6) [-]; needs "
+        "natural_curvature > 0"))
+    stretch_start: Literal["tiled", "affine"] = Field("tiled", description=(
+        "how the knit reaches its stretch: tiled with the periodised stitch stretched to the target, "
+        "then corrected (clamped ends; tails, and yarns too thick for the stitch, d/l0 = 1/20, affine), or affine increments of the built knit [-]"))
+    dt_safety: float = Field(0.35, gt=0, le=1, description=(
+        "time step of the laddering dynamics, fraction of the stability limit of the yarns' sliding (rods and "
+        "contact springs; with twist the spin modes are only held stable) [-]; 0.35 from a paired time-step "
+        "study (docs/accuracy.md)"))
+
+    axial_stiffness_factor: float = Field(1.0, gt=0, le=1, description=(
+        "stretching stiffness of the laddering dynamics over the yarn's EA [-]; below 1 the axial waves "
+        "slow down and the step grows as 1/sqrt(factor), every edge keeping its tension at the cut; it "
+        "changes v_lad and f_x^fin (docs/accuracy.md)"))
+
+    twist_inertia_factor: float = Field(1.0, ge=1, le=1000, description=(
+        "with twist: the yarn's inertia about its axis in the laddering dynamics over rho_L d^2/8 per length [-]; "
+        "a setting for studies (the step does not need it); large factors slow the ladder, as the yarns roll "
+        "at the contacts (docs/accuracy.md)"))
+
+    framed_twist: bool = Field(False, description=(
+        "with twist and no natural curvature: bend and twist through material frames (framed DER, the "
+        "averaged material curvature) instead of the frame-free isotropic path (|kb|^2 and the reference "
+        "twist by holonomy), whose bent hinges are a little softer in twist (by B |kb|^2 / 4GJ); costlier: "
+        "for comparisons [-]"))
+
+    implicit_axial: bool | None = Field(None, description=(
+        "the laddering dynamics take the yarn's axial springs and dashpots at the end of each kick "
+        "(linearly implicit, a tridiagonal solve per yarn): the axial waves set no limit and the step, "
+        "dt_safety x the contact and bending limit, grows; the static tensions are unchanged [-]; "
+        "default: the preset's"))
+
+    stop_at_edge: bool = Field(True, description=(
+        "stop the run when a ladder reaches an edge course (its damage and f_x^fin are then those of that moment); "
+        "false: go on until every front has stopped (or max_time_ms) [-]"))
+    predicted_dashpots: bool = Field(False, description=(
+        "the laddering dynamics' dashpots (axial and contact) act on the velocity at the end of each step, "
+        "predicted from the last forces (second order in dt), instead of the half-step velocity (first order); "
+        "their stability limit is lower (0.57 against 0.74 x the undamped one at the contacts' 0.3 of critical) [-]"))
+
+    @model_validator(mode="before")
+    @classmethod
+    def natural_curvature_carries_twist(cls, data):
+        """A yarn with natural curvature carries twist (its curvature lives in its material frame)."""
+        if isinstance(data, dict) and isinstance(data.get("natural_curvature"), (int, float)) \
+                and not isinstance(data.get("natural_curvature"), bool) and data["natural_curvature"] > 0:
+            if data.get("twist") is False:
+                raise ValueError("natural_curvature: a yarn with natural curvature carries twist (twist: true)")
+            data = {**data, "twist": True}
+        return data
+
+    @model_validator(mode="after")
+    def one_control(self) -> "CutConfig":
+        if self.fx is not None and self.lx is not None:
+            raise ValueError("give either fx (force control) or lx (position control), not both")
+        if self.fx is None and self.lx is None:
+            raise ValueError("give fx (force control) or lx (position control)")
+        if self.natural_curvature > 0 and (self.stretch_start, self.edge) != ("tiled", "clamped"):
+            raise ValueError("natural_curvature: set in the periodised stitch and tiled over the knit, it needs "
+                             "stretch_start tiled and edge clamped")
+        if self.memory_peak_ratio is not None and self.natural_curvature == 0:
+            raise ValueError("memory_peak_ratio: shapes the memory of natural_curvature > 0; the yarn has none")
+        check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
+        if self.frame_every_us is not None and self.frame_every_us < self.observe_every_us:
+            raise ValueError(f"frame_every_us: {self.frame_every_us:g} is shorter than observe_every_us "
+                             f"({self.observe_every_us:g}): frames are taken at observations")
+        return self
+
+    @property
+    def nodes(self) -> int:
+        """Nodes of the knit: n_y free courses and two held edge courses of n_x stitches each."""
+        return (self.n_y + 2) * (self.n_x * self.resolution + 1)
+
+    def memory_estimate_bytes(self) -> int:
+        """What a run holds in memory, about: ~2 kB per node (model, state, work arrays and contact
+        buffers of 4 pairs per edge) and the position frames (float32) kept until written."""
+        frames = int(self.max_time_ms * 1e3 / self.frame_every_us) + 2 if self.frame_every_us else AUTO_FRAMES + 2
+        return self.nodes * (2048 + 24 * frames)  # positions and velocities, float32
+
+    def stretch_settings(self):
+        from knitlad.experiments.protocol import StretchSettings
+
+        return StretchSettings(
+            n_x=self.n_x, n_y=self.n_y, lx_over_l0=self.lx, fx_target=self.fx, ly_over_l0=self.ly,
+            nodes_per_stitch=self.resolution, contact_force_f0=self.contact_force_f0,
+            overlap_fraction=self.overlap_fraction, edge=self.edge, stretch_increment=self.stretch_increment,
+            steps_per_increment=self.steps_per_increment, fx_tolerance=self.fx_tolerance, start=self.stretch_start,
+            natural_curvature=self.natural_curvature, memory_peak_ratio=self.memory_peak_ratio,
+            material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
+        )
+
+    def dynamics_settings(self):
+        from knitlad.engine.contact import Counting
+        from knitlad.experiments.protocol import DynamicsSettings
+
+        return DynamicsSettings(
+            mu=self.mu, contact_counting=Counting(self.contact_counting),
+            contact_damping_ratio=self.contact_damping_ratio, stretch_damping_ratio=self.stretch_damping_ratio,
+            dt_safety=self.dt_safety, drag_per_s=self.drag_per_s, twist=self.twist,
+            axial_stiffness_factor=self.axial_stiffness_factor, twist_inertia_factor=self.twist_inertia_factor,
+            framed_twist=self.framed_twist, implicit_axial=self.implicit_axial,
+            predicted_dashpots=self.predicted_dashpots,
+            observe_every_s=self.observe_every_us * 1e-6, arrest_s=self.arrest_ms * 1e-3,
+            max_time_s=self.max_time_ms * 1e-3,
+            frame_every_s=None if self.frame_every_us is None else self.frame_every_us * 1e-6,
+            stop_at_edge=self.stop_at_edge,
+        )
+
+    def settings(self):
+        from knitlad.experiments.protocol import LadderSettings
+
+        return LadderSettings(self.stretch_settings(), self.dynamics_settings())
+
+
+class CycleConfig(CutConfig):
+    """Protocol B (``knitlad cycle``, sweep scene ``cycle``; paper Fig. 4a): the knit stretched at mu = 0 to
+    Delta x_min (``fx``, the holding tension, or ``lx``), then cycled with friction on to Delta x_max
+    (``lx_max``) and back; a copy is cut at Delta x_max of the last cycle, the uncut twin unloads.
+    The laddering's settings are those of ``knitlad cut``."""
+
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ()
+    fx: float | None = Field(None, gt=0, le=40, description=(
+        "tension per thread f_x at Delta x_min, where the knit is stretched at mu = 0 [-] (force control; the "
+        "experiments' 0.68)"))
+    lx: float | None = Field(None, gt=0.2, lt=1.0, description="l_x/l0 at Delta x_min [-] (position control, instead of fx)")
+    mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient while cycling and laddering [-]")
+    lx_max: float = Field(..., gt=0.2, lt=1.0, description="the box's l_x/l0 at Delta x_max [-]")
+    cycles: int = Field(3, ge=1, le=10, description="loading cycles; the cut comes at Delta x_max of the last [-]")
+    bar_speed: float = Field(0.25, gt=0, le=10, description=(
+        "speed of each held end away from (or towards) the knit's centre line [m/s]; quasi-static when halving it "
+        "changes nothing that counts (16 x 16: 0.5 against 0.25 m/s moves delta l by 2 %, docs/quasistatic.md)"))
+    cycle_damping_per_s: float = Field(2e4, gt=0, le=1e7, description=(
+        "mass-proportional damping alpha while the bars move and hold [1/s]; biases a reading taken while "
+        "moving by alpha M V (knitlad/engine/quasistatic.py)"))
+    readings_per_leg: int = Field(20, ge=2, le=10000, description="f_x readings per loading or unloading [-]")
+    hold_ms: float = Field(5.0, gt=0, le=1000, description="longest hold at Delta x_max, a settle [ms]")
+    hold_tol_f0: float = Field(1e-3, gt=0, le=1, description="a hold has settled when no free node carries more [f0]")
+    fx_thr: float | None = Field(None, gt=0, le=40, description=(
+        "threshold tension f_x^thr [-]: delta l is read where the uncut twin's unloading crosses it; none: not read"))
+    cut: bool = Field(True, description="cut a copy at Delta x_max of the last cycle and follow its ladder [-]")
+    stop_at_edge: bool = Field(False, description=(
+        "stop the laddering when a ladder reaches an edge course; false: go on until every front has stopped, "
+        "the damage Eq. 1 predicts [-]"))
+
+    @model_validator(mode="after")
+    def loads(self) -> "CycleConfig":
+        if self.lx is not None and self.lx_max <= self.lx:
+            raise ValueError(f"lx_max: {self.lx_max:g} is not above the start lx = {self.lx:g}")
+        return self
+
+    def cycle_settings(self):
+        from knitlad.experiments.cycling import CycleSettings
+
+        return CycleSettings(
+            lx_max=self.lx_max, cycles=self.cycles, bar_speed_m_s=self.bar_speed,
+            damping_per_s=self.cycle_damping_per_s, readings_per_leg=self.readings_per_leg, hold_s=self.hold_ms * 1e-3,
+            hold_tol_f0=self.hold_tol_f0, fx_thr=self.fx_thr)
+
+
+class LoopConfig(_WithPreset):
+    """One single-loop run (``knitlad loop``, paper Fig. 5b,c)."""
+
+    PRESETS: ClassVar[dict[str, dict]] = LOOP_PRESETS
+
+    fx: float = Field(8.0, gt=0, le=40, description="tension per thread pulling the loop's ends, f_x = F/f0 [-]")
+    mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient after the release [-]")
+    lx: float = Field(0.30, gt=0.2, le=0.34, description=(
+        "column width l_x/l0 [-] (wider, the loops no longer overlap); geometry tails only: the periodic rows "
+        "take theirs from f_x"))
+    ly: float = Field(0.25, gt=0.2, lt=0.35, description="row spacing l_y/l0 [-]")
+    resolution: int | None = Field(None, ge=12, le=280, description="nodes per stitch [-]; default: the preset's")
+    max_time_ms: float = Field(1.0, gt=0, le=100, description="longest time simulated after the release [ms]")
+    geometry: Literal["tails", "periodic", "periodic-sinkers", "strip"] = Field("tails", description=(
+        "tails: three one-stitch rows ending in tails (knitlad.experiments.loop_model); periodic: rows periodic along the "
+        "course, one stitch per period under the imposed tension; periodic-sinkers: the same with the loop "
+        "row's sinkers held in y; strip: periodic rows of `columns` columns at fixed period, one lower loop "
+        "removed (knitlad.experiments.periodic_loop) [-]"))
+    columns: int = Field(8, ge=2, le=32, description="columns of the strip geometry [-]")
+
+    @model_validator(mode="after")
+    def geometry_fields(self) -> "LoopConfig":
+        # a resolved config names every field: only a value other than the default is a mistake
+        defaults = type(self).model_fields
+        if self.geometry != "tails" and self.lx != defaults["lx"].default:
+            raise ValueError(f"lx: the {self.geometry} geometry takes its column width from fx; give lx only "
+                             "with geometry tails")
+        if self.geometry != "strip" and self.columns != defaults["columns"].default:
+            raise ValueError("columns: only the strip geometry has columns")
+        return self
+
+    def settings(self, **model_choices):
+        """The run's settings; ``model_choices``: other fields of :class:`knitlad.experiments.loop_model.LoopSettings`
+        (geometry tails) or :class:`knitlad.experiments.periodic_loop.PeriodicLoopSettings`."""
+        if self.geometry == "tails":
+            from knitlad.experiments.loop_model import LoopSettings
+
+            return LoopSettings(fx=self.fx, mu=self.mu, lx_over_l0=self.lx, ly_over_l0=self.ly,
+                                nodes_per_stitch=self.resolution, max_time_s=self.max_time_ms * 1e-3, **model_choices)
+        from knitlad.experiments.periodic_loop import PeriodicLoopSettings
+
+        return PeriodicLoopSettings(fx=self.fx, mu=self.mu, ly_over_l0=self.ly, nodes_per_stitch=self.resolution,
+                                    max_time_s=self.max_time_ms * 1e-3,
+                                    columns=self.columns if self.geometry == "strip" else 1,
+                                    sinkers_held=self.geometry == "periodic-sinkers", **model_choices)
+
+
+class StitchConfig(_WithPreset):
+    """One periodised stitch (``knitlad stitch``): tensions at imposed (l_x, l_y)."""
+
+    PRESETS: ClassVar[dict[str, dict]] = STITCH_PRESETS
+
+    lx: float = Field(0.35, gt=0.2, lt=0.6, description="cell width l_x/l0 [-]")
+    ly: float = Field(0.25, gt=0.15, lt=0.4, description="cell height l_y/l0 [-]")
+    resolution: int | None = Field(None, ge=12, le=280, description="nodes per stitch [-]; default: the preset's")
+    sagitta_radius: float | None = Field(None, ge=0, le=1000, description=(
+        "the contact's sagitta correction (see knitlad cut --help) [d]; 0: none; default: the preset's"))
+    d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description=(
+        "yarn diameter over stitch length d/l0 [-]; 1/70, the paper's rounded value and the default, means its "
+        "Nylon itself: d = 0.14 mm with l0 = 9.74 mm, d/l0 = 0.01437 (knitlad.experiments.config.material_for)"))
+
+    @model_validator(mode="after")
+    def sagitta_within_reach(self) -> "StitchConfig":
+        check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
+        return self
+
+    def settings(self, **model_choices):
+        """The run's settings; ``model_choices``: other fields of :class:`knitlad.experiments.stitch_model.StitchSettings`."""
+        from knitlad.experiments.stitch_model import StitchSettings
+
+        return StitchSettings(lx_over_l0=self.lx, ly_over_l0=self.ly, nodes_per_stitch=self.resolution,
+                              material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
+                              **model_choices)
+
+
+# the longest segment, over the correction's radius of curvature R, at which the sagitta correction
+# is taken: it is l^2/(12 R) to leading order in l/R, measured from 24 nodes per stitch up (l = 0.27 R)
+SAGITTA_MAX_SEGMENT = 0.3
+
+
+def check_sagitta(resolution: int, d_over_l0: float, sagitta_radius: float) -> None:
+    """Refuse a sagitta correction on segments too long for it (one line naming the field)."""
+    if sagitta_radius > 0:
+        segment = 1.0 / (d_over_l0 * resolution)  # in yarn diameters
+        if segment > SAGITTA_MAX_SEGMENT * sagitta_radius:
+            raise ValueError(
+                f"sagitta_radius: the correction holds for segments up to {SAGITTA_MAX_SEGMENT:g} R; at {resolution} "
+                f"nodes per stitch a segment is {segment / sagitta_radius:.2f} R: give sagitta_radius 0 (as the fast "
+                f"preset does) or at least {math.ceil(1.0 / (d_over_l0 * SAGITTA_MAX_SEGMENT * sagitta_radius))} "
+                "nodes per stitch")
+
+
+def material_for(d_over_l0: float):
+    """The paper's Nylon with the diameter set by d/l0 (l0 = 9.74 mm kept)."""
+    import dataclasses
+
+    from knitlad.engine.units import NYLON
+
+    if abs(d_over_l0 - NYLON.diameter / NYLON.stitch_length) < 1e-12 or abs(d_over_l0 - 1 / 70) < 1e-12:
+        return NYLON
+    return dataclasses.replace(NYLON, diameter=d_over_l0 * NYLON.stitch_length)
+
+
+def parse_stitches(text: str) -> tuple[int, int]:
+    """'42' -> (42, 42); '8x10' -> (8, 10)."""
+    m = re.fullmatch(r"\s*(\d+)\s*(?:[xX]\s*(\d+))?\s*", text)
+    if not m:
+        raise ValueError(f"stitches must be N or NXxNY (e.g. 42 or 8x10), got {text!r}")
+    n_x = int(m.group(1))
+    return n_x, int(m.group(2)) if m.group(2) else n_x
+
+
+def one_line(error: ValidationError, prefix: tuple = ()) -> str:
+    """The first validation error as 'field: reason' (the field's path joined by dots, after ``prefix``)."""
+    e = error.errors()[0]
+    # pydantic names the member of a union it tried ("list[any]", "Range"): not part of the user's path
+    loc = [str(p) for p in prefix + tuple(e.get("loc", ())) if not (isinstance(p, str) and p in ("list[any]", "Range"))]
+    # never str(error): it formats the whole input, which an alias-expanded document makes huge
+    msg = (e["msg"] if "msg" in e else "invalid value").removeprefix("Value error, ")
+    return f"{'.'.join(loc) or 'config'}: {msg}"
+
+
+def cli_option(model: type[BaseModel], field: str) -> str:
+    """The command-line option of a config field: ``--field-name`` unless the field names its own (``cli``)."""
+    extra = model.model_fields[field].json_schema_extra or {}
+    return extra.get("cli", "--" + field.replace("_", "-"))

@@ -1,0 +1,227 @@
+"""Protocol B (paper, Fig. 4a and the appendix "Stretching protocols"): the damage prediction's loading.
+
+The knit, stretched at mu = 0 to a small holding tension (Delta x_min, f_x about 0.68), is loaded with
+friction on: its held ends (the bars) move apart at a steady speed to Delta x_max, are held there until the
+knit is static, and come back, ``cycles`` times. At Delta x_max of the last cycle a copy of the knit is cut
+(friction history and all, :func:`cut_cycled`), while the uncut twin goes on unloading: where its tension
+crosses the threshold f_x^thr lies the shortening delta l of Eq. 1,
+
+    n_lad / n_y = delta l / (l0 - l_x),
+
+each laddered column freeing l0 - l_x of yarn. Delta x is the distance between the knit's two held ends,
+n_x l_x in a uniform knit, so a change of the box's l_x/l0 by dl is a Delta x change of n_x dl l0.
+
+Quasi-static with friction. The bars move at ``bar_speed_m_s`` under a mass-proportional damping
+(:meth:`knitlad.engine.simulation.Simulation.ramp_held`, ``knitlad/engine/quasistatic.py``); a hold settles to a stated
+force residual. Readings while moving carry the damping's bias alpha M V and the knit's inertia; the
+answer is rate-independent when halving the speed changes it less than its own error
+(``tests/test_cycling.py``, docs/quasistatic.md). The experiments' "gentle stroking" at each hold has no
+counterpart here: a hold is a settle with the friction history as the loading left it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from knitlad.engine import units
+from knitlad.engine.contact import carry_friction_history
+from knitlad.experiments.protocol import (
+    DynamicsSettings,
+    LadderResult,
+    Laddering,
+    LadderSettings,
+    StretchedKnit,
+    analyse,
+    cut,
+    dynamics_rods,
+    dynamics_simulation,
+    propagate,
+    stretch,
+)
+from knitlad.engine.simulation import Simulation
+
+LOADING, HOLD, UNLOADING = 1, 0, -1  # the leg column of the readings
+
+
+@dataclass(frozen=True)
+class CycleSettings:
+    """Protocol B's loading (from :meth:`knitlad.experiments.config.CycleConfig.cycle_settings`). l/l0, f_x, SI."""
+
+    lx_max: float  # the box's l_x/l0 at Delta x_max
+    cycles: int  # loading cycles; the cut comes at Delta x_max of the last
+    bar_speed_m_s: float  # each held end's speed away from (or towards) the knit's centre line
+    damping_per_s: float  # alpha of the mass-proportional damping while the bars move and hold
+    readings_per_leg: int
+    hold_s: float  # the longest hold at Delta x_max (a settle)
+    hold_tol_f0: float  # a hold has settled when no free node carries more than this (f0)
+    fx_thr: float | None  # delta l is read where the uncut twin's unloading crosses this f_x
+
+    def __post_init__(self) -> None:
+        if self.cycles < 1 or self.readings_per_leg < 1:
+            raise ValueError("cycles and readings_per_leg must be at least 1")
+        if not (self.bar_speed_m_s > 0 and self.damping_per_s > 0 and self.hold_s > 0 and self.hold_tol_f0 > 0):
+            raise ValueError("bar_speed_m_s, damping_per_s, hold_s and hold_tol_f0 must be positive")
+
+
+class LoadedKnit:
+    """A stretched knit under the laddering's dynamics (friction, dashpots, twist, step), its held ends
+    moved affinely along x (as the stretch moved them)."""
+
+    def __init__(self, knit: StretchedKnit, s: CycleSettings, dynamics: DynamicsSettings) -> None:
+        self.knit, self.s = knit, s
+        rods = dynamics_rods(knit.knit.rods.copy(), dynamics, knit.settings.material)
+        self.sim = dynamics_simulation(rods, knit, dynamics)
+        self.held = np.flatnonzero(self.sim.model.held)
+        self.lx = knit.box_lx
+        self.readings: list[tuple[int, int, float, float, float]] = []  # cycle, leg, t [s], box l_x/l0, f_x
+
+    def tension(self) -> float:
+        return self.knit.gauge.tension(self.sim)
+
+    def move_bars(self, lx: float, cycle: int, report: Callable[[float], None] | None = None) -> None:
+        """Bring the box to ``lx`` (l_x/l0) in ``readings_per_leg`` ramps, reading f_x after each."""
+        leg = LOADING if lx > self.lx else UNLOADING
+        s, x = self.s, self.sim.state.x
+        for k, target in enumerate(np.linspace(self.lx, lx, s.readings_per_leg + 1)[1:], start=1):
+            by = np.zeros((self.held.size, 3))
+            by[:, 0] = x[self.held, 0] * (target / self.lx - 1.0) * units.LENGTH  # affine about the centre
+            self.sim.ramp_held(self.held, by_m=by, speed_m_s=s.bar_speed_m_s, damping_per_s=s.damping_per_s)
+            self.lx = target
+            self.readings.append((cycle, leg, self.sim.time_s, self.lx, self.tension()))
+            if report:
+                report(k / s.readings_per_leg)
+
+    def hold(self, cycle: int) -> dict:
+        """Keep the bars still until the knit is static (or ``hold_s`` has passed); read f_x."""
+        s = self.s
+        out = self.sim.settle(force_tol_N=s.hold_tol_f0 * self.knit.settings.material.f0, max_time_s=s.hold_s,
+                              damping_per_s=s.damping_per_s)
+        self.readings.append((cycle, HOLD, self.sim.time_s, self.lx, self.tension()))
+        return out
+
+    def snapshot(self) -> StretchedKnit:
+        """The knit as it is now, as the value the laddering starts from (its friction history stays in
+        :attr:`sim`: :func:`cut_cycled` carries it over)."""
+        rods = self.sim.rods.copy()
+        lx, ly = self.knit.gauge.periodicities(rods.state.x, self.lx)  # node indices are those of the knit
+        return dataclasses.replace(self.knit, knit=dataclasses.replace(self.knit.knit, rods=rods), box_lx=self.lx,
+                                   fx_ini=self.tension(), lx_over_l0=lx, ly_over_l0=ly, dt_s=self.sim.dt_s)
+
+
+def cut_cycled(knit: StretchedKnit, loaded: Simulation, dynamics: DynamicsSettings) -> Laddering:
+    """:func:`knitlad.experiments.protocol.cut` of a cycled knit, the contacts' friction history carried over from the
+    simulation that loaded it (``loaded``): the cut edge's pairs go, every other pair keeps its slip."""
+    run = cut(knit, dynamics, rods_ready=True)
+    ne = loaded.model.edge_a.shape[0]
+    edge_map = np.arange(ne) - (np.arange(ne) > run.cut_edge)
+    edge_map[run.cut_edge] = -1
+    run.sim.adopt_friction_history(loaded.contacts, edge_map)
+    return run
+
+
+@dataclass
+class CycleResult:
+    """Protocol B's curve and the damage it predicts (paper, Fig. 4a and Eq. 1)."""
+
+    settings: CycleSettings
+    n_x: int
+    lx_min: float  # box l_x/l0 at Delta x_min
+    readings: np.ndarray  # (k, 5): cycle, leg (1 loading, 0 hold, -1 unloading), t [s], box l_x/l0, f_x
+    fx_ini: float = math.nan  # settled f_x at Delta x_max of the last cycle
+    lx_over_l0: float = math.nan  # measured l_x/l0 there (before the cut)
+    ly_over_l0: float = math.nan
+    delta_l_over_l0: float = math.nan  # the shortening from Delta x_max to f_x^thr on the uncut twin's unloading
+    hold_converged: bool = False
+    wall_s: float = 0.0
+
+    @property
+    def predicted_damage(self) -> float:
+        """delta l / (l0 - l_x) (Eq. 1), l_x measured at Delta x_max."""
+        return self.delta_l_over_l0 / (1.0 - self.lx_over_l0)
+
+    def leg(self, cycle: int, leg: int) -> np.ndarray:
+        """(k, 2) box l_x/l0 and f_x of one leg, in order."""
+        r = self.readings
+        return r[(r[:, 0] == cycle) & (r[:, 1] == leg)][:, 3:5]
+
+    def summary(self) -> dict:
+        return {"fx_ini": self.fx_ini, "lx_over_l0": self.lx_over_l0, "ly_over_l0": self.ly_over_l0,
+                "lx_max": self.settings.lx_max, "lx_min": self.lx_min, "fx_thr": self.settings.fx_thr,
+                "delta_l_over_l0": self.delta_l_over_l0, "predicted_damage": self.predicted_damage,
+                "cycles": self.settings.cycles, "bar_speed_m_s": self.settings.bar_speed_m_s,
+                "hold_converged": self.hold_converged, "wall_s": self.wall_s}
+
+
+def shortening_to(unloading: np.ndarray, fx_thr: float, n_x: int) -> float:
+    """delta l / l0: the Delta x shortening from the first reading of ``unloading`` ((k, 2) box l_x/l0, f_x,
+    from Delta x_max down) to where f_x first falls to ``fx_thr`` (linear between readings); NaN if never."""
+    lx, fx = unloading[:, 0], unloading[:, 1]
+    below = np.flatnonzero(fx <= fx_thr)
+    if below.size == 0 or below[0] == 0:
+        return math.nan
+    k = below[0]
+    at = lx[k - 1] + (fx_thr - fx[k - 1]) * (lx[k] - lx[k - 1]) / (fx[k] - fx[k - 1])
+    return n_x * (lx[0] - at)
+
+
+def run_cycles(knit: StretchedKnit, s: CycleSettings, dynamics: DynamicsSettings,
+               progress: Callable[[str, float], None] | None = None,
+               at_the_cut: Callable[[StretchedKnit, Simulation], None] | None = None,
+               after_leg: Callable[[np.ndarray], None] | None = None) -> CycleResult:
+    """Protocol B on ``knit`` (stretched at mu = 0 to Delta x_min) under ``dynamics`` (its friction on):
+    ``cycles`` loadings to ``lx_max`` with a hold, back to the start; ``at_the_cut(snapshot, sim)`` is
+    called at Delta x_max of the last cycle (to cut a copy: :func:`cut_cycled`); the last unloading is the
+    uncut twin's, read for delta l. ``after_leg(readings)``: the readings so far after each leg and hold
+    (to keep them as they come: a run of an hour stopped early keeps its curve)."""
+    t0 = time.perf_counter()
+    loaded, lx_min = LoadedKnit(knit, s, dynamics), knit.box_lx
+    loaded.readings.append((0, HOLD, 0.0, lx_min, loaded.tension()))
+    result = CycleResult(settings=s, n_x=knit.settings.n_x, lx_min=lx_min, readings=np.zeros((0, 5)))
+    legs = 2 * s.cycles
+    for cycle in range(1, s.cycles + 1):
+        def report(f, done=2 * (cycle - 1)):
+            if progress:
+                progress("cycle", (done + f) / legs)
+        loaded.move_bars(s.lx_max, cycle, report)
+        result.hold_converged = bool(loaded.hold(cycle)["converged"])
+        if after_leg:
+            after_leg(np.array(loaded.readings, dtype=float))
+        if cycle == s.cycles:
+            snap = loaded.snapshot()
+            result.fx_ini, result.lx_over_l0, result.ly_over_l0 = snap.fx_ini, snap.lx_over_l0, snap.ly_over_l0
+            if at_the_cut:
+                at_the_cut(snap, loaded.sim)
+        loaded.move_bars(lx_min, cycle, lambda f, done=2 * cycle - 1: report(f, done))
+        if after_leg:
+            after_leg(np.array(loaded.readings, dtype=float))
+    result.readings = np.array(loaded.readings, dtype=float)
+    if s.fx_thr is not None:
+        start = np.flatnonzero((result.readings[:, 0] == s.cycles) & (result.readings[:, 1] == HOLD))[0]
+        unloading = np.vstack([result.readings[start, 3:5], result.leg(s.cycles, UNLOADING)])
+        result.delta_l_over_l0 = shortening_to(unloading, s.fx_thr, result.n_x)
+    result.wall_s = time.perf_counter() - t0
+    return result
+
+
+def run_protocol_b(ladder: LadderSettings, s: CycleSettings, cut_at_max: bool = True,
+                   progress: Callable[[str, float], None] | None = None, knit: StretchedKnit | None = None,
+                   after_leg: Callable[[np.ndarray], None] | None = None) -> tuple[CycleResult, LadderResult | None]:
+    """Stretch at mu = 0 to Delta x_min (``ladder.stretch``; or start from ``knit``, stretched so), cycle
+    (:func:`run_cycles`), and at Delta x_max of the last cycle cut a copy and follow its ladder under
+    ``ladder.dynamics`` (``cut_at_max``)."""
+    if knit is None:
+        knit = stretch(ladder.stretch, progress)
+    laddered: list[LadderResult] = []
+
+    def at_the_cut(snapshot: StretchedKnit, sim: Simulation) -> None:
+        if cut_at_max:
+            laddered.append(analyse(propagate(cut_cycled(snapshot, sim, ladder.dynamics), progress=progress)))
+
+    result = run_cycles(knit, s, ladder.dynamics, progress, at_the_cut, after_leg)
+    return result, (laddered[0] if laddered else None)

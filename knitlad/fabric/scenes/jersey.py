@@ -1,0 +1,241 @@
+"""Jersey (stockinette) fabric: n_x stitches per course, n_y courses.
+
+Centreline of course r (after Crane's "plain-knit-yarn", see shared/notes), one
+stitch per 2 pi of the parameter t:
+
+    x = (t + a sin 2t) l_x / (2 pi),  y = r l_y + H cos t,  z = c cos 2t,   a = 3/2.
+
+Heads (needle loops, pointing +y) sit at t = 2 pi i (column i), sinker loops
+(pointing -y) at t = 2 pi i + pi. The loop half-height H is solved so that each
+stitch holds exactly l0 of yarn; c = 2 d by default keeps crossing yarns about
+3 d apart. Each course runs from the sinker left of column 0 to the sinker right
+of column n_x - 1: on the box edges x = +-n_x l_x / 2. One extra course below
+(r = -1) and above (r = n_y), entirely held, secure the bottom and top edges so
+that a ladder reaching them stops there.
+
+How the course ends are held (``Jersey.edge``):
+
+* ``"clamped"`` (default): the last two nodes at each end are held, fixing the
+  end's position and its tangent (along x). The periodic stitch is mirror
+  symmetric about its sinkers, so there the yarn runs along x: the clamp
+  imposes that symmetry. It also fixes the sinker's height (as built, then
+  carried by the affine stretch), which in the bulk is free.
+* ``"tail"``: a straight tail 0.5 l_x long continues each end, and only its
+  tip is held. The edge sinker and the tail are then free to bend and to trade
+  yarn with the edge stitches, which at mu = 0 they do without end: the knit
+  held at a fixed box creeps (42 x 42 at l_x/l0 = 0.355: f_x 0.33 -> 2.04 over
+  57 rounds of 750 FIRE steps, then a drop to 0.77; the loop heads of the two
+  outermost columns moved 7.5 and 3.3 nodes, the interior ones < 1), where the
+  clamped knit settles (f_x 2.36 -> 2.28 over 30 rounds, heads moved <= 1 node).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from knitlad.engine.state import Rods, Scene
+from knitlad.engine.units import NYLON, Material
+
+
+class CourseTooWide(ValueError):
+    """No centreline of this family holds l0 per stitch at this l_x: even a flat course is longer."""
+
+CRANE_A = 1.5
+EDGES = ("clamped", "tail")  # how the course ends are held: see the module docstring
+# widest l_x/l0 at which the knit and the periodised stitch are built: wider, Crane's loops
+# of successive courses barely overlap; they are stretched from there
+BUILD_LX = 0.30
+
+
+@dataclass(frozen=True)
+class Jersey:
+    """Geometry of a jersey knit (SI units)."""
+
+    n_x: int = 42
+    n_y: int = 42
+    l_x: float = 0.245 * NYLON.stitch_length
+    l_y: float = 0.245 * NYLON.stitch_length
+    nodes_per_stitch: int = 36
+    material: Material = NYLON
+    depth: float | None = None  # c, default 2 d
+    tail: float = 0.5  # straight tail beyond the last sinker, in l_x (edge "tail" only)
+    edge: str = "clamped"  # how the course ends are held: EDGES
+    width: float = CRANE_A  # a: how far the head bulges sideways (Crane: 3/2)
+
+    def __post_init__(self) -> None:
+        if self.n_x < 1 or self.n_y < 1:
+            raise ValueError(f"the knit needs at least 1 x 1 stitches, got {self.n_x} x {self.n_y}")
+        if self.nodes_per_stitch < 8:
+            raise ValueError(f"nodes_per_stitch must be >= 8, got {self.nodes_per_stitch}")
+        if self.edge not in EDGES:
+            raise ValueError(f"edge must be one of {', '.join(EDGES)}, got {self.edge!r}")
+        l0 = self.material.stitch_length
+        if not 0 < self.l_x < l0 or not 0 < self.l_y < l0:
+            raise ValueError("l_x and l_y must lie strictly between 0 and l0")
+
+    @property
+    def c(self) -> float:
+        return 2.0 * self.material.diameter if self.depth is None else self.depth
+
+    @property
+    def segment(self) -> float:
+        return self.material.stitch_length / self.nodes_per_stitch
+
+    def column_x(self, i: np.ndarray | int) -> np.ndarray | float:
+        """x of the head (column centre) of column i; the knit is centred on x = 0."""
+        return (np.asarray(i) - 0.5 * (self.n_x - 1)) * self.l_x
+
+    def curve(self, t: np.ndarray, row: int, H: float) -> np.ndarray:
+        x = (t + self.width * np.sin(2 * t)) * self.l_x / (2 * math.pi) + self.column_x(0)
+        y = row * self.l_y + H * np.cos(t)
+        z = self.c * np.cos(2 * t)
+        return np.column_stack([x, y, z])
+
+    def stitch_length_for(self, H: float, samples: int = 4000) -> float:
+        t = np.linspace(0.0, 2 * math.pi, samples + 1)
+        return float(np.linalg.norm(np.diff(self.curve(t, 0, H), axis=0), axis=1).sum())
+
+    def loop_half_height(self, length: float | None = None) -> float:
+        """H such that one stitch of the smooth curve holds ``length`` (default l0) of yarn."""
+        l0 = self.material.stitch_length if length is None else length
+        lo, hi = 0.0, self.material.stitch_length
+        if self.stitch_length_for(lo) > l0:
+            raise CourseTooWide(
+                f"l_x/l0 = {self.l_x / l0:.3f} is too wide for this centreline: a flat course is already longer than l0"
+            )
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            if self.stitch_length_for(mid) < l0:
+                lo = mid
+            else:
+                hi = mid
+        return 0.5 * (lo + hi)
+
+    def course_points(self, row: int, H: float) -> tuple[np.ndarray, np.ndarray]:
+        """Nodes of one course, uniform in arc length, and the parameter t of each.
+
+        With ``edge="tail"``, straight tails continue from the end sinkers out to the held ends.
+        """
+        fine_per_stitch = 400
+        t = np.linspace(-math.pi, 2 * math.pi * (self.n_x - 1) + math.pi, fine_per_stitch * self.n_x + 1)
+        pts = self.curve(t, row, H)
+        s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+        n_seg = self.nodes_per_stitch * self.n_x
+        targets = np.linspace(0.0, s[-1], n_seg + 1)
+        knit = np.column_stack([np.interp(targets, s, pts[:, k]) for k in range(3)])
+        tk = np.interp(targets, s, t)
+        seg = s[-1] / n_seg
+        if self.edge == "clamped":
+            return knit, tk
+        n_tail = max(1, int(round(self.tail * self.l_x / seg)))
+        left = knit[0] + np.outer(np.arange(n_tail, 0, -1) * seg, [-1.0, 0.0, 0.0])
+        right = knit[-1] + np.outer(np.arange(1, n_tail + 1) * seg, [1.0, 0.0, 0.0])
+        t_left = np.full(n_tail, -np.inf)
+        t_right = np.full(n_tail, np.inf)
+        return np.vstack([left, knit, right]), np.concatenate([t_left, tk, t_right])
+
+
+def widest_fitting_width(lx_max: float, ly: float, material: Material, nodes_per_stitch: int,
+                         min_loop_overlap: float = -math.inf, lx_min: float = 0.1) -> float:
+    """The widest l_x/l0 <= lx_max, in steps of 0.01, at which a stitch holds l0 of yarn and its
+    loop reaches ``min_loop_overlap`` [m] past the next course (2 H - l_y); thick yarns need
+    narrower cells. Raises :class:`CourseTooWide` if none down to ``lx_min`` does."""
+    l0 = material.stitch_length
+    lx = lx_max
+    while lx >= lx_min - 1e-12:
+        geometry = Jersey(n_x=1, n_y=1, l_x=lx * l0, l_y=ly * l0, nodes_per_stitch=nodes_per_stitch, material=material)
+        try:
+            if 2 * geometry.loop_half_height() - ly * l0 > min_loop_overlap:
+                return lx
+        except CourseTooWide:
+            pass
+        lx = round(lx - 0.01, 6)
+    raise CourseTooWide(f"no jersey stitch of d/l0 = {material.diameter / l0:.3g} fits at l_y/l0 = {ly}")
+
+
+@dataclass
+class KnitScene:
+    """The built knit: its state plus the bookkeeping the protocol and observers need."""
+
+    geometry: Jersey
+    rods: Rods
+    H: float
+    courses: list[int]  # yarn index of each free course, bottom to top
+    bars: list[int]  # yarn indices of the held edge courses
+    node_t: np.ndarray  # centreline parameter of each node (+-inf on tails)
+    left_end: np.ndarray  # (courses, held) node indices of the held left end of each free course
+    right_end: np.ndarray
+
+    def course_nodes(self, k: int) -> slice:
+        """Node slice of free course k (0 = bottom). Node indices never change (a cut makes two
+        yarns of a course and shifts the yarn indices above it, not the nodes)."""
+        return self._yarn_nodes(self.courses[k])
+
+    def row_nodes(self) -> list[slice]:
+        """Node slices of the free courses, bottom to top, then of the held top course."""
+        return [self._yarn_nodes(y) for y in self.courses + [self.bars[1]]]
+
+    def node_course(self) -> np.ndarray:
+        """The course of each node: 0 to n_y - 1 for the free courses, -1 and n_y for the held ones."""
+        out = np.empty(self.rods.model.n_nodes, dtype=np.int64)
+        out[self._yarn_nodes(self.bars[0])] = -1
+        for k, nodes in enumerate(self.row_nodes()):
+            out[nodes] = k
+        return out
+
+    def _yarn_nodes(self, y: int) -> slice:
+        start = self.rods.model.yarn_start  # as built: this scene is never cut
+        return slice(int(start[y]), int(start[y + 1]))
+
+
+def discrete_loop_half_height(geometry: Jersey) -> float:
+    """H at which the resampled polygon (not the smooth curve) holds l0 per stitch.
+
+    Chords are shorter than the arcs they span, by about (kappa seg)^2 / 24; the
+    smooth curve is lengthened to compensate, in two fixed-point passes.
+    """
+    l0 = geometry.material.stitch_length
+    target = l0
+    H = geometry.loop_half_height(target)
+    for _ in range(3):
+        pts, t = geometry.course_points(0, H)
+        inside = np.isfinite(t)
+        chord = np.linalg.norm(np.diff(pts[inside], axis=0), axis=1).sum() / geometry.n_x
+        target *= l0 / chord
+        H = geometry.loop_half_height(target)
+    return H
+
+
+def build_jersey(geometry: Jersey, stretch_damping_ratio: float = 0.2) -> KnitScene:
+    """A jersey knit at (l_x, l_y), every course held at its two ends (``geometry.edge``), edge courses held whole.
+
+    ``stretch_damping_ratio``: each edge's axial dashpot as a fraction of critical (``Scene.build``).
+    """
+    H = discrete_loop_half_height(geometry)
+    scene = Scene(geometry.material)
+    courses, bars, ts = [], [], []
+    left, right = [], []
+    offset = 0
+    for row in range(-1, geometry.n_y + 1):
+        pts, t = geometry.course_points(row, H)
+        y = scene.add_yarn(pts)
+        ts.append(t)
+        if row in (-1, geometry.n_y):
+            scene.hold(y, range(pts.shape[0]))
+            bars.append(y)
+        else:
+            held = 2 if geometry.edge == "clamped" else 1
+            last = pts.shape[0] - 1
+            scene.hold(y, list(range(held)) + list(range(last - held + 1, last + 1)))
+            courses.append(y)
+            left.append(offset + np.arange(held))
+            right.append(offset + last - np.arange(held))
+        offset += pts.shape[0]
+    rods = scene.build(twist=False, stretch_damping_ratio=stretch_damping_ratio)
+    return KnitScene(
+        geometry=geometry, rods=rods, H=H, courses=courses, bars=bars, node_t=np.concatenate(ts),
+        left_end=np.array(left), right_end=np.array(right),
+    )

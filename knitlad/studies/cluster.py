@@ -1,0 +1,89 @@
+"""Batch clusters for sweeps: a YAML file that says which dask-jobqueue cluster to start (``knitlad sweep
+CONFIG --cluster FILE``).
+
+The sweep's jobs then run as Dask tasks on workers that the batch system starts, one
+worker per batch job, as with ``--executor dask --scheduler ADDRESS`` but without a
+scheduler to start by hand. The output folder must be on a file system the workers share,
+and the workers must run the same knitlad (the same environment, on a shared disk).
+
+    kind: slurm          # slurm, pbs, sge, lsf, oar, htcondor, moab; local: workers as local processes
+    jobs: 8              # batch jobs to submit, one Dask worker of one thread each
+    options:             # handed to dask_jobqueue.<Kind>Cluster as they are
+      queue: normal
+      account: my-project
+      cores: 1
+      memory: 4GB
+      walltime: "04:00:00"
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from knitlad.experiments.config import one_line
+from knitlad.studies.sweep import SweepError, bounded_yaml
+
+KINDS = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster", "lsf": "LSFCluster",
+         "oar": "OARCluster", "htcondor": "HTCondorCluster", "moab": "MoabCluster"}
+
+
+class ClusterConfig(BaseModel):
+    """Which batch cluster to start for a sweep, and how many workers."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    kind: Literal["slurm", "pbs", "sge", "lsf", "oar", "htcondor", "moab", "local"] = Field(description=(
+        "the batch system (dask-jobqueue's cluster of that name); local: the same jobqueue cluster with its "
+        "workers started as local processes, to try a config on a laptop [-]"))
+    jobs: int = Field(ge=1, le=10_000, description="batch jobs to submit, each one Dask worker [-]")
+    options: dict[str, Any] = Field(default_factory=dict, description=(
+        "keyword arguments of the dask-jobqueue cluster (queue, account, cores, memory, walltime, "
+        "job_extra_directives, ...), as its documentation gives them [-]"))
+
+    def _make(self):
+        try:
+            import dask_jobqueue
+            from dask_jobqueue.local import LocalCluster
+        except ImportError:
+            raise SweepError("--cluster: needs dask-jobqueue (pip install 'knitlad[cluster]')") from None
+        cls = LocalCluster if self.kind == "local" else getattr(dask_jobqueue, KINDS[self.kind])
+        try:
+            return cls(**{"cores": 1, "processes": 1, "memory": "4GB", **self.options})
+        except Exception as e:  # noqa: BLE001 - a bad option or a missing batch command: one line
+            first = str(e).splitlines()[0] if str(e) else ""
+            raise SweepError(f"--cluster: cannot start a {self.kind} cluster ({type(e).__name__}: {first})") from None
+
+    def start(self):
+        """The dask-jobqueue cluster, asked for ``jobs`` workers (a :class:`SweepError` if it cannot be made)."""
+        cluster = self._make()
+        cluster.scale(jobs=self.jobs)
+        return cluster
+
+    def job_script(self) -> str:
+        """The batch script each worker is submitted with (to check a config before anything is submitted)."""
+        cluster = self._make()
+        try:
+            return cluster.job_script()
+        finally:
+            cluster.close()
+
+
+def load_cluster(path: str | Path) -> ClusterConfig:
+    """Read and validate a cluster file; every problem is a :class:`SweepError` of one line."""
+    path = Path(path)
+    try:
+        raw = bounded_yaml(path.read_text(encoding="utf-8"), str(path))
+    except (OSError, UnicodeDecodeError) as e:
+        raise SweepError(f"--cluster {path}: cannot read ({getattr(e, 'strerror', None) or e})") from None
+    except yaml.YAMLError as e:
+        raise SweepError(f"--cluster {path}: not valid YAML ({getattr(e, 'problem', None) or e})") from None
+    if not isinstance(raw, dict):
+        raise SweepError(f"--cluster {path}: the file must be a mapping with keys kind, jobs, options")
+    try:
+        return ClusterConfig.model_validate(raw)
+    except ValidationError as e:
+        raise SweepError(f"--cluster {path}: {one_line(e)}") from None

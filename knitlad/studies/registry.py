@@ -1,0 +1,139 @@
+"""The scenes a sweep can run: each names its config, its runner and its summary columns once.
+
+A runner takes the validated config of one job, the job's output options, the
+sweep's folder and a progress callback ``progress(stage, fraction)`` (or None), runs it, and returns its summary (a dict of scalars) and a writer
+``write(path, record)`` of its file (``record``: the sweep's job attributes: id,
+status, config).
+To add a scene: a pydantic config in :mod:`knitlad.experiments.config`, a runner here, one entry.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from pydantic import BaseModel
+
+from knitlad.experiments.config import CutConfig, CycleConfig, LoopConfig, StitchConfig
+
+
+@dataclass(frozen=True)
+class SweepScene:
+    """A scene a sweep can run (``scene:`` in a sweep config): not :class:`knitlad.engine.state.Scene`, the rod builder."""
+
+    config: type[BaseModel]
+    run: Callable  # (config, output options, sweep folder, progress) -> (summary, write)
+    summary_keys: tuple[str, ...]  # the results a sweep's summary table shows, in order
+    description: str
+    shared_work: Callable | None = None  # config -> key of work that jobs with the same key share
+
+
+def stretch_of(cfg: CutConfig) -> str:
+    """Laddering jobs with the same stretch settings share one stretched knit."""
+    from knitlad.io.knit_cache import stretch_key
+
+    return stretch_key(cfg.stretch_settings())
+
+
+def run_ladder_job(cfg: CutConfig, output, folder: Path | None = None, progress=None):
+    """The laddering experiment (`knitlad cut`); its file holds the frames and series (:mod:`knitlad.io.hdf5`).
+
+    The stretched knit is kept in ``folder/stretched`` and reused by the jobs that share
+    its settings (:mod:`knitlad.io.knit_cache`): a sweep over the dynamics stretches once."""
+    import time
+
+    from knitlad.io.hdf5 import write_ladder_result
+    from knitlad.io.knit_cache import cached_stretch
+    from knitlad.experiments.protocol import analyse, cut, propagate, require_memory, stretch
+
+    require_memory(cfg.memory_estimate_bytes(), f"a {cfg.n_x} x {cfg.n_y} knit at {cfg.resolution} nodes per stitch")
+    t0 = time.perf_counter()
+    if folder is None:
+        knit, reused = stretch(cfg.stretch_settings(), progress), False
+    else:
+        knit, reused = cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch, progress)
+    if reused:  # the stretch cost this job only the reading
+        knit = dataclasses.replace(knit, wall_s=time.perf_counter() - t0)
+    result = analyse(propagate(cut(knit, cfg.dynamics_settings()), progress=progress))
+    if not output.frames:
+        result.frames, result.frame_times_s = [], []
+    compression = None if output.compression == "none" else output.compression
+
+    def write(path: Path, record: dict) -> None:
+        write_ladder_result(path, result, compression=compression, attrs={**record, "stretch_reused": reused})
+
+    return {**result.summary(), "stretch_reused": reused}, write
+
+
+def run_cycle_job(cfg: CycleConfig, output, folder: Path | None = None, progress=None):
+    """Protocol B (`knitlad cycle`): its file holds the readings and, if cut, the ladder."""
+    from knitlad.experiments.cycling import run_protocol_b
+    from knitlad.io.hdf5 import write_cycle_result
+    from knitlad.io.knit_cache import cached_stretch
+    from knitlad.experiments.protocol import stretch
+
+    knit = None if folder is None else cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch,
+                                                      progress)[0]
+    cycle, ladder = run_protocol_b(cfg.settings(), cfg.cycle_settings(), cut_at_max=cfg.cut, progress=progress,
+                                   knit=knit)
+    summary = {**cycle.summary(), **({f"cut_{k}": v for k, v in ladder.summary().items()} if ladder else {})}
+    if ladder is not None and not output.frames:
+        ladder.frames, ladder.frame_times_s = [], []
+
+    def write(path: Path, record: dict) -> None:
+        write_cycle_result(path, cycle, ladder, cfg.model_dump(),
+                           compression=None if output.compression == "none" else output.compression, attrs=record)
+
+    return summary, write
+
+
+def _attributes_only(result):
+    """A reduced model's summary, and a writer of a file of attributes (summary, settings, scales)."""
+    from knitlad.io.hdf5 import write_record
+    from knitlad.engine.units import Scales
+
+    summary = result.summary()
+    settings = {k: v for k, v in dataclasses.asdict(result.settings).items() if k != "material"}
+    scales = {f"scale_{k}": v for k, v in Scales(result.settings.material).as_attributes().items()}
+
+    def write(path: Path, record: dict) -> None:
+        write_record(path, {**summary, **record, "settings_json": json.dumps(settings), **scales})
+
+    return summary, write
+
+
+def run_loop_job(cfg: LoopConfig, output, folder: Path | None = None, progress=None):
+    from knitlad.experiments.periodic_loop import run_single_loop
+
+    return _attributes_only(run_single_loop(cfg.settings()))
+
+
+def run_stitch_job(cfg: StitchConfig, output, folder: Path | None = None, progress=None):
+    from knitlad.experiments.stitch_model import StitchRun
+
+    return _attributes_only(StitchRun(cfg.settings()).run())
+
+
+SCENES: dict[str, SweepScene] = {
+    "ladder": SweepScene(CutConfig, run_ladder_job, (
+        "fx_ini", "fx_fin", "fx_fin_crossed", "fx_fin_intact", "n_lad", "n_lad_over_ny", "v_lad_over_cb", "natural_curvature", "lx_over_l0", "ly_over_l0",
+        "ladders_up", "ladders_down", "first_down_ms", "second_up_ms", "hindered",
+        "box_lx_over_l0", "fx_within_tolerance", "peak_overlap_over_d", "reached_edge", "stop_reason",
+        "laddering_column", "v_fit_stitches", "nodes", "steps", "relax_steps", "stretch_reused", "wall_s",
+        "wall_stretch_s", "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment", stretch_of),
+    "cycle": SweepScene(CycleConfig, run_cycle_job, (
+        "fx_ini", "lx_over_l0", "ly_over_l0", "lx_max", "fx_thr", "delta_l_over_l0", "predicted_damage",
+        "cut_n_lad_over_ny", "cut_fx_fin", "cut_fx_fin_crossed", "cut_reached_edge", "cut_ladders_up",
+        "cut_ladders_down", "cut_second_up_ms", "cut_hindered", "hold_converged", "wall_s",
+        "job_wall_s"), "`knitlad cycle`: protocol B, the damage prediction's loading", stretch_of),
+    "loop": SweepScene(LoopConfig, run_loop_job, (
+        "tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before", "steps",
+        "nodes", "lx_over_l0", "lx_end_over_l0", "climb_over_ly", "wall_s", "job_wall_s"),
+        "`knitlad loop`: the single-loop model"),
+    "stitch": SweepScene(StitchConfig, run_stitch_job, (
+        "fx", "fy", "converged", "max_overlap_over_d", "relax_steps", "wall_s", "job_wall_s"),
+        "`knitlad stitch`: the periodised stitch"),
+}

@@ -1,0 +1,324 @@
+"""Parameter sweeps: a YAML config, validated, expanded into jobs with stable ids, run in a pool.
+
+A sweep config (``knitlad sweep config.yaml --out DIR``)::
+
+    scene: ladder            # the laddering experiment of `knitlad cut` (or loop: `knitlad loop`)
+    fixed:                   # every job: the options of `knitlad cut`, same units
+      n_x: 8
+      n_y: 10
+      resolution: 16
+    sweep:
+      expand: grid           # grid: every combination; zip: the i-th values together
+      axes:
+        fx: [4, 8, 13.6]                          # a list ...
+        ly: {start: 0.25, stop: 0.30, num: 2}     # ... or a range (end included)
+    output:
+      frame_every_us: 100
+      compression: gzip
+
+Each job is the fully resolved scene config; its id is a hash of that config, so
+the same inputs always give the same id, and a finished job is found again by
+its file ``DIR/jobs/<id>.h5``. The summary table is rebuilt from those files,
+so it is always consistent with what is on disk, whatever interrupted the sweep.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
+
+from knitlad.experiments.config import one_line
+from knitlad.studies.registry import SCENES
+
+MAX_JOBS = 10_000  # a sweep of more jobs is refused unless asked for (--max-jobs)
+COMPRESSIONS = ("gzip", "lzf", "none")
+
+
+class SweepError(ValueError):
+    """A config that cannot be run: the message is one line, 'key: reason'."""
+
+
+class Range(BaseModel):
+    """Evenly spaced values from start to stop (both included): num of them, or every step."""
+
+    model_config = ConfigDict(extra="forbid")
+    start: float = Field(allow_inf_nan=False, description="first value, in the axis' unit")
+    stop: float = Field(allow_inf_nan=False, description="last value, in the axis' unit (included)")
+    # no bound here: the sweep's job count is checked against --max-jobs before any value is built
+    num: int | None = Field(None, ge=1, strict=True, description="number of values [-]")
+    step: float | None = Field(None, gt=0, allow_inf_nan=False, description="spacing, in the axis' unit")
+
+    @model_validator(mode="after")
+    def one_spacing(self) -> "Range":
+        if (self.num is None) == (self.step is None):
+            raise ValueError("give num or step (one of them)")
+        if self.stop < self.start:
+            raise ValueError("stop must be >= start")
+        return self
+
+    def count(self) -> int:
+        if self.num is not None:
+            return self.num
+        return int(math.floor((self.stop - self.start) / self.step + 1e-9)) + 1
+
+    def values(self) -> list[float]:
+        n = self.count()
+        if n == 1:
+            return [self.start]
+        h = (self.stop - self.start) / (n - 1) if self.num is not None else self.step
+        return [round(self.start + k * h, 12) for k in range(n)]
+
+
+class Sweep(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    expand: Literal["grid", "zip"] = Field("grid", description="grid: all combinations; zip: i-th values together")
+    axes: dict[str, list[Any] | Range] = Field(description="swept fields of the scene config, each a list or a range")
+
+    @field_validator("axes", mode="before")
+    @classmethod
+    def ranges(cls, axes):
+        """A mapping is a Range: report its own error rather than 'not a list'."""
+        if not isinstance(axes, dict):
+            return axes
+        out = {}
+        for name, values in axes.items():
+            if isinstance(values, dict):
+                try:
+                    values = Range.model_validate(values)
+                except ValidationError as e:
+                    raise ValueError(f"{name}: {one_line(e).replace('config: ', '')}") from None
+            elif not isinstance(values, list):
+                raise ValueError(f"{name}: give a list of values or a range {{start, stop, num or step}}, got {values!r}")
+            out[name] = values
+        return out
+
+    @field_validator("axes")
+    @classmethod
+    def not_empty(cls, axes: dict) -> dict:
+        if not axes:
+            raise ValueError("empty sweep: give at least one axis")
+        for name, values in axes.items():
+            if isinstance(values, list) and not values:
+                raise ValueError(f"axis {name!r} has no values")
+        return axes
+
+    def values(self) -> dict[str, list]:
+        return {k: v.values() if isinstance(v, Range) else list(v) for k, v in self.axes.items()}
+
+    def counts(self) -> dict[str, int]:
+        """How many values each axis has (without building them)."""
+        return {k: v.count() if isinstance(v, Range) else len(v) for k, v in self.axes.items()}
+
+
+class Output(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    frame_every_us: float = Field(100.0, gt=0, description="interval between stored position frames [us]")
+    frames: bool = Field(True, description="store position frames at all (they dominate the file size)")
+    compression: Literal["gzip", "lzf", "none"] = Field("gzip", description="HDF5 compression of the frames")
+
+
+class SweepConfig(BaseModel):
+    """A whole sweep file (see the module docstring)."""
+
+    model_config = ConfigDict(extra="forbid")
+    scene: Literal[tuple(SCENES)] = Field(
+        "ladder", description="what each job runs: " + "; ".join(f"{k} = {s.description}" for k, s in SCENES.items()))
+    fixed: dict[str, Any] = Field(default_factory=dict, description="scene fields common to all jobs (scene units)")
+    sweep: Sweep = Field(description="the swept axes and how they combine")
+    output: Output = Field(default_factory=Output, description="what each job writes")
+
+
+class Job(BaseModel):
+    """One fully resolved run; ``id`` is a hash of everything that determines its output."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    scene: str
+    params: dict[str, Any]
+    output: Output
+
+    @property
+    def id(self) -> str:
+        return job_id(self.scene, self.params, self.output)
+
+    def scene_config(self) -> BaseModel:
+        return SCENES[self.scene].config.model_validate(self.params)
+
+
+def job_id(scene: str, params: dict, output: Output) -> str:
+    """Hash of the resolved parameters, less those a scene added later left at their neutral value."""
+    model = SCENES[scene].config
+    neutral = {name: model.model_fields[name].default for name in getattr(model, "ADDED_LATER", ())}
+    params = {k: v for k, v in params.items() if not (k in neutral and v == neutral[k])}
+    blob = json.dumps({"scene": scene, "params": params, "output": output.model_dump()}, sort_keys=True)
+    return hashlib.sha256(blob.encode()).hexdigest()[:16]
+
+
+# --------------------------------------------------------------------- loading
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """YAML with each key of a mapping given once: a repeated key is an error, not 'the last wins'."""
+
+
+def _mapping_with_unique_keys(loader: _UniqueKeyLoader, node: yaml.MappingNode, deep: bool = False) -> dict:
+    seen = set()
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=deep)
+        if key in seen:
+            raise yaml.constructor.ConstructorError(None, None, f"key {key!r} is given twice", key_node.start_mark)
+        seen.add(key)
+    return loader.construct_mapping(node, deep)
+
+
+_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _mapping_with_unique_keys)
+
+
+
+# what a sweep file may hold: nesting and the values it expands to (aliases counted each time they are used)
+MAX_YAML_DEPTH = 64
+MAX_YAML_VALUES = 100_000
+
+
+def bounded_yaml(text: str, where: str):
+    """The document of ``text`` (unique keys), refused with a SweepError before it is built if it nests
+    deeper than MAX_YAML_DEPTH, expands to more than MAX_YAML_VALUES values through its aliases (a
+    "billion laughs" of a few hundred bytes), or uses a list or mapping as a mapping key."""
+    depth = 0
+    for event in yaml.parse(text, Loader=_UniqueKeyLoader):  # a stream of events: no recursion, no expansion
+        if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+            depth += 1
+            if depth > MAX_YAML_DEPTH:
+                raise SweepError(f"{where}: line {event.start_mark.line + 1}: nested deeper than {MAX_YAML_DEPTH} levels")
+        elif isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+            depth -= 1
+    loader = _UniqueKeyLoader(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        _expanded_values(node, {}, where)
+        return loader.construct_document(node)
+    finally:
+        loader.dispose()
+
+
+def _expanded_values(node: yaml.Node, seen: dict, where: str) -> int:
+    """Values under ``node`` with every alias expanded, counted without expanding (memoised by node)."""
+    if id(node) in seen:
+        return seen[id(node)]
+    count = 1
+    if isinstance(node, yaml.SequenceNode):
+        count += sum(_expanded_values(child, seen, where) for child in node.value)
+    elif isinstance(node, yaml.MappingNode):
+        for key, value in node.value:
+            if not isinstance(key, yaml.ScalarNode):
+                raise SweepError(f"{where}: line {key.start_mark.line + 1}: a mapping key must be a plain value, "
+                                 "not a list or a mapping")
+            count += 1 + _expanded_values(value, seen, where)
+    if count > MAX_YAML_VALUES:
+        raise SweepError(f"{where}: line {node.start_mark.line + 1}: expands to more than {MAX_YAML_VALUES:,} values "
+                         "(aliases of aliases?)")
+    seen[id(node)] = count
+    return count
+
+
+def load_sweep(path: str | Path, max_jobs: int = MAX_JOBS) -> tuple[SweepConfig, list[Job]]:
+    """Read, validate and expand a sweep file; every problem raises SweepError('key: reason')."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise SweepError(f"{path}: not a text file (a YAML sweep config is text)") from None
+    except OSError as e:
+        raise SweepError(f"{path}: cannot read ({e.strerror or e})") from None
+    try:
+        raw = bounded_yaml(text, str(path))
+    except yaml.YAMLError as e:
+        mark = getattr(e, "problem_mark", None)
+        where = f"line {mark.line + 1}" if mark is not None else "YAML"
+        raise SweepError(f"{path}: {where}: not valid YAML ({getattr(e, 'problem', None) or e})") from None
+    if not isinstance(raw, dict):
+        raise SweepError(f"{path}: the file must be a mapping with keys scene, fixed, sweep, output")
+    try:
+        cfg = SweepConfig.model_validate(raw)
+    except ValidationError as e:
+        raise SweepError(one_line(e)) from None
+    return cfg, expand(cfg, max_jobs)
+
+
+def expand(cfg: SweepConfig, max_jobs: int = MAX_JOBS) -> list[Job]:
+    """All jobs of a sweep, each validated by its scene's config (errors name the YAML key).
+
+    The number of jobs is counted before any is built: more than ``max_jobs`` is refused."""
+    model = SCENES[cfg.scene].config
+    fields = set(model.model_fields)
+    counts = cfg.sweep.counts()
+    n_jobs = math.prod(counts.values()) if cfg.sweep.expand == "grid" else max(counts.values())
+    if n_jobs > max_jobs:
+        sizes = " x ".join(f"{c:.3g}" if c >= 1e6 else str(c) for c in counts.values())
+        raise SweepError(f"sweep.axes: {n_jobs:.3g} jobs ({sizes}), more than {max_jobs}; use fewer values or "
+                         "--max-jobs")
+    preset_sets = tuple(next(iter(model.PRESETS.values()))) if hasattr(model, "PRESETS") else ()
+    if "preset" in cfg.sweep.axes and preset_sets and all(k in cfg.fixed or k in cfg.sweep.axes for k in preset_sets):
+        raise SweepError(f"sweep.axes.preset: has no effect where {', '.join(preset_sets)} are given (the preset "
+                         "only sets them)")
+    for key in cfg.fixed:
+        if key not in fields:
+            raise SweepError(f"fixed.{key}: not a field of scene {cfg.scene!r} (fields: {', '.join(sorted(fields))})")
+    axes = cfg.sweep.values()
+    for key in axes:
+        if key not in fields:
+            raise SweepError(f"sweep.axes.{key}: not a field of scene {cfg.scene!r} (fields: {', '.join(sorted(fields))})")
+        if key in cfg.fixed:
+            raise SweepError(f"sweep.axes.{key}: also given in fixed; give it in one place")
+    names = list(axes)
+    if cfg.sweep.expand == "zip":
+        lengths = {k: len(v) for k, v in axes.items()}
+        if len(set(lengths.values())) > 1:
+            raise SweepError(f"sweep.axes: zip needs axes of equal length, got {lengths}")
+        index_sets = [tuple(i for _ in names) for i in range(len(axes[names[0]]))]
+    else:
+        index_sets = list(itertools.product(*(range(len(axes[k])) for k in names)))
+    extras = {}
+    if "frame_every_us" in fields:
+        extras["frame_every_us"] = cfg.output.frame_every_us
+    jobs, seen = [], set()
+    for idx in index_sets:
+        params = {**cfg.fixed, **extras, **{k: axes[k][i] for k, i in zip(names, idx)}}
+        try:
+            resolved = model.model_validate(params)
+        except ValidationError as e:
+            err = e.errors()[0]
+            field = err["loc"][0] if err.get("loc") else None
+            reason = one_line(e).partition(": ")[2]
+            if field is None:  # a rule across fields names the field it is about first, if any
+                named, _, rest = reason.partition(": ")
+                if named in fields and rest:
+                    field, reason = named, rest
+            if field in axes:
+                where = f"sweep.axes.{field}[{idx[names.index(field)]}]"
+            elif field in cfg.fixed:
+                where = f"fixed.{field}"
+            elif field in extras:
+                where = f"output.{field}"
+            else:
+                where = "fixed"  # a rule across fields (e.g. neither fx nor lx given)
+            raise SweepError(f"{where}: {reason}") from None
+        job = Job(scene=cfg.scene, params=resolved.model_dump(), output=cfg.output)
+        if job.id in seen:
+            raise SweepError("sweep.axes: two jobs are identical (a value repeats)")
+        seen.add(job.id)
+        jobs.append(job)
+    return jobs

@@ -1,0 +1,316 @@
+"""Figures: the spatio-temporal diagram of a ladder (paper, Fig. 3b,d and Fig. 7) and a sweep's
+summary plots (n_lad/n_y, f_x^fin and v_lad/c_b against f_x^ini: Fig. 3e, 3f, 5a).
+
+Every figure is written atomically (temporary file, then rename).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from knitlad.io.atomic import atomic_path
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+FORMATS = ("png", "pdf", "svg")  # what `knitlad plot --format` writes
+PNG_DPI = 200
+
+# the paper's symbols, rendered (matplotlib's mathtext), for the columns of a summary table
+SYMBOL = {
+    "fx": r"$f_x$", "fx_ini": r"$f_x^{\mathrm{ini}}$", "fx_fin": r"$f_x^{\mathrm{fin}}$",
+    "n_lad_over_ny": r"$n_{\mathrm{lad}}/n_y$", "v_lad_over_cb": r"$v_{\mathrm{lad}}/c_b$", "mu": r"$\mu$",
+    "lx": r"$l_x/l_0$", "ly": r"$l_y/l_0$", "natural_curvature": r"$K$", "resolution": "nodes per stitch",
+}
+
+
+def symbol(column: str) -> str:
+    """The rendered symbol of a summary column (the column's name if it has none)."""
+    return SYMBOL.get(column, column)
+
+
+def _save(fig, path: Path) -> Path:
+    """Write ``fig`` to ``path`` in the format its suffix names (PNG at PNG_DPI), atomically."""
+    with atomic_path(path, suffix=path.suffix) as tmp:
+        fig.savefig(tmp, format=path.suffix.lstrip(".") or "png", dpi=PNG_DPI)
+    _pyplot().close(fig)
+    return path
+
+
+def draw_spatio_temporal(times_s, front_up, front_down, column_history, cut_row: int, title: str, path) -> Path:
+    """Laddered cells of the laddering column (grey) against time, with the two fronts."""
+    plt = _pyplot()
+    path = Path(path)
+    t_ms = np.asarray(times_s) * 1e3
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    if len(column_history):
+        cells = np.asarray(column_history, dtype=float).T
+        ax.imshow(cells, origin="lower", aspect="auto", cmap="Greys", vmin=0, vmax=1.5,
+                  extent=(t_ms[0], t_ms[-1], -0.5, cells.shape[0] - 0.5) if t_ms.size > 1 else None)
+    ax.plot(t_ms, cut_row + np.asarray(front_up), color="tab:red", lw=1.2, label="front (up)")
+    ax.plot(t_ms, cut_row - np.asarray(front_down), color="tab:blue", lw=1.2, label="front (down)")
+    ax.axhline(cut_row, color="k", lw=0.5, ls=":")
+    ax.set_xlabel("time since the cut [ms]")
+    ax.set_ylabel("course (stitch) index")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def _title(fx_ini: float, v: float) -> str:
+    ini = f"{symbol('fx_ini')} = {fx_ini:.2f}"
+    return f"{ini}, {symbol('v_lad_over_cb')} = {v:.3f}" if np.isfinite(v) else ini
+
+
+def spatio_temporal_diagram(result, path: str | Path) -> Path:
+    """The diagram of a :class:`knitlad.experiments.protocol.LadderResult`."""
+    return draw_spatio_temporal(result.times_s, result.front_up, result.front_down, result.column_history,
+                                result.settings.stretch.n_y // 2, _title(result.fx_ini, result.v_lad_over_cb), path)
+
+
+def spatio_temporal_from_file(h5_path: str | Path, path: str | Path) -> Path:
+    """The diagram of a run stored by :func:`knitlad.io.hdf5.write_ladder_result`."""
+    import h5py
+
+    from knitlad.io.hdf5 import read_attrs, run_settings
+
+    settings = run_settings(read_attrs(h5_path))
+    with h5py.File(h5_path, "r") as f:
+        s = f["series"]
+        hist = s["laddering_column_cells"][()] if "laddering_column_cells" in s else []
+        return draw_spatio_temporal(s["time"][()], s["front_up"][()], s["front_down"][()], hist,
+                                    settings["n_y"] // 2, _title(float(f.attrs["fx_ini"]), float(f.attrs["v_lad_over_cb"])),
+                                    path)
+
+
+def column_midline_diagram(h5_path: str | Path, path: str | Path) -> Path:
+    """The paper's spatio-temporal diagram (Fig. 3b,d; the appendix's simulation figure): the y of
+    the yarn crossing the middle line of the laddering column against time, from the frames."""
+    import h5py
+
+    from knitlad.io.hdf5 import read_attrs
+
+    attrs = read_attrs(h5_path)
+    with h5py.File(h5_path, "r") as f:
+        x = f["frames/positions"][()]
+        t_ms = f["frames/time"][()] * 1e3
+        centres = f["cells/centres"][()]
+    column = int(attrs["laddering_column"])
+    x_mid = centres[0, column, 0]
+    l_x = float(attrs["box_lx_over_l0"]) * float(attrs["scale_l0_m"])
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    for k in range(len(t_ms)):
+        near = np.abs(x[k, :, 0] - x_mid) < 0.04 * l_x
+        ax.plot(np.full(near.sum(), t_ms[k]), 1e3 * x[k, near, 1], "k.", ms=1.2)
+    ax.set_xlabel("time since the cut [ms]")
+    ax.set_ylabel("yarn's $y$ on the column's mid-line [mm]")  # short: a longer one was clipped
+    ax.set_title(_title(float(attrs["fx_ini"]), float(attrs["v_lad_over_cb"])) + f", column {column}", fontsize=9)
+    fig.tight_layout()
+    return _save(fig, Path(path))
+
+
+def tension_history_plot(h5_path: str | Path, path: str | Path) -> Path:
+    """f_x through the whole run, as the paper's force-time curves (appendix): the stretch at mu = 0
+    (its relaxed readings, against FIRE steps), then the laddering after the cut, against time."""
+    import h5py
+
+    with h5py.File(h5_path, "r") as f:
+        steps, box, fx_stretch = (f[f"stretch/{k}"][()] for k in ("relax_steps", "box_lx_over_l0", "fx"))
+        t_ms, fx = f["series/time"][()] * 1e3, f["series/fx"][()]
+    plt = _pyplot()
+    fig, (left, right) = plt.subplots(1, 2, figsize=(7.5, 3.2), sharey=True,
+                                      gridspec_kw={"width_ratios": [1, 1.3]})
+    left.set_ylabel(symbol("fx"))
+    if steps.size and steps.max() > steps.min():  # a stretch of the whole knit: its relaxed readings
+        left.plot(steps / 1e3, fx_stretch, "k.-", ms=2, lw=0.6)
+        left.set_xlabel(r"stretch at $\mu$ = 0: FIRE steps [$10^3$]")
+        if box.max() > box.min():
+            twin = left.twiny()
+            twin.set_xlim(box.min(), box.max())
+            twin.set_xlabel(f"box {symbol('lx')}", fontsize=8)
+    else:  # stretched as one periodised stitch and tiled: no history of the knit's own to draw
+        left.plot([0.0], [fx_stretch[-1] if fx_stretch.size else np.nan], "ko", ms=4)
+        left.set_xticks([])
+        left.set_xlabel("stretch at $\\mu$ = 0")
+        left.text(0.5, 0.06, f"one periodised stitch stretched\nand tiled: no FIRE history\n{symbol('lx')} = "
+                  f"{box[-1] if box.size else np.nan:.3f}", transform=left.transAxes, ha="center", fontsize=8)
+    right.plot(t_ms, fx, "tab:red", lw=1.0)
+    right.set_xlabel("time since the cut [ms]")
+    right.axhline(fx_stretch[-1] if fx_stretch.size else np.nan, color="k", ls=":", lw=0.7, label=symbol("fx_ini"))
+    right.legend(fontsize=7)
+    fig.tight_layout()
+    return _save(fig, Path(path))
+
+
+PAPER_DER_VELOCITY = ((1.58, 0.176), (15.67, 1.05))  # 42 x 42, mu = 0.4, l_y/l0 = 0.25 (paper, Fig. 7)
+EXPERIMENTS_VELOCITY_SLOPE = 0.1  # the experiments' v_lad/c_b ~ 0.1 f_x^ini (paper, Fig. 5a and eq. 1)
+DAMAGE_CLASSES = (0.2, 1.0, 2.0)  # the paper's classes of n_lad/n_y (Fig. 3e): < 0.2, 0.2-1, 1-2, >= 2
+
+SUMMARY_PLOTS = {
+    # file stem: (y column, paper figure)
+    "damage_vs_fx": ("n_lad_over_ny", "Fig. 3e"),
+    "fx_fin_vs_fx_ini": ("fx_fin", "Fig. 3f"),
+    "velocity_vs_fx": ("v_lad_over_cb", "Fig. 5a"),
+}
+
+
+def loop_velocity_plot(df, path: str | Path) -> Path:
+    """Single-loop sweeps (paper Fig. 5c): v_lad/c_b against f_x, one series per mu, and 0.34 sqrt(f_x)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(4.5, 3.4))
+    for mu, g in df.groupby("mu", sort=True):
+        g = g.sort_values("fx")
+        released = g["released"].astype(bool)
+        line, = ax.plot(g["fx"][released], g["v_lad_over_cb"][released], "o-", ms=4, label=f"{symbol('mu')} = {mu}")
+        if (~released).any():  # still hooked at the end of the run: v_lad = 0, not part of the curve
+            ax.plot(g["fx"][~released], 0 * g["fx"][~released], "x", color=line.get_color())
+    f = np.linspace(0, float(df["fx"].max()), 100)
+    ax.plot(f, 0.34 * np.sqrt(f), "k--", lw=0.8, label=r"$0.34\sqrt{f_x}$ (paper, $\mu$ = 0)")
+    return _labelled(fig, ax, symbol("fx"), symbol("v_lad_over_cb"),
+                     f"single loop: {symbol('v_lad_over_cb')} against {symbol('fx')} (paper Fig. 5c)", path)
+
+
+def _labelled(fig, ax, xlabel: str, ylabel: str, title: str, path: str | Path) -> Path:
+    """Axis labels, title and legend (if anything is labelled), then save."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=9)
+    if ax.get_legend_handles_labels()[1]:
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    return _save(fig, Path(path))
+
+
+def zero_tension_curve_plot(df, d_over_l0: float, path: str | Path) -> Path:
+    """The f_x = 0 curve of the periodised stitch: l_y/l0 against l_x/l0 (f_x > 0 to its right)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(4.2, 3.6))
+    ax.plot(df["lx_over_l0_at_fx0"], df["ly_over_l0"], "k-o", ms=3, label=f"$f_x$ = 0, $d/l_0$ = {d_over_l0:.4g}")
+    return _labelled(fig, ax, symbol("lx"), symbol("ly"), "periodised stitch: $f_x$ > 0 right of the curve", path)
+
+
+def summary_plots(df, out_dir: str | Path, fmt: str = "png") -> list[Path]:
+    """One figure per entry of SUMMARY_PLOTS (laddering jobs: one series per value of the swept
+    l_y/l0, mu, resolution and K), and the single-loop velocity plot for loop jobs; ``fmt``: one of FORMATS."""
+    plt = _pyplot()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    ok = df[df["status"] == "ok"]
+    paths = []
+    if "scene" in ok and (ok["scene"] == "loop").any():
+        paths.append(loop_velocity_plot(ok[ok["scene"] == "loop"], out / f"loop_velocity_vs_fx.{fmt}"))
+        ok = ok[ok["scene"] != "loop"]
+    if "scene" in ok and (ok["scene"] == "cycle").any():
+        paths.append(damage_prediction_plot(ok[ok["scene"] == "cycle"], out / f"damage_vs_prediction.{fmt}"))
+    if "scene" in ok:
+        ok = ok[ok["scene"] == "ladder"]  # stitch sweeps: the table says it all
+    if not len(ok):
+        return paths
+    keys = [k for k in ("ly", "mu", "resolution", "natural_curvature") if k in ok and ok[k].nunique() > 1] or [None]
+    groups = ok.groupby(keys if keys != [None] else (lambda _: ""), sort=True)
+    x = symbol("fx_ini")
+    for stem, (column, figure) in SUMMARY_PLOTS.items():
+        fig, ax = plt.subplots(figsize=(4.5, 3.4))
+        for key, g in groups:
+            g = g.sort_values("fx_ini")
+            key = key if isinstance(key, tuple) else (key,)
+            legend = ", ".join(f"{symbol(k)} = {v}" for k, v in zip(keys, key) if k is not None) or "knitlad"
+            ax.plot(g["fx_ini"], g[column], "o-", ms=4, label=legend)
+        if column == "v_lad_over_cb":
+            px, py = zip(*PAPER_DER_VELOCITY)
+            ax.plot(px, py, "k+", ms=8, label=r"paper, DER 42 $\times$ 42")
+            f = np.array([0.0, float(np.nanmax(ok["fx_ini"]))])
+            ax.plot(f, EXPERIMENTS_VELOCITY_SLOPE * f, "k--", lw=0.8, label=f"experiments, 0.1 {x}")
+        if column == "n_lad_over_ny":
+            for k, level in enumerate(DAMAGE_CLASSES):  # the paper's damage classes, said in the legend
+                ax.axhline(level, color="0.6", ls=":", lw=0.7,
+                           label="paper's damage classes (Fig. 3e): 0.2, 1, 2" if k == 0 else None)
+        if column == "fx_fin":
+            lim = float(np.nanmax(ok["fx_ini"])) if len(ok) else 1.0
+            ax.plot([0, lim], [0, lim], "k:", lw=0.8, label=f"{symbol('fx_fin')} = {x}")
+        label = symbol(column)
+        paths.append(_labelled(fig, ax, x, label, f"{label} against {x} (paper {figure})", out / f"{stem}.{fmt}"))
+    return paths
+
+
+def job_figure_names(df) -> dict[str, str]:
+    """A file stem per job of a sweep table, from the parameters that vary between its jobs
+    (``natural_curvature=1_mu=0.2_fx=3``); the job id is added where two jobs would share a stem."""
+    params = [c for c in df.columns[: list(df.columns).index("status")] if c not in ("job_id", "scene")]
+    varying = [c for c in params if df[c].astype(str).nunique() > 1]
+
+    def value(v) -> str:
+        return f"{v:g}" if isinstance(v, (int, float, np.number)) and not isinstance(v, bool) else str(v)
+
+    stems = {row.job_id: "_".join(f"{c}={value(getattr(row, c))}" for c in varying) or row.job_id
+             for row in df.itertuples()}
+    counts = {}
+    for stem in stems.values():
+        counts[stem] = counts.get(stem, 0) + 1
+    return {job: (stem if counts[stem] == 1 else f"{stem}_{job}") for job, stem in stems.items()}
+
+
+def cycle_curve_plot(readings, n_x: int, stitch_length_m: float, fx_thr: float | None, delta_l_over_l0: float,
+                     path: str | Path) -> Path:
+    """Protocol B's force-displacement curve (paper, Fig. 4a): f_x against Delta x - Delta x_min [mm], one
+    colour per cycle, the holds as dots; with f_x^thr, the threshold and delta l on the last unloading."""
+    plt = _pyplot()
+    r = np.asarray(readings)
+    dx = (r[:, 3] - r[0, 3]) * n_x * stitch_length_m * 1e3
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    for cycle in np.unique(r[r[:, 0] > 0, 0]).astype(int):
+        rows = np.flatnonzero(r[:, 0] == cycle)
+        rows = np.concatenate([[rows[0] - 1], rows])  # from where the cycle before ended
+        line, = ax.plot(dx[rows], r[rows, 4], lw=1.2, label=f"cycle {cycle}")
+        holds = rows[r[rows, 1] == 0]
+        ax.plot(dx[holds], r[holds, 4], "o", ms=3, color=line.get_color())
+    if fx_thr is not None:
+        ax.axhline(fx_thr, color="0.4", ls="--", lw=0.8, label=r"$f_x^{\mathrm{thr}}$")
+        if np.isfinite(delta_l_over_l0):
+            top = dx.max()
+            ax.annotate("", xy=(top - delta_l_over_l0 * stitch_length_m * 1e3, fx_thr), xytext=(top, fx_thr),
+                        arrowprops=dict(arrowstyle="<->", color="k", lw=0.8))
+            ax.text(top - 0.5 * delta_l_over_l0 * stitch_length_m * 1e3, fx_thr, r"$\delta l$", ha="center",
+                    va="bottom")
+    return _labelled(fig, ax, r"$\Delta x - \Delta x_{\min}$ [mm]", symbol("fx"), "protocol B", path)
+
+
+def damage_prediction_plot(df, path: str | Path) -> Path:
+    """Paper Fig. 4c: the damage of protocol B's cut, n_lad/n_y, against Eq. 1's delta l/(l0 - l_x), one
+    series per l_y/l0; open symbols where a ladder reached an edge course (the knit too small for it)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(4.5, 3.4))
+    for ly, g in df.groupby("ly") if "ly" in df else [(None, df)]:
+        line, = ax.plot(g["predicted_damage"], g["cut_n_lad_over_ny"], "o", ms=5,
+                        label=f"{symbol('ly')} = {ly}" if ly is not None else "knitlad")
+        edge = g[g["cut_reached_edge"].astype(bool)] if "cut_reached_edge" in g else g.iloc[:0]
+        ax.plot(edge["predicted_damage"], edge["cut_n_lad_over_ny"], "o", ms=9, mfc="none", color=line.get_color())
+    top = float(np.nanmax([df["predicted_damage"].max(), df["cut_n_lad_over_ny"].max(), 1.0]))
+    ax.plot([0, top], [0, top], "k:", lw=0.8, label="Eq. 1")
+    ax.plot([], [], "o", ms=9, mfc="none", color="0.4", label="a ladder reached an edge course")
+    return _labelled(fig, ax, r"$\delta l/(l_0 - l_x)$", symbol("n_lad_over_ny"), "damage against Eq. 1 (paper Fig. 4c)",
+                     path)
+
+
+def final_tension_plot(df, path: str | Path) -> Path:
+    """Paper Fig. 3f read where the arrest happens: f_x^fin against f_x^ini, the mean over every course, the
+    courses the ladder crossed and the others (a sweep's summary table, sorted by f_x^ini)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(4.5, 3.4))
+    for column, label in (("fx_fin", "every course"), ("fx_fin_crossed", "courses the ladder crossed"),
+                          ("fx_fin_intact", "the others")):
+        ax.plot(df["fx_ini"], df[column], "o-", ms=4, label=label)
+    top = float(df["fx_ini"].max())
+    ax.plot([0, top], [0, top], "k:", lw=0.8, label=f"{symbol('fx_fin')} = {symbol('fx_ini')}")
+    return _labelled(fig, ax, symbol("fx_ini"), symbol("fx_fin"), "tension after arrest (paper Fig. 3f)", path)

@@ -1,0 +1,288 @@
+"""Pictures of a laddering run from its ``ladder.h5`` (or of one's own scene, from its trajectory file):
+renders, a movie and a ParaView file.
+
+* :func:`render_run`: the fabric at chosen instants (default: the knit just cut, then
+  four evenly spaced instants of the ladder, as in the paper's figures), yarns drawn as
+  shaded tubes of their real diameter coloured by course, the cut course in black and
+  the undone cells shaded red; a front view (the x-y plane, as the photographs) and an
+  oblique one. VTK renders off screen (EGL or OSMesa: no display, no GPU).
+* :func:`movie`: every frame, front view with a time stamp, as MP4 (imageio-ffmpeg, whose
+  wheel carries ffmpeg) or GIF.
+The ParaView file (``ladder.xdmf``) is written by :func:`knitlad.io.xdmf.write_xdmf`.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import h5py
+import numpy as np
+
+from knitlad.io.atomic import atomic_path
+
+COURSE_COLOURS = np.array([[0.20, 0.45, 0.75], [0.95, 0.60, 0.15], [0.30, 0.65, 0.35], [0.60, 0.40, 0.70]])
+CUT_COLOUR = (0.05, 0.05, 0.05)
+LADDERED_COLOUR = (0.85, 0.15, 0.15)
+
+
+@dataclass
+class Run:
+    """What a picture needs from a run file (SI units): a laddering run, or the trajectory of one's own
+    scene (:func:`knitlad.io.hdf5.write_trajectory`: no cells, each yarn its own colour)."""
+
+    path: Path
+    positions: h5py.Dataset  # (n_frames, n, 3) [m]
+    times_s: np.ndarray
+    laddered: np.ndarray  # (n_frames, n_y, n_x)
+    edges: np.ndarray  # (ne, 2)
+    node_course: np.ndarray
+    cut_course: int
+    cell_centres: np.ndarray  # (n_y, n_x, 2) [m]
+    diameter: float
+    l_x: float
+    l_y: float
+    knit: bool = True  # a laddering run (cells, courses, a cut), else a scene of one's own
+
+    @staticmethod
+    def open(path: str | Path) -> tuple["Run", h5py.File]:
+        from knitlad.io.kinds import is_trajectory
+
+        f = h5py.File(path, "r")
+        if is_trajectory(f) and "positions" in f.get("frames", {}):
+            n = f["frames/positions"].shape[0]
+            run = Run(Path(path), f["frames/positions"], f["frames/time"][()], np.zeros((n, 0, 0), dtype=bool),
+                      f["topology/edges"][()], f["topology/node_course"][()], -1, np.zeros((0, 0, 2)),
+                      float(f.attrs["scale_d_m"]), 0.0, 0.0, knit=False)
+            return run, f
+        if "frames" not in f or "laddered" not in f["frames"]:
+            f.close()
+            raise ValueError(f"{path}: no frames to draw (the run was written without them, or by an older knitlad)")
+        settings = json.loads(f.attrs["settings_json"])
+        n_y = settings["stretch"]["n_y"]
+        l0 = float(f.attrs["scale_l0_m"])
+        run = Run(Path(path), f["frames/positions"], f["frames/time"][()], f["frames/laddered"][()],
+                  f["topology/edges"][()], f["topology/node_course"][()], n_y // 2, f["cells/centres"][()],
+                  float(f.attrs["scale_d_m"]), float(f.attrs["box_lx_over_l0"]) * l0,
+                  float(f.attrs["ly_over_l0"]) * l0)
+        return run, f
+
+    def frame_at(self, t: float) -> int:
+        return int(np.argmin(np.abs(self.times_s - t)))
+
+    def label(self, k: int, since: str = " after the cut") -> str:
+        """The caption of frame ``k``: its time, and for a laddering run the cells undone."""
+        if not self.knit:
+            return f"t = {self.times_s[k] * 1e3:.3f} ms"
+        return f"t = {self.times_s[k] * 1e3:.3f} ms{since}, {int(self.laddered[k].sum())} cells undone"
+
+
+def _quiet_vtk() -> None:
+    """VTK's log off the terminal: with no display it warns "bad X server connection" before rendering off
+    screen anyway, and its XDMF reader reports an element it skips as an error; knitlad says what failed."""
+    from vtkmodules.vtkCommonCore import vtkLogger, vtkObject
+
+    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)
+    vtkObject.GlobalWarningDisplayOff()
+
+
+def _vtk():
+    _quiet_vtk()
+    import vtkmodules.vtkFiltersCore  # noqa: F401 - tube filter
+    import vtkmodules.vtkRenderingFreeType  # noqa: F401 - text
+    import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 - the off-screen render window
+    from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
+    from vtkmodules.vtkCommonCore import vtkPoints
+    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+
+    return vtkPoints, vtkCellArray, vtkPolyData, numpy_to_vtk, numpy_to_vtkIdTypeArray
+
+
+def _fabric_actor(run: Run, x: np.ndarray, window: np.ndarray | None):
+    """Tubes of the yarn's diameter along every edge (edges outside ``window`` [x0, x1, y0, y1] left out)."""
+    from vtkmodules.vtkFiltersCore import vtkTubeFilter
+    from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
+
+    vtkPoints, vtkCellArray, vtkPolyData, numpy_to_vtk, numpy_to_vtkIdTypeArray = _vtk()
+    edges = run.edges
+    if window is not None:
+        mid = 0.5 * (x[edges[:, 0]] + x[edges[:, 1]])
+        inside = (mid[:, 0] > window[0]) & (mid[:, 0] < window[1]) & (mid[:, 1] > window[2]) & (mid[:, 1] < window[3])
+        edges = edges[inside]
+    points = vtkPoints()
+    points.SetData(numpy_to_vtk(np.ascontiguousarray(x, dtype=np.float64), deep=True))
+    cells = np.column_stack([np.full(len(edges), 2), edges]).astype(np.int64).ravel()
+    lines = vtkCellArray()
+    lines.ImportLegacyFormat(numpy_to_vtkIdTypeArray(cells, deep=True))  # (2, i, j) per edge
+    poly = vtkPolyData()
+    poly.SetPoints(points)
+    poly.SetLines(lines)
+    course = run.node_course
+    colours = COURSE_COLOURS[np.mod(course, len(COURSE_COLOURS))]
+    if run.knit:
+        colours[(course < 0) | (course >= run.cell_centres.shape[0])] = 0.6  # the held edge courses: grey
+        colours[course == run.cut_course] = CUT_COLOUR
+    rgb = numpy_to_vtk((255 * colours).astype(np.uint8), deep=True)
+    rgb.SetName("colour")
+    poly.GetPointData().SetScalars(rgb)
+    tubes = vtkTubeFilter()
+    tubes.SetInputData(poly)
+    tubes.SetRadius(0.5 * run.diameter)
+    tubes.SetNumberOfSides(10)
+    tubes.CappingOn()
+    mapper = vtkPolyDataMapper()
+    mapper.SetInputConnection(tubes.GetOutputPort())
+    mapper.SetColorModeToDirectScalars()
+    actor = vtkActor()
+    actor.SetMapper(mapper)
+    actor.GetProperty().SetSpecular(0.3)
+    return actor
+
+
+def _cell_actor(run: Run, laddered: np.ndarray, depth: float):
+    """Red squares behind the undone cells."""
+    from vtkmodules.vtkFiltersSources import vtkPlaneSource
+    from vtkmodules.vtkFiltersCore import vtkAppendPolyData
+    from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
+
+    append = vtkAppendPolyData()
+    for r, i in zip(*np.nonzero(laddered)):
+        cx, cy = run.cell_centres[r, i]
+        plane = vtkPlaneSource()
+        plane.SetOrigin(cx - 0.5 * run.l_x, cy - 0.5 * run.l_y, depth)
+        plane.SetPoint1(cx + 0.5 * run.l_x, cy - 0.5 * run.l_y, depth)
+        plane.SetPoint2(cx - 0.5 * run.l_x, cy + 0.5 * run.l_y, depth)
+        plane.Update()
+        append.AddInputData(plane.GetOutput())
+    if not laddered.any():
+        return None
+    mapper = vtkPolyDataMapper()
+    mapper.SetInputConnection(append.GetOutputPort())
+    actor = vtkActor()
+    actor.SetMapper(mapper)
+    actor.GetProperty().SetColor(*LADDERED_COLOUR)
+    actor.GetProperty().SetOpacity(0.35)
+    actor.GetProperty().LightingOff()
+    return actor
+
+
+def _picture(run: Run, frame: int, path: Path, view: str, size=(1200, 900), window=None, label: str = "") -> Path:
+    from vtkmodules.vtkRenderingCore import vtkRenderer, vtkRenderWindow, vtkTextActor, vtkWindowToImageFilter
+    from vtkmodules.vtkIOImage import vtkPNGWriter
+
+    _vtk()  # the OpenGL and FreeType overrides must be registered before any renderer is made
+    x = np.asarray(run.positions[frame], dtype=np.float64)
+    renderer = vtkRenderer()
+    renderer.SetBackground(1.0, 1.0, 1.0)
+    renderer.AddActor(_fabric_actor(run, x, window))
+    cells = _cell_actor(run, run.laddered[frame], float(x[:, 2].min()) - 2 * run.diameter)
+    if cells is not None:
+        renderer.AddActor(cells)
+    if label:
+        text = vtkTextActor()
+        text.SetInput(label)
+        text.GetTextProperty().SetFontSize(22)
+        text.GetTextProperty().SetColor(0.0, 0.0, 0.0)
+        text.SetPosition(12, 12)
+        renderer.AddViewProp(text)
+    camera = renderer.GetActiveCamera()
+    if view == "front":
+        camera.ParallelProjectionOn()
+        camera.SetViewUp(0, 1, 0)
+    else:
+        camera.Elevation(-35)
+        camera.Azimuth(25)
+        camera.SetViewUp(0, 1, 0.3)
+    renderer.ResetCamera()
+    if view == "front":
+        camera.Zoom(1.15)
+    win = vtkRenderWindow()
+    win.SetOffScreenRendering(1)
+    win.AddRenderer(renderer)
+    win.SetSize(*size)
+    win.Render()
+    grab = vtkWindowToImageFilter()
+    grab.SetInput(win)
+    grab.Update()
+    with atomic_path(path, suffix=".png") as tmp:
+        writer = vtkPNGWriter()
+        writer.SetFileName(str(tmp))
+        writer.SetInputConnection(grab.GetOutputPort())
+        writer.Write()
+        try:
+            whole_png(tmp)
+        finally:
+            win.Finalize()
+    return path
+
+
+PNG_END = b"IEND\xaeB`\x82"  # the last chunk of every complete PNG
+
+
+def whole_png(path: Path) -> None:
+    """OSError unless ``path`` is a complete PNG: VTK's writer only prints libpng's errors (a full disk
+    left truncated images that were renamed into place and reported written)."""
+    try:
+        size = path.stat().st_size
+        with open(path, "rb") as f:
+            f.seek(max(size - len(PNG_END), 0))
+            end = f.read()
+    except OSError as e:
+        raise OSError(f"{path.name}: the image was not written ({e.strerror or e})") from None
+    if size < 64 or end != PNG_END:
+        raise OSError(f"{path.name}: the image was not written whole ({size} bytes; a full disk?)")
+
+
+def default_instants(run: Run) -> list[float]:
+    """The first frame (a laddering run: the knit just cut), then four evenly spaced instants to the last."""
+    t0, t_end = float(run.times_s[0]), float(run.times_s[-1])
+    return [t0 + (t_end - t0) * k / 4 for k in range(5)]
+
+
+def render_run(h5: str | Path, out_dir: str | Path, times_s: list[float] | None = None,
+               views: tuple[str, ...] = ("front", "oblique"), size=(1200, 900),
+               progress: Callable[[int, int], None] | None = None) -> list[Path]:
+    """PNGs of the fabric at ``times_s`` [s since the cut] (default :func:`default_instants`).
+    ``progress(done, total)`` is called after each image."""
+    run, f = Run.open(h5)
+    out = Path(out_dir)
+    paths = []
+    try:
+        instants = times_s if times_s is not None else default_instants(run)
+        frames = list(dict.fromkeys(run.frame_at(t) for t in instants))  # each stored frame once
+        for k in frames:
+            label = run.label(k)
+            for view in views:
+                paths.append(_picture(run, k, out / f"render_{view}_{run.times_s[k] * 1e6:08.1f}us.png", view,
+                                      size, label=label))
+                if progress:
+                    progress(len(paths), len(frames) * len(views))
+    finally:
+        f.close()
+    return paths
+
+
+def movie(h5: str | Path, path: str | Path, fps: int = 12, size=(960, 720),
+          progress: Callable[[int, int], None] | None = None) -> Path:
+    """Every frame of the run, front view with a time stamp, as MP4 (or GIF if ``path`` ends so).
+    ``progress(done, total)`` is called after each frame."""
+    import tempfile
+
+    import imageio.v2 as imageio
+
+    run, f = Run.open(h5)
+    path = Path(path)
+    try:
+        with tempfile.TemporaryDirectory() as tmp, atomic_path(path, suffix=path.suffix) as out:
+            kwargs = dict(fps=fps, macro_block_size=8) if path.suffix == ".mp4" else dict(duration=1 / fps)
+            with imageio.get_writer(out, **kwargs) as writer:
+                for k in range(len(run.times_s)):
+                    frame = _picture(run, k, Path(tmp) / f"{k:05d}.png", "front", size, label=run.label(k, since=""))
+                    writer.append_data(imageio.imread(frame))
+                    if progress:
+                        progress(k + 1, len(run.times_s))
+    finally:
+        f.close()
+    return path
