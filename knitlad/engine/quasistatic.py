@@ -18,7 +18,7 @@ Jumps or ramps. With friction the answer depends on the path, and a jump of the 
 (``move_held`` then ``settle`` or ``relax``) is a path of its own: the knit rings after each jump and
 its contacts slip further than under a steady pull. :meth:`QuasiStatics.ramp_held` moves the supports
 at a steady speed under the same damping instead. On a 4 x 4 knit at mu = 0.4 (a course pulled out by
-0.2 mm, ``tests/test_quasistatic.py``) ramps at 0.01, 0.02 and 0.04 m/s and alpha 1e4 or 2e4 /s
+0.2 mm, ``tests/engine/test_quasistatic.py``) ramps at 0.01, 0.02 and 0.04 m/s and alpha 1e4 or 2e4 /s
 give one pull to 1e-4; jumps of 20 um give 15 % less, of 2.5 um 2 % less (docs/quasistatic.md).
 """
 

@@ -15,7 +15,7 @@ Quasi-static with friction. The bars move at ``bar_speed_m_s`` under a mass-prop
 (:meth:`knitlad.engine.simulation.Simulation.ramp_held`, ``knitlad/engine/quasistatic.py``); a hold settles to a stated
 force residual. Readings while moving carry the damping's bias alpha M V and the knit's inertia; the
 answer is rate-independent when halving the speed changes it less than its own error
-(``tests/test_cycling.py``, docs/quasistatic.md). The experiments' "gentle stroking" at each hold has no
+(``tests/experiments/test_cycling.py``, docs/quasistatic.md). The experiments' "gentle stroking" at each hold has no
 counterpart here: a hold is a settle with the friction history as the loading left it.
 """
 

@@ -77,7 +77,7 @@ def test_outputs_name_the_commit_of_the_checkout_they_came_from():
     from knitlad import __version__
     from knitlad.io.provenance import code_commit, code_identity
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     if not (root / ".git").exists():
         pytest.skip("not a git checkout")
     head = subprocess.run(["git", "-C", str(root), "rev-parse", "--short=12", "HEAD"], capture_output=True,

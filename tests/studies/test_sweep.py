@@ -20,7 +20,7 @@ from knitlad.io.summary import TIMING_COLUMNS, read_summary
 from knitlad.studies.runner import run_sweep
 from knitlad.studies.sweep import Job, SweepConfig, SweepError, expand, job_id, load_sweep
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 KNITLAD = [sys.executable, "-m", "knitlad.cli"]
 TINY = {"n_x": 6, "n_y": 8, "preset": "fast", "resolution": 16, "max_time_ms": 3, "arrest_ms": 1}
 
