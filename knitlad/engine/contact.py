@@ -128,6 +128,14 @@ class ContactModel:
         return ContactModel(stiffness=force_N / (overlap_fraction * diameter_m), **kwargs)
 
     @staticmethod
+    def of_settings(settings, **kwargs) -> "ContactModel":
+        """The contact of an experiment's settings (:meth:`for_knit`): any object naming ``material``,
+        ``contact_force_f0``, ``overlap_fraction`` and, if it has one, ``sagitta_radius_d`` (the laddering's,
+        the stitch's and the single loops' settings); ``kwargs`` as :meth:`for_knit`'s (``mu``, dashpots)."""
+        return ContactModel.for_knit(settings.material, settings.contact_force_f0, settings.overlap_fraction,
+                                     getattr(settings, "sagitta_radius_d", 0.0), **kwargs)
+
+    @staticmethod
     def for_knit(material, contact_force_f0: float = 20.0, overlap_fraction: float = 0.05,
                  sagitta_radius_d: float = 0.0, **kwargs) -> "ContactModel":
         """The knit scenes' contact: a contact carrying ``contact_force_f0`` f0 overlaps by ``overlap_fraction`` d;

@@ -72,6 +72,12 @@ def numba_threads(n: int):
         numba.set_num_threads(before)
 
 
+def small_scene_threads():
+    """The thread budget of a small scene (a stitch, a single loop, rows of loops: a few thousand nodes at
+    most): one Numba thread, for the reason :func:`numba_threads` gives. Every reduced model runs under it."""
+    return numba_threads(1)
+
+
 def idle_cpu_ticks(cpus: tuple[int, ...]) -> tuple[int, int] | None:
     """(idle, total) clock ticks so far of the processors ``cpus``, from /proc/stat (Linux); None elsewhere."""
     try:

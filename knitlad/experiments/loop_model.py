@@ -36,7 +36,7 @@ from knitlad.fabric.observers import LetGo, TimeLimit
 from knitlad.engine.runloop import run_until
 from knitlad.fabric.scenes.jersey import Jersey
 from knitlad.fabric.scenes.loop import LoopScene, build_single_loop
-from knitlad.engine.simulation import Simulation, numba_threads
+from knitlad.engine.simulation import Simulation, small_scene_threads
 from knitlad.engine.timestep import DEFAULT_SAFETY
 from knitlad.fabric.topology import piercings
 from knitlad.engine.units import NYLON, Material
@@ -127,7 +127,7 @@ class LoopRun:
         geometry = Jersey(n_x=1, n_y=1, l_x=settings.lx_over_l0 * l0, l_y=settings.ly_over_l0 * l0,
                           nodes_per_stitch=settings.nodes_per_stitch, material=m, edge="tail")
         self.scene: LoopScene = build_single_loop(geometry, settings.fx * m.f0)
-        contact = ContactModel.for_knit(m, settings.contact_force_f0, settings.overlap_fraction, mu=0.0)
+        contact = ContactModel.of_settings(settings, mu=0.0)
         self.sim = Simulation(self.scene.rods, contact=contact, safety=settings.dt_safety)
         self.result = LoopResult(settings, nodes=self.scene.rods.model.n_nodes)
 
@@ -183,7 +183,7 @@ class LoopRun:
         res.wall_s["release"] = time.perf_counter() - t0
 
     def run(self) -> LoopResult:
-        with numba_threads(1):  # ~150 nodes: threads would only wait for each other
+        with small_scene_threads():
             self.relax()
             self.release()
         return self.result

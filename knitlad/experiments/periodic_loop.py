@@ -39,7 +39,7 @@ from knitlad.experiments.loop_model import LoopReading, LoopResult, check_tensio
 from knitlad.fabric.observers import LetGo, TimeLimit
 from knitlad.engine.runloop import run_until
 from knitlad.fabric.scenes.rows import PeriodicRows, build_periodic_rows
-from knitlad.engine.simulation import Simulation, numba_threads
+from knitlad.engine.simulation import Simulation, small_scene_threads
 from knitlad.experiments.stitch_model import StitchRun, StitchSettings, cell_energy
 from knitlad.fabric.stretching import force_control
 from knitlad.engine.timestep import DEFAULT_SAFETY
@@ -199,7 +199,7 @@ class PeriodicLoopRun:
                                         rest_length=self.cell.sim.model.rest_length[self.cell.cell.real_edges])
         if s.columns > 1:
             self.rows.absent.add(LOWER)  # a support: out of the energy
-        contact = ContactModel.for_knit(s.material, s.contact_force_f0, s.overlap_fraction, mu=0.0)
+        contact = ContactModel.of_settings(s, mu=0.0)
         self.sim = Simulation(self.rows.rods, contact=contact, safety=s.dt_safety)
         self.box = TensionBox(self.rows, self.sim, s.material, s.rows if s.columns == 1 else s.rows - 1)
         self.result.nodes = int(self.sim.model.yarn_start[s.rows])
@@ -289,7 +289,7 @@ class PeriodicLoopRun:
         res.wall_s["release"] = time.perf_counter() - t0
 
     def run(self) -> PeriodicLoopResult:
-        with numba_threads(1):  # a few thousand nodes at most
+        with small_scene_threads():
             self.build()
             self.relax()
             self.release()

@@ -56,13 +56,12 @@ from knitlad.fabric.observers import (
     Observer,
     OverlapGuard,
     TOP_ROWS_HELD,
-    StopRule,
     TensionRecorder,
     TimeLimit,
 )
 from knitlad.fabric.scenes.jersey import BUILD_LX, CourseTooWide, Jersey, KnitScene, build_jersey, widest_fitting_width
-from knitlad.engine.runloop import run_until
-from knitlad.engine.simulation import Simulation, numba_threads
+from knitlad.engine.runloop import StopRule, run_until
+from knitlad.engine.simulation import Simulation, small_scene_threads
 from knitlad.experiments.stitch_model import StitchRun, StitchSettings, zero_tension_lx
 from knitlad.engine.state import Rods, cut_edge, with_axial_stiffness, with_twist
 from knitlad.fabric.stretching import OutOfReach, force_control, relax_to_steady_tension, stretch_to
@@ -240,8 +239,7 @@ class StretchedKnit:
 def stretch_contact(s: StretchSettings, **changes) -> ContactModel:
     """The contact model of the stretch (mu = 0, the stretch's dashpots); ``changes`` for the dynamics' (their mu)."""
     kw = dict(mu=0.0, damping_ratio=STRETCH_CONTACT_DAMPING, tangential_damping_ratio=STRETCH_CONTACT_DAMPING)
-    return ContactModel.for_knit(s.material, s.contact_force_f0, s.overlap_fraction,
-                                 sagitta_radius_d=s.sagitta_radius_d, **{**kw, **changes})
+    return ContactModel.of_settings(s, **{**kw, **changes})
 
 
 class KnitBox:
@@ -420,7 +418,7 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
     """
     s = box.s
     report = report or (lambda fraction: None)
-    with numba_threads(1):  # the stitch has a few hundred nodes
+    with small_scene_threads():
         # from the knit's build width: tall cells are built narrower (build_width)
         cell = stitch_of(s, box.build_lx)
         stretch_to(cell, cell.lx, s.ly_over_l0, s.stretch_increment, min_increments=0)
@@ -443,7 +441,7 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
     for k in range(corrections):
         if abs(fx - target) <= s.fx_tolerance * target or fx <= 0 or cell_fx <= 0:
             break
-        with numba_threads(1):
+        with small_scene_threads():
             force_control(cell, target * cell_fx / fx, 0.25 * s.fx_tolerance, s.stretch_increment, MIN_BUILD_LX)
             cell_fx = settled_tension(cell)
         check_stitch_held(box, cell)

@@ -36,7 +36,7 @@ from knitlad.fabric.natural_curvature import remember_shape
 from knitlad.fabric.presets import STITCH_PRESETS
 from knitlad.fabric.scenes.jersey import BUILD_LX, Jersey, widest_fitting_width
 from knitlad.fabric.scenes.stitch import PeriodicStitch, build_periodic_stitch
-from knitlad.engine.simulation import Simulation, numba_threads
+from knitlad.engine.simulation import Simulation, small_scene_threads
 from knitlad.fabric.stretching import stretch_to
 from knitlad.engine.units import NYLON, Material
 
@@ -85,8 +85,7 @@ class StitchRun:
         self.ly = min(settings.ly_over_l0, BUILD_LY)
         self.lx, geometry = self._build_geometry()
         self.cell: PeriodicStitch = build_periodic_stitch(geometry)
-        contact = ContactModel.for_knit(m, settings.contact_force_f0, settings.overlap_fraction,
-                                        sagitta_radius_d=settings.sagitta_radius_d, mu=0.0)
+        contact = ContactModel.of_settings(settings, mu=0.0)
         self.sim = Simulation(self.cell.rods, contact=contact)
         self.result = StitchResult(settings)
 
@@ -144,7 +143,7 @@ class StitchRun:
 
     def run(self) -> StitchResult:
         t0 = time.perf_counter()
-        with numba_threads(1):  # a few hundred nodes
+        with small_scene_threads():
             self.stretch()
             self.result.fx, self.result.fy = self.tensions()
             self.sim.compute_forces()

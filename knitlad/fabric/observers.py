@@ -23,10 +23,6 @@ class Observer(Protocol):
     def observe(self, t: float, run, undone: np.ndarray) -> None: ...
 
 
-class StopRule(Protocol):
-    def check(self, t: float, undone: np.ndarray) -> str | None: ...
-
-
 class Interpenetration(RuntimeError):
     """Two yarns overlap by more than MAX_OVERLAP_OVER_D: the contact is too soft for the forces it carries."""
 
