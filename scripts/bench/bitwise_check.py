@@ -5,7 +5,7 @@
     python scripts/bench/bitwise_check.py --twist --save runs/bitwise_twist.npz   # the yarns carrying twist
     python scripts/bench/bitwise_check.py --natural-curvature 0.1 --save runs/bitwise_k.npz   # framed DER
 
-The knit is stretched to f_x^ini = 8 by force control (preset fast: 24 nodes per stitch), cut, and
+The knit is stretched to f_x^ini = 8 by force control (preset fast by default: 24 nodes per stitch), cut, and
 stepped 3,000 times. A change that only moves code must leave every position and
 velocity identical (same machine, same Numba version and threads). It imports only knitlad's public
 names, so that a reference saved by one layout of the package compares with another.
@@ -21,8 +21,8 @@ import numpy as np
 from knitlad import CutConfig, cut, stretch
 
 
-def ladder_after_3000_steps(twist: bool, natural_curvature: float = 0.0) -> dict:
-    cfg = CutConfig(n_x=16, n_y=16, fx=8.0, twist=twist or natural_curvature > 0, preset="fast",  # 24 nodes per stitch
+def ladder_after_3000_steps(twist: bool, natural_curvature: float = 0.0, preset: str = "fast") -> dict:
+    cfg = CutConfig(n_x=16, n_y=16, fx=8.0, twist=twist or natural_curvature > 0, preset=preset,
                     natural_curvature=natural_curvature)
     knit = stretch(cfg.stretch_settings())
     run = cut(knit, cfg.dynamics_settings())
@@ -39,9 +39,11 @@ def main() -> None:
     p.add_argument("--twist", action="store_true", help="the yarns carry twist (frame-free, straight at rest)")
     p.add_argument("--natural-curvature", type=float, default=0.0,
                    help="the yarn's memory K (> 0: twist on, framed DER)")
+    p.add_argument("--preset", default="fast", choices=["fast", "default", "accurate"],
+                   help="accuracy preset (fast: 24 nodes per stitch, explicit axial springs; default: 48, implicit)")
     args = p.parse_args()
     t = time.perf_counter()
-    now = ladder_after_3000_steps(args.twist, args.natural_curvature)
+    now = ladder_after_3000_steps(args.twist, args.natural_curvature, args.preset)
     if args.save:
         np.savez(args.save, **now)
         print(f"saved {args.save} ({time.perf_counter() - t:.0f} s)")

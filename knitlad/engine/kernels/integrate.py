@@ -287,6 +287,37 @@ def drift_nodes(held, v_prescribed, v, x, dt):
 
 
 @njit(**PARALLEL_OPTS)
+def kick_drift_nodes(held, mass, force, v_prescribed, v, x, dt):
+    """One step's closing kick and the next one's drift in one pass (:func:`kick_nodes` with half_dt = dt, then
+    :func:`drift_nodes`): the same operations on each node in the same order, so the same bits, with one
+    parallel region and one sweep of the node arrays fewer per step."""
+    for i in prange(v.shape[0]):
+        if held[i]:
+            v[i, 0] = v_prescribed[i, 0]
+            v[i, 1] = v_prescribed[i, 1]
+            v[i, 2] = v_prescribed[i, 2]
+        else:
+            step = dt / mass[i]
+            v[i, 0] += force[i, 0] * step
+            v[i, 1] += force[i, 1] * step
+            v[i, 2] += force[i, 2] * step
+        x[i, 0] += dt * v[i, 0]
+        x[i, 1] += dt * v[i, 1]
+        x[i, 2] += dt * v[i, 2]
+
+
+@njit(**PARALLEL_OPTS)
+def kick_drift_edges(theta_held, twist_inertia, torque, omega, theta, dt):
+    """:func:`kick_edges` with half_dt = dt, then :func:`drift_edges`, in one pass (as :func:`kick_drift_nodes`)."""
+    for j in prange(omega.shape[0]):
+        if theta_held[j]:
+            omega[j] = 0.0
+        else:
+            omega[j] += dt * torque[j] / twist_inertia[j]
+        theta[j] += dt * omega[j]
+
+
+@njit(**PARALLEL_OPTS)
 def kick_edges(theta_held, twist_inertia, torque, omega, half_dt):
     """omega += half_dt torque / I on every edge free to twist."""
     for j in prange(omega.shape[0]):
@@ -349,10 +380,10 @@ def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, drag, axial=AXIAL_EXPL
     which the fused half-kicks give (two halves of dt around a call boundary add up to it). With
     ``dashpots`` DASHPOTS_PREDICTED each step predicts ``w.v_damp``, ``w.omega_damp`` before its forces.
     """
-    # the closing half-kick of one step and the opening one of the next are fused
+    # the closing half-kick of one step and the opening one of the next are fused, and with the next drift
     half_kick(m, s, w, 0.5 * dt, twist)
+    _drift(m, s, dt, twist)
     for step in range(n_steps):
-        _drift(m, s, dt, twist)
         if obstacles is not None:
             advance_obstacles(obstacles, dt)
         if dashpots == DASHPOTS_PREDICTED:  # w.force still holds the last step's forces
@@ -362,7 +393,12 @@ def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, drag, axial=AXIAL_EXPL
         if not compute_forces(m, s, w, c, twist, contact, drag, dt, axial, dashpots, obstacles):
             complete_frames(m, s, w, twist)
             return step
-        half_kick(m, s, w, dt if step < n_steps - 1 else 0.5 * dt, twist)
+        if step < n_steps - 1:
+            kick_drift_nodes(m.held, m.mass, w.force, m.v_prescribed, s.v, s.x, dt)
+            if twist:
+                kick_drift_edges(m.theta_held, m.twist_inertia, w.torque, s.omega, s.theta, dt)
+        else:
+            half_kick(m, s, w, 0.5 * dt, twist)
     complete_frames(m, s, w, twist)
     return n_steps
 
