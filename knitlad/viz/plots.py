@@ -288,12 +288,14 @@ def cycle_curve_plot(readings, n_x: int, stitch_length_m: float, fx_thr: float |
 
 def damage_prediction_plot(df, path: str | Path) -> Path:
     """Paper Fig. 4c: the damage of protocol B's cut, n_lad/n_y, against Eq. 1's delta l/(l0 - l_x), one
-    series per l_y/l0; open symbols where a ladder reached an edge course (the knit too small for it)."""
+    series per l_y/l0 (or per ``series`` label, where the table has that column: sweeps compared); open
+    symbols where a ladder reached an edge course (the knit too small for it)."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(4.5, 3.4))
-    for ly, g in df.groupby("ly") if "ly" in df else [(None, df)]:
-        line, = ax.plot(g["predicted_damage"], g["cut_n_lad_over_ny"], "o", ms=5,
-                        label=f"{symbol('ly')} = {ly}" if ly is not None else "knitlad")
+    by = "series" if "series" in df else "ly" if "ly" in df else None
+    for key, g in df.groupby(by, sort=False) if by else [(None, df)]:
+        label = "knitlad" if key is None else key if by == "series" else f"{symbol('ly')} = {key}"
+        line, = ax.plot(g["predicted_damage"], g["cut_n_lad_over_ny"], "o", ms=5, label=label)
         edge = g[g["cut_reached_edge"].astype(bool)] if "cut_reached_edge" in g else g.iloc[:0]
         ax.plot(edge["predicted_damage"], edge["cut_n_lad_over_ny"], "o", ms=9, mfc="none", color=line.get_color())
     top = float(np.nanmax([df["predicted_damage"].max(), df["cut_n_lad_over_ny"].max(), 1.0]))

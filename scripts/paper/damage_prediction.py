@@ -2,6 +2,8 @@
 
     python scripts/paper/damage_prediction.py runs/fig4c [--csv docs/reference/fig4c_summary.csv]
                                              [--png docs/fig4c.png] [--curve docs/fig4a.png [--curve-at 0.25 0.38]]
+    python scripts/paper/damage_prediction.py runs/fig4c:"fast, 16 wide" runs/fig4c_default:"default, 16 wide" \
+                                             --png docs/fig4c_compared.png      # sweeps compared, one series each
 
 Reads every finished job of a ``cycle`` sweep (``knitlad sweep configs/fig4c.yaml``): its readings
 (``cycle/readings``) and summary. delta l is read on the uncut twin's last unloading twice: at the
@@ -54,19 +56,25 @@ def job_rows(folder: Path) -> list[dict]:
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("folder", type=Path)
+    p.add_argument("folders", nargs="+", help="a cycle sweep's output folder, or FOLDER:LABEL for sweeps compared")
     p.add_argument("--csv", type=Path)
     p.add_argument("--png", type=Path)
     p.add_argument("--curve", type=Path, help="Fig. 4a of one job (--curve-at)")
     p.add_argument("--curve-at", type=float, nargs=2, default=(0.25, 0.38), metavar=("LY", "LX_MAX"),
                    help="the job of Fig. 4a: its l_y/l0 and Delta x_max (box l_x/l0), at the fastest bars")
     args = p.parse_args()
-    rows = job_rows(args.folder)
-    if not rows:
-        raise SystemExit(f"{args.folder}: no finished cycle job")
+    rows = []
+    for spec in args.folders:
+        folder, _, label = spec.partition(":")
+        found = job_rows(Path(folder))
+        if not found:
+            raise SystemExit(f"{folder}: no finished cycle job")
+        rows += [{**r, "series": label or Path(folder).name} for r in found]
     table = pd.DataFrame([{k: v for k, v in r.items() if k != "readings"} for r in rows])
-    table = table.sort_values(["ly", "lx_max", "bar_speed"])
-    shown = ["ly", "lx_max", "bar_speed", "fx_ini", "lx_over_l0", "delta_l_over_l0", "predicted", "fx_fin_crossed",
+    table = table.sort_values(["series", "ly", "lx_max", "bar_speed"], kind="stable")
+    if len(args.folders) == 1:
+        table = table.drop(columns=["series"])
+    shown = (["series"] if "series" in table else []) + ["ly", "lx_max", "bar_speed", "fx_ini", "lx_over_l0", "delta_l_over_l0", "predicted", "fx_fin_crossed",
              "predicted_own", "n_lad_over_ny", "ladders_up", "ladders_down", "reached_edge", "wall_min"]
     print("| " + " | ".join(shown) + " |\n|" + "---|" * len(shown))
     for _, row in table[shown].iterrows():
@@ -76,7 +84,8 @@ def main() -> None:
     if args.png:
         plot = table.rename(columns={"predicted": "predicted_damage", "n_lad_over_ny": "cut_n_lad_over_ny",
                                      "reached_edge": "cut_reached_edge"})
-        damage_prediction_plot(plot[plot["bar_speed"] == plot["bar_speed"].max()], args.png)
+        fastest = plot.groupby("series" if "series" in plot else "ly")["bar_speed"].transform("max")
+        damage_prediction_plot(plot[plot["bar_speed"] == fastest], args.png)
     if args.curve:
         ly, lx_max = args.curve_at
         top = max((r for r in rows if r["ly"] == ly and r["lx_max"] == lx_max), key=lambda r: r["bar_speed"])
