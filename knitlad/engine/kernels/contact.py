@@ -535,13 +535,20 @@ def _pair_contact_forces_in_blocks(
 
 @njit(**PARALLEL_OPTS)
 def edge_displacements(x, x_ref, edge_a, edge_b, out):
-    """Largest displacement of each edge's two ends since ``x_ref`` (the last rebuild) into ``out``."""
+    """Largest displacement of each edge's two ends since ``x_ref`` (the last rebuild) into ``out``; returns
+    the largest over the edges, which is :func:`max_displacement` over the nodes where every node ends an
+    edge (sqrt is monotonic and correctly rounded: the same bits), so one pass serves the rebuild's test
+    and the narrow phase's skipping."""
+    largest = 0.0
     for k in prange(edge_a.shape[0]):
         a = edge_a[k]
         b = edge_b[k]
         da = (x[a, 0] - x_ref[a, 0]) ** 2 + (x[a, 1] - x_ref[a, 1]) ** 2 + (x[a, 2] - x_ref[a, 2]) ** 2
         db = (x[b, 0] - x_ref[b, 0]) ** 2 + (x[b, 1] - x_ref[b, 1]) ** 2 + (x[b, 2] - x_ref[b, 2]) ** 2
-        out[k] = math.sqrt(max(da, db))
+        d2 = max(da, db)
+        out[k] = math.sqrt(d2)
+        largest = max(largest, d2)
+    return math.sqrt(largest)
 
 
 @njit(**NUMBA_OPTS)
@@ -549,7 +556,8 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
                    predicted):
     """Add the contact forces of the candidate pairs of ``c`` (:class:`knitlad.engine.contact.Contacts`) to F
     (and, with ``spin``, the friction couples to ``torque``); advance the slip history. ``predicted``:
-    the dashpots act on ``v_damp``, ``omega_damp`` (:func:`pair_contact_forces`).
+    the dashpots act on ``v_damp``, ``omega_damp`` (:func:`pair_contact_forces`). Call
+    :func:`refresh_contacts` at these positions first: it fills ``c.edge_moved``, which this reads.
 
     The damping parameters are damping ratios of the contact springs (gamma =
     2 zeta sqrt(k m_eff)). ``c.stats`` receives, at slots TOUCHING, MAX_OVERLAP,
@@ -565,7 +573,7 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
     # most candidate pairs stay apart between two rebuilds: after the first evaluation of a list, a pair
     # its stored gap rules out skips the distance test (counted_overlaps, SKIP_BY_GAPS)
     mode = SKIP_BY_GAPS if c.status[GAPS_KNOWN] == 1 else ALL_PAIRS_RECORD_GAPS
-    edge_displacements(x, c.x_ref, edge_a, edge_b, c.edge_moved)
+    # c.edge_moved: filled by refresh_contacts for these positions (always called just before)
     if n_blocks > 1:
         _pair_contact_forces_in_blocks(
             n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
@@ -656,7 +664,8 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
     kept, ``c.status[PAIRS_NEEDED]`` holds the pairs needed, and the caller must grow the buffer.
     """
     skin = c.params.skin
-    if c.status[STALE] == 0 and max_displacement(x, c.x_ref) <= 0.5 * skin:
+    moved = edge_displacements(x, c.x_ref, edge_a, edge_b, c.edge_moved)
+    if c.status[STALE] == 0 and moved <= 0.5 * skin:
         return True
     n_old = c.n_pairs[0]
     old_pairs = c.pairs[:n_old].copy()
@@ -688,6 +697,7 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
     carry_history(old_keys, old_slip, n_old, c.keys, c.slip, n)
     c.n_pairs[0] = n
     c.x_ref[:] = x
+    c.edge_moved[:] = 0.0  # |x - x_ref| = 0 exactly: what edge_displacements would give
     c.status[STALE] = 0
     c.status[GAPS_KNOWN] = 0
     return True
