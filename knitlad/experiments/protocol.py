@@ -479,7 +479,7 @@ def unloaded_width(ly_over_l0: float, nodes_per_stitch: int, material: Material,
 
 def remember_unloaded_shape(cell: StitchRun, s: StretchSettings) -> None:
     """The stitch is taken to the f_x = 0 curve (the unloaded fabric), relaxed, and remembers that shape
-    with mean (kappa_bar/kappa0)^2 = K (:mod:`knitlad.fabric.natural_curvature`); relaxed again, twist on."""
+    with mean (kappa_bar/kappa0)^2 = K (:mod:`knitlad.fabric.shape_memory`); relaxed again, twist on."""
     stretch_to(cell, unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material, s.sagitta_radius_d), s.ly_over_l0,
                s.stretch_increment, min_increments=0)
     cell.settle()

@@ -32,7 +32,7 @@ from knitlad.engine.contact import ContactModel
 from knitlad.engine.kernels.contact import contact_energy
 from knitlad.engine.kernels.elastic import bending_energy, edge_vectors, framed_bending_twisting_energy, stretching_energy
 from knitlad.engine.kernels.frames import material_frames, transport_reference_frames, update_reference_twist
-from knitlad.fabric.natural_curvature import remember_shape
+from knitlad.fabric.shape_memory import remember_shape
 from knitlad.fabric.presets import STITCH_PRESETS
 from knitlad.fabric.scenes.jersey import BUILD_LX, Jersey, widest_fitting_width
 from knitlad.fabric.scenes.stitch import PeriodicStitch, build_periodic_stitch
@@ -120,7 +120,7 @@ class StitchRun:
         """From here on the yarn carries twist and remembers its current shape: its natural curvature is
         the fraction of the current curvature whose mean (kappa_bar/kappa0)^2 is ``K``, concentrated at the
         most bent hinges to a max/mean of ``peak_ratio`` if given
-        (:func:`knitlad.fabric.natural_curvature.remember_shape`)."""
+        (:func:`knitlad.fabric.shape_memory.remember_shape`)."""
         rods = remember_shape(self.sim.rods, K, self.cell.real_hinges, self.s.material, peak_ratio)
         self.cell.rods = rods
         self.sim = Simulation(rods, contact=self.sim.contact_model)

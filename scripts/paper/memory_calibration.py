@@ -8,7 +8,7 @@ stitches. Here, for each K (knitlad's mean of (kappa_bar/kappa0)^2 over the yarn
 a 4 x 4 knit with that memory is stretched to f_x^ini 4, a middle course is freed of its holds and of
 contact and relaxed (FIRE, twist on), and its relaxed shape is read three ways: the 3-D mean of
 (kappa/kappa0)^2 (which should give K back), and the outline laid flat on its best plane
-(knitlad.fabric.natural_curvature.flattened_curvature): mean and maximum of (kappa/kappa0)^2, the maximum as
+(knitlad.fabric.shape_memory.flattened_curvature): mean and maximum of (kappa/kappa0)^2, the maximum as
 the paper's "at most over four stitches" (the course spans four). Prints a markdown table.
 """
 
@@ -21,7 +21,7 @@ import pandas as pd
 
 import knitlad as kl
 from knitlad.experiments.config import CutConfig
-from knitlad.fabric.natural_curvature import flattened_curvature, positional_curvature
+from knitlad.fabric.shape_memory import flattened_curvature, positional_curvature
 from knitlad.experiments.protocol import stretch
 from knitlad.engine.simulation import Simulation
 

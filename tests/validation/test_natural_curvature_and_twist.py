@@ -91,7 +91,7 @@ def test_a_course_freed_of_the_knit_relaxes_to_the_natural_curvature_it_was_give
     to a shape whose mean (kappa/kappa0)^2, read from the positions alone (|kb| = 2 tan(phi/2)
     over the Voronoi length), is K within 2 %. Stretched, the same course is bent more (1.86)."""
     from knitlad.experiments.config import CutConfig
-    from knitlad.fabric.natural_curvature import positional_curvature
+    from knitlad.fabric.shape_memory import positional_curvature
     from knitlad.experiments.protocol import stretch
     from knitlad.engine.simulation import Simulation
 
@@ -118,7 +118,7 @@ def test_a_tilted_planar_arc_laid_flat_keeps_its_curvature_and_an_ellipse_its_ve
     """flattened_curvature: a circle of radius R drawn in a tilted plane reads 1/R at every vertex (its
     own plane is the best fit); an ellipse (a, b) reads a/b^2 at the ends of its major axis, b/a^2 at
     the minor, to the discretisation's second order."""
-    from knitlad.fabric.natural_curvature import flattened_curvature
+    from knitlad.fabric.shape_memory import flattened_curvature
 
     R = 2e-3
     arc = circle(R, 200, arc=1.5 * math.pi, closed=False)
@@ -138,7 +138,7 @@ def test_a_remembered_shape_has_the_mean_asked_and_a_concentrated_one_the_peak_a
     (kappa_bar/kappa0)^2 is K; the scaled copy keeps the shape's own max/mean; the memory concentrated at
     the most bent hinges reaches the max/mean asked, the paper's 3.5, still with mean K, and its largest
     natural curvature sits where the arc is most bent."""
-    from knitlad.fabric.natural_curvature import mean_squared_curvature, remember_shape, voronoi_lengths
+    from knitlad.fabric.shape_memory import mean_squared_curvature, remember_shape, voronoi_lengths
 
     phi = np.linspace(0.1, 2.9, 120)
     scene = kl.Scene(kl.NYLON)

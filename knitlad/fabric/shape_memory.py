@@ -1,4 +1,4 @@
-"""The natural curvature of a knitted thread: the yarn remembers the shape it was knitted in.
+"""Shape memory: the natural curvature a knitted thread keeps from the shape it was knitted in.
 
 The paper (appendix "Natural curvature") measures on threads pulled out of the fabric
 (kbar/kappa0)^2 of about 1 on average and 3.5 at most over four stitches, and proposes
