@@ -86,11 +86,12 @@ def test_every_public_name_and_signature_is_recorded():
 
 
 def test_the_versions_agree():
-    """The package, pyproject.toml and the newest CHANGELOG.md entry name one version."""
+    """The package, pyproject.toml, the newest CHANGELOG.md entry and CITATION.cff name one version."""
     pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
     newest = re.search(r"^## (\d+\.\d+\.\d+) \(\d{4}-\d{2}-\d{2}\)", CHANGELOG.read_text(), re.M)
     assert newest, "CHANGELOG.md has no '## X.Y.Z (YYYY-MM-DD)' entry"
-    assert knitlad.__version__ == pyproject == newest.group(1)
+    cited = re.search(r"^version: (\S+)$", (ROOT / "CITATION.cff").read_text(), re.M)
+    assert knitlad.__version__ == pyproject == newest.group(1) == cited.group(1)
 
 
 def test_deprecated_names_still_work_and_warn():
