@@ -340,15 +340,6 @@ def carry_history(old_keys, old_slip, n_old, new_keys, new_slip, n_new):
             new_slip[q, 2] = 0.0
 
 
-@njit(**PARALLEL_OPTS)
-def max_displacement(x, x_ref):
-    """Largest |x - x_ref| over the nodes."""
-    m = 0.0
-    for i in prange(x.shape[0]):
-        m = max(m, (x[i, 0] - x_ref[i, 0]) ** 2 + (x[i, 1] - x_ref[i, 1]) ** 2 + (x[i, 2] - x_ref[i, 2]) ** 2)
-    return math.sqrt(m)
-
-
 # below this many candidate pairs per thread, starting the threads costs more than they save
 MIN_PAIRS_PER_THREAD = 1000
 
@@ -536,7 +527,7 @@ def _pair_contact_forces_in_blocks(
 @njit(**PARALLEL_OPTS)
 def edge_displacements(x, x_ref, edge_a, edge_b, out):
     """Largest displacement of each edge's two ends since ``x_ref`` (the last rebuild) into ``out``; returns
-    the largest over the edges, which is :func:`max_displacement` over the nodes where every node ends an
+    the largest over the edges, which is the largest |x - x_ref| over the nodes where every node ends an
     edge (sqrt is monotonic and correctly rounded: the same bits), so one pass serves the rebuild's test
     and the narrow phase's skipping."""
     largest = 0.0
