@@ -133,8 +133,9 @@ class CutConfig(_WithPreset):
         "then corrected (clamped ends; tails, and yarns too thick for the stitch, d/l0 = 1/20, affine), or affine increments of the built knit [-]"))
     dt_safety: float = Field(0.35, gt=0, le=1, description=(
         "time step of the laddering dynamics, fraction of the stability limit of the yarns' sliding (rods and "
-        "contact springs; with twist the spin modes are only held stable) [-]; 0.35 from a paired time-step "
-        "study (docs/accuracy.md)"))
+        "contact springs; with twist the spin modes are only held stable) [-]; default: the preset's, from "
+        "paired time-step studies (0.35 at fast and default: docs/accuracy.md; 0.7 at accurate, whose limit "
+        "is shorter: docs/performance.md)"))
 
     axial_stiffness_factor: float = Field(1.0, gt=0, le=1, description=(
         "stretching stiffness of the laddering dynamics over the yarn's EA [-]; below 1 the axial waves "

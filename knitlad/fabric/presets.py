@@ -11,12 +11,16 @@ from __future__ import annotations
 
 SAGITTA_RADIUS_D = 11.0  # the stitch's contacts' radius of curvature for the sagitta correction, in d
 
+# dt_safety: the laddering's step over its stability limit, chosen by paired runs at each resolution: 0.35 at
+# 24 and 48 nodes per stitch, 0.7 at 96, where the step 0.7 x the (shorter) limit gives the ladder of
+# 0.175 x it (docs/performance.md, "The accurate preset's step")
 LADDER_PRESETS = {
-    "fast": {"resolution": 24, "sagitta_radius": 0.0, "implicit_axial": False},
-    "default": {"resolution": 48, "sagitta_radius": SAGITTA_RADIUS_D, "implicit_axial": True},
-    "accurate": {"resolution": 96, "sagitta_radius": SAGITTA_RADIUS_D, "implicit_axial": True},
+    "fast": {"resolution": 24, "sagitta_radius": 0.0, "implicit_axial": False, "dt_safety": 0.35},
+    "default": {"resolution": 48, "sagitta_radius": SAGITTA_RADIUS_D, "implicit_axial": True, "dt_safety": 0.35},
+    "accurate": {"resolution": 96, "sagitta_radius": SAGITTA_RADIUS_D, "implicit_axial": True, "dt_safety": 0.7},
 }
-STITCH_PRESETS = {name: {k: v for k, v in p.items() if k != "implicit_axial"} for name, p in LADDER_PRESETS.items()}
+DYNAMICS_ONLY = ("implicit_axial", "dt_safety")  # settings of the laddering's dynamics, not of a stitch
+STITCH_PRESETS = {name: {k: v for k, v in p.items() if k not in DYNAMICS_ONLY} for name, p in LADDER_PRESETS.items()}
 LOOP_PRESETS = {"fast": {"resolution": 24}, "default": {"resolution": 36}, "accurate": {"resolution": 48}}
 
 # each preset's measured error, for the help texts (the tables: docs/accuracy.md)
@@ -26,5 +30,5 @@ PRESET_HELP = (
     "narrow at a given tension, v_lad -9 to -14 %); default (48, the contact's sagitta correction, implicit "
     "axial springs: tension -3 to +6 %, width within 0.001 l0, v_lad -12 to -18 % at low tension, +7 % at "
     "high, about 2 x fast's cost); accurate (96, the same: tension -3 to 0 %, width within 0.0003 l0, v_lad "
-    "-4 to -8 % at low tension, +2 % at high, 10-14 x fast's cost) [-]"
+    "-4 to -8 % at low tension, +2 % at high, stepping at 0.7 x its stability limit: about 7 x fast's cost) [-]"
 )

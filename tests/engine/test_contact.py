@@ -418,3 +418,36 @@ def test_the_edges_largest_displacement_is_the_nodes_to_the_bit():
     assert largest == np.sqrt(np.max(d[:, 0] ** 2 + d[:, 1] ** 2 + d[:, 2] ** 2)) == out.max()
     ends = np.unique(np.concatenate([m.edge_a, m.edge_b]))
     assert ends.size == m.n_nodes  # every node ends an edge: the premise
+
+
+def test_a_pair_that_parts_while_skipped_loses_its_tangential_spring():
+    """A pair that touched at the last evaluation and that the stored gaps rule out now (it is not tested)
+    must have its tangential spring cleared, as a pair found apart does, or it would come back with a stale
+    friction force."""
+    from knitlad.engine import units
+    from knitlad.engine.kernels.contact import GAPS_KNOWN, OVERLAP, contact_forces, refresh_contacts
+
+    rods = plain_weave(4, spacing=4 * D, nodes_per_spacing=6, amplitude=0.55 * D).build()  # axes 1.1 d apart
+    m, x0 = rods.model, rods.state.x.copy()
+    c = make_contacts(rods, ContactModel(stiffness=1e3, mu=0.4))
+    force, torque, omega = np.zeros_like(x0), np.zeros(m.edge_a.shape[0]), np.zeros(m.edge_a.shape[0])
+    first = slice(m.yarn_start[0], m.yarn_start[1])
+
+    def evaluate(x, v):
+        assert refresh_contacts(x, m.edge_a, m.edge_b, m.edge_shift, c)
+        force[:] = 0.0
+        contact_forces(x, v, omega, 0, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, 1e-5, force, torque, v, omega,
+                       False)
+        n = int(c.n_pairs[0])
+        return c.pair_results[:n, OVERLAP].copy(), np.abs(c.slip[:n]).sum(axis=1)
+
+    still = np.zeros_like(x0)
+    overlap, _ = evaluate(x0, still)  # the list's first evaluation: every pair apart, gaps stored
+    assert c.status[GAPS_KNOWN] == 1 and not np.any(overlap > 0)
+    pressed, sliding = x0.copy(), still.copy()
+    pressed[first, 2] += 0.2 * D / units.LENGTH  # the first yarn pressed into half of its crossings (no rebuild)
+    sliding[first, 0] = 0.1 / units.VELOCITY  # and drawn along them: the springs stretch
+    overlap, spring = evaluate(pressed, sliding)
+    assert np.any(overlap > 0) and np.all(spring[overlap > 0] > 0)
+    overlap, spring = evaluate(x0, still)  # back where the gaps were stored: every pair skipped
+    assert not np.any(overlap > 0) and not np.any(spring > 0)

@@ -51,3 +51,12 @@ def test_replacing_the_preset_brings_its_settings_and_keeps_those_given():
     assert fast.resolution == LADDER_PRESETS["fast"]["resolution"] != cfg.resolution
     assert fast.dt_safety == 0.2
     assert fast.replace(preset="default").model_dump() == cfg.model_dump()
+
+
+def test_each_preset_brings_its_time_step_factor_and_a_given_one_stays():
+    """The accurate preset steps at 0.7 x its (shorter) stability limit, the others at 0.35 (paired studies:
+    docs/accuracy.md, docs/performance.md); a factor given by the user is kept through a change of preset."""
+    assert [CutConfig(fx=4.0, preset=p).dt_safety for p in ("fast", "default", "accurate")] == [0.35, 0.35, 0.7]
+    assert CutConfig(fx=4.0, preset="accurate").replace(preset="default").dt_safety == 0.35
+    assert CutConfig(fx=4.0, preset="accurate", dt_safety=0.35).dt_safety == 0.35
+    assert CutConfig(fx=4.0, dt_safety=0.2).replace(preset="accurate").dt_safety == 0.2
