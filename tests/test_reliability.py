@@ -200,7 +200,8 @@ def test_a_job_that_outlives_its_sweep_writes_nothing(tmp_path):
 
 @pytest.mark.parametrize("cfg, where", [
     ({"fixed": {**{k: v for k, v in TINY.items() if k != "preset"}, "lx": 0.4, "resolution": 16, "sagitta_radius": 0,
-                "implicit_axial": False}, "sweep": {"axes": {"preset": ["fast", "accurate"]}}}, "preset"),
+                "implicit_axial": False, "dt_safety": 0.35}, "sweep": {"axes": {"preset": ["fast", "accurate"]}}},
+     "preset"),
     ({"fixed": {**TINY, "lx": 0.4, "observe_every_us": 50}, "sweep": {"axes": {"mu": [0.4]}},
       "output": {"frame_every_us": 20}}, "output.frame_every_us: 20 is shorter"),  # was "fixed: frame_every_us"
     ({"fixed": {**TINY, "lx": 0.4, "n_x": True}, "sweep": {"axes": {"mu": [0.4]}}}, "n_x"),
