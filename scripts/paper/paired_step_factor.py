@@ -1,7 +1,7 @@
 """The laddering's time step, by paired runs: each stretched knit cut at several factors of the stability limit.
 
-    python scripts/paper/step_factor.py runs/step_factor_accurate [--reference 0.35] [--csv FILE]
-    python scripts/paper/step_factor.py docs/reference/step_factor_accurate_summary.csv
+    python scripts/paper/paired_step_factor.py runs/step_factor_accurate [--reference 0.35] [--csv FILE]
+    python scripts/paper/paired_step_factor.py docs/reference/step_factor_accurate_summary.csv
 
 Reads a sweep over (f_x target, ``dt_safety``) (``docs/reference/step_factor_accurate.yaml``): the knits of one
 nominal tension are targets a fraction of a percent apart, and every knit is laddered at every factor from the
