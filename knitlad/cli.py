@@ -169,13 +169,16 @@ def config_options(model, exclude: tuple[str, ...] = ()):
     def decorate(func):
         own = [p for p in inspect.signature(func).parameters.values() if p.name != "options"]
         derived = []
+        # a setting of the presets' tables defaults to the chosen preset's value, not to the field's
+        by_preset = {key for table in getattr(model, "PRESETS", {}).values() for key in table}
         for name, f in model.model_fields.items():
             if name in exclude:
                 continue
             flag = cli_option(model, name)
             typ = _option_type(f.annotation)
+            shown = f.default is not None and name not in by_preset
             # units and defaults are in [brackets], which rich reads as markup unless escaped
-            help_text = rich_escape(f.description + (f" [default: {f.default}]" if f.default is not None else ""))
+            help_text = rich_escape(f.description + (f" [default: {f.default}]" if shown else ""))
             decls = [f"{flag}/--no-{flag[2:]}"] if typ is bool else [flag]
             derived.append(inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, annotation=typing.Optional[typ],
                                              default=typer.Option(None, *decls, help=help_text, show_default=False,

@@ -240,3 +240,7 @@ def test_cut_help_groups_its_options_and_keeps_units_and_carries_no_dated_measur
     assert all(f"--{o} " in experiment for o in ("stitches", "preset", "fx", "lx", "ly", "mu"))
     assert "[ms] [default: 30.0]" in p.stdout and "[us]" in p.stdout and "[1/s]" in p.stdout
     assert not re.search(r"20\d\d-\d\d-\d\d", p.stdout)
+    # a preset's setting defaults to the chosen preset's value: the help said 0.35 for --dt-safety, which
+    # `--preset accurate` runs at 0.7
+    dt_help = p.stdout[p.stdout.index("--dt-safety"):p.stdout.index("--axial-stiffness-factor")]
+    assert "the preset's" in dt_help and "[default:" not in dt_help
