@@ -1,7 +1,8 @@
 """The accuracy presets: what each sets, chosen from the converged reference (docs/accuracy.md).
 
 Each preset sets the resolution, the contact's sagitta correction
-(:func:`knitlad.engine.contact.sagitta_corrected_radius`) and, for the laddering, the axial springs;
+(:func:`knitlad.engine.contact.sagitta_corrected_radius`) and, for the laddering, the axial springs and
+the step factor;
 :mod:`knitlad.experiments.config` fills every setting of the chosen preset that a run does not give.
 ``fast`` is the model as it stood before the reference (24 nodes per stitch, capsules of the
 yarn's radius). The errors quoted are those measured against the reference (docs/accuracy.md).
