@@ -2,21 +2,15 @@
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
 import pytest
 
-PAPER = Path(__file__).parents[1] / "scripts" / "paper"
+from tests.script_loading import load_script
 
 
 def paper_script(name: str):
-    spec = importlib.util.spec_from_file_location(name, PAPER / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("scripts/paper", name)
 
 
 def test_the_paired_step_study_pairs_each_knit_with_itself_at_the_reference_factor():
