@@ -170,7 +170,7 @@ def config_options(model, exclude: tuple[str, ...] = ()):
         own = [p for p in inspect.signature(func).parameters.values() if p.name != "options"]
         derived = []
         # a setting of the presets' tables defaults to the chosen preset's value, not to the field's
-        by_preset = {key for table in getattr(model, "PRESETS", {}).values() for key in table}
+        by_preset = set(model.preset_fields()) if hasattr(model, "preset_fields") else set()
         for name, f in model.model_fields.items():
             if name in exclude:
                 continue

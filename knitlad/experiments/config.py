@@ -36,6 +36,11 @@ class _WithPreset(BaseModel):
             data = {k: v for k, v in data.items() if not (k in old and v == old[k] and k not in changes)}
         return type(self).model_validate({**data, **changes})
 
+    @classmethod
+    def preset_fields(cls) -> tuple[str, ...]:
+        """The settings a preset fills (the keys of the presets' tables), in their order."""
+        return tuple(dict.fromkeys(key for table in cls.PRESETS.values() for key in table))
+
     @model_validator(mode="before")
     @classmethod
     def preset_settings(cls, data):
