@@ -451,3 +451,42 @@ def test_a_pair_that_parts_while_skipped_loses_its_tangential_spring():
     assert np.any(overlap > 0) and np.all(spring[overlap > 0] > 0)
     overlap, spring = evaluate(x0, still)  # back where the gaps were stored: every pair skipped
     assert not np.any(overlap > 0) and not np.any(spring > 0)
+
+
+@pytest.mark.parametrize("n_blocks", [1, 2, 3, 7])
+def test_the_slip_history_carried_across_a_rebuild_is_the_same_in_any_number_of_blocks(n_blocks):
+    """A pair in both lists keeps its slip, a new pair starts from none (the merge in blocks, each starting
+    at its first key by a binary search)."""
+    from knitlad.engine.kernels.contact import carry_history
+
+    rng = np.random.default_rng(n_blocks)
+    old_keys = np.unique(rng.integers(0, 400, 150))
+    new_keys = np.unique(np.concatenate([rng.choice(old_keys, 60, replace=False), rng.integers(0, 400, 80)]))
+    old_slip = rng.normal(size=(old_keys.size + 5, 3))  # rows past n_old are not the list's
+    new_slip = np.full((new_keys.size, 3), np.nan)
+    carry_history(old_keys, old_slip, old_keys.size, new_keys, new_slip, new_keys.size, n_blocks)
+    row_of = {int(k): i for i, k in enumerate(old_keys)}
+    expected = np.array([old_slip[row_of[int(k)]] if int(k) in row_of else np.zeros(3) for k in new_keys])
+    assert np.array_equal(new_slip, expected)
+    assert 0 < np.isin(new_keys, old_keys).sum() < new_keys.size  # both kinds of pair were there
+
+
+def test_the_broad_phase_in_blocks_finds_the_serial_list_in_its_order():
+    """Midpoints, cells, search and concatenation run on blocks of edges: the list is the one-block list."""
+    from knitlad.engine.kernels.contact import build_candidate_pairs
+
+    rods = pressed_weave()
+    c = make_contacts(rods, ContactModel(stiffness=1e3))
+    m, x = rods.model, rods.state.x
+    lists = []
+    for blocks in (1, 2, 5):
+        pairs = np.full_like(c.pairs, -1)
+        keys = np.full_like(c.keys, -1)
+        n = build_candidate_pairs(x, m.edge_a, m.edge_b, m.edge_shift, c.edge_radius, c.edge_yarn, c.edge_local,
+                                  c.yarn_edges, c.yarn_closed, c.exclusion, c.edge_image, 3 * D / kl.units.LENGTH,
+                                  c.params.skin, pairs, keys, blocks)
+        assert 0 < n <= pairs.shape[0]
+        lists.append((pairs[:n].copy(), keys[:n].copy()))
+    for pairs, keys in lists[1:]:
+        assert np.array_equal(pairs, lists[0][0]) and np.array_equal(keys, lists[0][1])
+    assert np.all(np.diff(lists[0][1]) > 0)

@@ -181,6 +181,56 @@ MAX_CELLS_PER_EDGE = 8
 
 
 @njit(**PARALLEL_OPTS)
+def edge_midpoints(x, edge_a, edge_b, edge_shift, edge_radius, skin, n_blocks, mid, reach, block_lo, block_hi):
+    """Each edge's midpoint and reach (bounding-sphere radius of its capsule plus half the skin) into ``mid``,
+    ``reach``; the box of the finite midpoints of each of ``n_blocks`` blocks of edges into ``block_lo``,
+    ``block_hi`` (a non-finite edge stays out of the box). Blocks in parallel."""
+    ne = edge_a.shape[0]
+    for blk in prange(n_blocks):
+        for d in range(3):
+            block_lo[blk, d] = np.inf
+            block_hi[blk, d] = -np.inf
+        for k in range(blk * ne // n_blocks, (blk + 1) * ne // n_blocks):
+            a = edge_a[k]
+            b = edge_b[k]
+            half2 = 0.0
+            for d in range(3):
+                xb = x[b, d] + edge_shift[k, d]
+                mid[k, d] = 0.5 * (x[a, d] + xb)
+                half2 += 0.25 * (xb - x[a, d]) ** 2
+                if math.isfinite(mid[k, d]):
+                    block_lo[blk, d] = min(block_lo[blk, d], mid[k, d])
+                    block_hi[blk, d] = max(block_hi[blk, d], mid[k, d])
+            reach[k] = math.sqrt(half2) + edge_radius[k] + 0.5 * skin
+
+
+@njit(**PARALLEL_OPTS)
+def cells_of_edges(mid, lo, inv_cell, dims, cells, linear):
+    """The grid cell of each edge's midpoint (``cells``, clamped into the grid: a non-finite midpoint lands
+    somewhere and fails every distance test) and its number, x fastest (``linear``)."""
+    for k in prange(mid.shape[0]):
+        for d in range(3):
+            c = (mid[k, d] - lo[d]) * inv_cell
+            cells[k, d] = min(max(int(c), 0), dims[d] - 1) if c == c else 0
+        linear[k] = (cells[k, 2] * dims[1] + cells[k, 1]) * dims[0] + cells[k, 0]
+
+
+@njit(**PARALLEL_OPTS)
+def concatenate_blocks(local, found, pairs, keys, ne):
+    """The candidates of each block (``local[blk, :found[blk]]``) one after the other into ``pairs``, with
+    their keys i * ne + j: blocks in parallel, each at its offset, so the order is the serial one."""
+    n_blocks = found.shape[0]
+    offset = np.zeros(n_blocks + 1, dtype=np.int64)
+    for blk in range(n_blocks):
+        offset[blk + 1] = offset[blk] + found[blk]
+    for blk in prange(n_blocks):
+        for q in range(found[blk]):
+            pairs[offset[blk] + q, 0] = local[blk, q, 0]
+            pairs[offset[blk] + q, 1] = local[blk, q, 1]
+            keys[offset[blk] + q] = local[blk, q, 0] * ne + local[blk, q, 1]
+
+
+@njit(**NUMBA_OPTS)
 def build_candidate_pairs(
     x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion,
     edge_image, cell_size, skin, pairs, keys, n_threads=1,
@@ -191,27 +241,24 @@ def build_candidate_pairs(
     over their bounding box, numbered x fastest, so the three cells along x of a
     neighbourhood are one contiguous run of the binned edges: nine runs per edge.
     A return value above ``pairs.shape[0]`` means the buffer overflowed (the
-    buffer's content is then undefined): grow it and call again. Blocks of edges
-    are searched in parallel.
+    buffer's content is then undefined): grow it and call again. The midpoints, the
+    cells, the search and the concatenation run on ``n_threads`` blocks of edges;
+    the counting sort into cells is serial (it keeps each cell's edges in index order).
     """
     ne = edge_a.shape[0]
     cap = pairs.shape[0]
+    n_blocks = max(1, min(n_threads, ne))
     mid = np.empty((ne, 3))
-    reach = np.empty(ne)  # bounding-sphere radius of the capsule plus half the skin
+    reach = np.empty(ne)
+    block_lo = np.empty((n_blocks, 3))
+    block_hi = np.empty((n_blocks, 3))
+    edge_midpoints(x, edge_a, edge_b, edge_shift, edge_radius, skin, n_blocks, mid, reach, block_lo, block_hi)
     lo = np.full(3, np.inf)
     hi = np.full(3, -np.inf)
-    for k in range(ne):
-        a = edge_a[k]
-        b = edge_b[k]
-        half2 = 0.0
+    for blk in range(n_blocks):
         for d in range(3):
-            xb = x[b, d] + edge_shift[k, d]
-            mid[k, d] = 0.5 * (x[a, d] + xb)
-            half2 += 0.25 * (xb - x[a, d]) ** 2
-            if math.isfinite(mid[k, d]):  # a non-finite edge stays out of the box
-                lo[d] = min(lo[d], mid[k, d])
-                hi[d] = max(hi[d], mid[k, d])
-        reach[k] = math.sqrt(half2) + edge_radius[k] + 0.5 * skin
+            lo[d] = min(lo[d], block_lo[blk, d])
+            hi[d] = max(hi[d], block_hi[blk, d])
     extent = np.maximum(hi - lo, 0.0)  # 0 along an axis with no finite midpoint (hi - lo = -inf)
     cell = cell_size
     # counted as a float: a far-flung yarn must not overflow the count
@@ -219,16 +266,11 @@ def build_candidate_pairs(
         cell *= 1.5
     dims = (extent / cell).astype(np.int64) + 1
     n_cells = dims[0] * dims[1] * dims[2]
-    inv = 1.0 / cell
     cells = np.empty((ne, 3), dtype=np.int64)
-    start = np.zeros(n_cells + 1, dtype=np.int64)
     linear = np.empty(ne, dtype=np.int64)
+    cells_of_edges(mid, lo, 1.0 / cell, dims, cells, linear)
+    start = np.zeros(n_cells + 1, dtype=np.int64)
     for k in range(ne):
-        for d in range(3):
-            c = (mid[k, d] - lo[d]) * inv
-            # clamped: a non-finite midpoint lands somewhere in the grid and fails every distance test
-            cells[k, d] = min(max(int(c), 0), dims[d] - 1) if c == c else 0
-        linear[k] = (cells[k, 2] * dims[1] + cells[k, 1]) * dims[0] + cells[k, 0]
         start[linear[k] + 1] += 1
     for h in range(n_cells):
         start[h + 1] += start[h]
@@ -238,30 +280,32 @@ def build_candidate_pairs(
         order[fill[linear[k]]] = k
         fill[linear[k]] += 1
     # candidates of each block of edges, found in parallel, then concatenated in order
-    n_blocks = max(1, min(n_threads, ne))
     block_cap = cap  # blocks can be very unequal (e.g. all partners j > i on the first yarns)
     local = np.empty((n_blocks, block_cap, 2), dtype=np.int64)
     found = np.zeros(n_blocks, dtype=np.int64)
+    _search_blocks(x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed,
+                   exclusion, edge_image, skin, cells, dims, mid, reach, start, order, local, found)
+    n = 0
+    for blk in range(n_blocks):
+        n += found[blk]
+    if n > cap or np.any(found > block_cap):
+        return max(n, cap + 1)
+    # blocks run in edge order and each edge's partners are sorted: keys end up sorted
+    concatenate_blocks(local, found, pairs, keys, ne)
+    return n
+
+
+@njit(**PARALLEL_OPTS)
+def _search_blocks(x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed,
+                   exclusion, edge_image, skin, cells, dims, mid, reach, start, order, local, found):
+    ne = edge_a.shape[0]
+    n_blocks = found.shape[0]
     for blk in prange(n_blocks):
         found[blk] = _candidates_of_block(
             blk * ne // n_blocks, (blk + 1) * ne // n_blocks, x, edge_a, edge_b, edge_shift, edge_radius,
             edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion, edge_image, skin, cells, dims, mid, reach,
             start, order, local[blk],
         )
-    n = 0
-    for blk in range(n_blocks):
-        n += found[blk]
-    if n > cap or np.any(found > block_cap):
-        return max(n, cap + 1)
-    p = 0
-    for blk in range(n_blocks):
-        for q in range(found[blk]):
-            pairs[p, 0] = local[blk, q, 0]
-            pairs[p, 1] = local[blk, q, 1]
-            keys[p] = pairs[p, 0] * ne + pairs[p, 1]
-            p += 1
-    # blocks run in edge order and each edge's partners are sorted below: keys end up sorted
-    return n
 
 
 @njit(**NUMBA_OPTS)
@@ -323,21 +367,56 @@ def _candidates_of_block(
     return n
 
 
-@njit(**NUMBA_OPTS)
-def carry_history(old_keys, old_slip, n_old, new_keys, new_slip, n_new):
-    """Copy the tangential slip of pairs present in both sorted lists; zero the new ones."""
-    p = 0
-    for q in range(n_new):
-        while p < n_old and old_keys[p] < new_keys[q]:
-            p += 1
-        if p < n_old and old_keys[p] == new_keys[q]:
-            new_slip[q, 0] = old_slip[p, 0]
-            new_slip[q, 1] = old_slip[p, 1]
-            new_slip[q, 2] = old_slip[p, 2]
-        else:
-            new_slip[q, 0] = 0.0
-            new_slip[q, 1] = 0.0
-            new_slip[q, 2] = 0.0
+@njit(**PARALLEL_OPTS)
+def carry_history(old_keys, old_slip, n_old, new_keys, new_slip, n_new, n_blocks=1):
+    """Copy the tangential slip of pairs present in both sorted lists; zero the new ones. The new list in
+    ``n_blocks`` blocks in parallel, each merging from the first old key not below its own first key."""
+    for blk in prange(n_blocks):
+        q0 = blk * n_new // n_blocks
+        q1 = (blk + 1) * n_new // n_blocks
+        p = 0
+        if q0 < q1:
+            p = np.searchsorted(old_keys[:n_old], new_keys[q0])
+        for q in range(q0, q1):
+            while p < n_old and old_keys[p] < new_keys[q]:
+                p += 1
+            if p < n_old and old_keys[p] == new_keys[q]:
+                new_slip[q, 0] = old_slip[p, 0]
+                new_slip[q, 1] = old_slip[p, 1]
+                new_slip[q, 2] = old_slip[p, 2]
+            else:
+                new_slip[q, 0] = 0.0
+                new_slip[q, 1] = 0.0
+                new_slip[q, 2] = 0.0
+
+
+@njit(**PARALLEL_OPTS)
+def copy_rows(src, dst, n):
+    """``dst[:n] = src[:n]`` for (m, k) arrays, rows in parallel."""
+    for p in prange(n):
+        for d in range(src.shape[1]):
+            dst[p, d] = src[p, d]
+
+
+@njit(**PARALLEL_OPTS)
+def copy_entries(src, dst, n):
+    """``dst[:n] = src[:n]`` for (m,) arrays, in parallel."""
+    for p in prange(n):
+        dst[p] = src[p]
+
+
+@njit(**PARALLEL_OPTS)
+def longest_edge(x, edge_a, edge_b, edge_shift):
+    """The longest edge now (the grid's cells must hold a whole capsule)."""
+    longest = 0.0
+    for k in prange(edge_a.shape[0]):
+        a = edge_a[k]
+        b = edge_b[k]
+        l2 = 0.0
+        for d in range(3):
+            l2 += (x[b, d] + edge_shift[k, d] - x[a, d]) ** 2
+        longest = max(longest, math.sqrt(l2))
+    return longest
 
 
 # below this many candidate pairs per thread, starting the threads costs more than they save
@@ -659,17 +738,13 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
     if c.status[STALE] == 0 and moved <= 0.5 * skin:
         return True
     n_old = c.n_pairs[0]
-    old_pairs = c.pairs[:n_old].copy()
-    old_keys = c.keys[:n_old].copy()
-    old_slip = c.slip[:n_old].copy()
-    longest = 0.0
-    for k in range(edge_a.shape[0]):
-        a = edge_a[k]
-        b = edge_b[k]
-        l2 = 0.0
-        for d in range(3):
-            l2 += (x[b, d] + edge_shift[k, d] - x[a, d]) ** 2
-        longest = max(longest, math.sqrt(l2))
+    old_pairs = np.empty((n_old, 2), dtype=np.int64)
+    old_keys = np.empty(n_old, dtype=np.int64)
+    old_slip = np.empty((n_old, 3))
+    copy_rows(c.pairs, old_pairs, n_old)
+    copy_entries(c.keys, old_keys, n_old)
+    copy_rows(c.slip, old_slip, n_old)
+    longest = longest_edge(x, edge_a, edge_b, edge_shift)
     r_max = 0.0
     for k in range(c.edge_radius.shape[0]):
         r_max = max(r_max, c.edge_radius[k])
@@ -685,9 +760,9 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
         c.status[STALE] = 1
         c.status[PAIRS_NEEDED] = n
         return False
-    carry_history(old_keys, old_slip, n_old, c.keys, c.slip, n)
+    carry_history(old_keys, old_slip, n_old, c.keys, c.slip, n, max(1, c.threads[0]))
     c.n_pairs[0] = n
-    c.x_ref[:] = x
+    copy_rows(x, c.x_ref, x.shape[0])
     c.edge_moved[:] = 0.0  # |x - x_ref| = 0 exactly: what edge_displacements would give
     c.status[STALE] = 0
     c.status[GAPS_KNOWN] = 0
