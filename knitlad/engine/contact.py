@@ -47,6 +47,10 @@ class Counting(str, Enum):
 
 
 COUNTING = tuple(c.value for c in Counting)
+# the contact list gives an edge fast enough to cross half the skin within this many steps an allowance
+# that lasts it as long (ContactParams.lookahead_steps, refresh_contacts): a cut yarn's flying ends rebuilt
+# the whole list every 12 steps of the accurate 42 x 42 ladder, now every 48 (docs/performance.md)
+LIST_LOOKAHEAD_STEPS = 40
 
 
 def check_friction_coefficient(mu: float) -> None:
@@ -193,6 +197,7 @@ class Contacts(NamedTuple):
     edge_moved: np.ndarray  # (ne,) each edge's largest end displacement since the rebuild (scratch)
     edge_class: np.ndarray  # (ne,) int64 row of ``stiffness`` for each edge's material (0: the default)
     stiffness: np.ndarray  # (c, c, 2) k_n and k_t of a pair of edge classes [mN/mm]
+    edge_allowance: np.ndarray  # (ne,) how far each edge may move before the list is stale (half the skin, more if fast)
 
 
 def edge_topology(m: RodModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -312,6 +317,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
             damping_t=float(model.tangential_damping_ratio),
             mu=float(model.mu),
             skin=float(skin),
+            lookahead_steps=float(LIST_LOOKAHEAD_STEPS),
         )
         # exclusion: edges within `exclusion_diameters` d of arc, and always the adjacent edge
         # (per state yarn: an image is a copy of its master, whose id it carries as its physical yarn)
@@ -343,6 +349,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         gap_ref=np.zeros(cap),
         edge_moved=np.zeros(ne),
         **pair_stiffness_table(m, model, params),
+        edge_allowance=np.full(ne, 0.5 * params.skin),
     )
     if previous is not None:
         m = int(previous.n_pairs[0])

@@ -49,6 +49,7 @@ class ContactParams(NamedTuple):
     damping_t: float  # tangential dashpot, fraction of critical [-]
     mu: float  # Coulomb coefficient [-]
     skin: float  # neighbour-list margin [mm]
+    lookahead_steps: float = 0.0  # a fast edge's allowance lasts it this many steps (0: half the skin for all)
 
 
 # slots of Contacts.stats, written by contact_forces at every evaluation
@@ -175,6 +176,8 @@ def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge
         out[p, T_PAIR] = t
 
 
+# the largest allowance of a fast edge, in skins: its pairs reach this far (edge_allowances)
+MAX_ALLOWANCE_SKINS = 3.0
 # a grid of more cells than this per edge is coarsened (a yarn flung far away must not
 # make the grid huge); cells larger than the reach only cost more distance tests
 MAX_CELLS_PER_EDGE = 8
@@ -233,9 +236,12 @@ def concatenate_blocks(local, found, pairs, keys, ne):
 @njit(**NUMBA_OPTS)
 def build_candidate_pairs(
     x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed, exclusion,
-    edge_image, cell_size, skin, pairs, keys, n_threads=1,
+    edge_image, cell_size, skin, pairs, keys, n_threads=1, allowance=None, n_fast=0,
 ):
-    """Fill ``pairs`` (cap, 2) with candidate edge pairs (i < j), sorted; return how many were found.
+    """Fill ``pairs`` (cap, 2) with candidate edge pairs (i < j), sorted; return how many were found:
+    the pairs whose gap is below the skin, and with ``allowance`` (each edge's, >= skin/2) and ``n_fast``
+    edges whose allowance exceeds skin/2, also each pair of a fast edge whose gap is below the sum of the
+    two allowances (:func:`fast_edge_pairs`).
 
     Edge midpoints are binned in a dense grid of cells of at least ``cell_size``
     over their bounding box, numbered x fastest, so the three cells along x of a
@@ -292,7 +298,81 @@ def build_candidate_pairs(
         return max(n, cap + 1)
     # blocks run in edge order and each edge's partners are sorted: keys end up sorted
     concatenate_blocks(local, found, pairs, keys, ne)
+    if n_fast > 0 and allowance is not None:
+        fast = np.flatnonzero(allowance > 0.5 * skin)
+        extra = fast_edge_pairs(x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges,
+                                yarn_closed, exclusion, edge_image, skin, allowance, fast, cell, cells, dims, mid,
+                                reach, start, order)
+        if n + extra.shape[0] > cap:
+            return n + extra.shape[0]
+        merge_sorted_pairs(pairs, keys, n, extra, ne)
+        n += extra.shape[0]
     return n
+
+
+@njit(**NUMBA_OPTS)
+def fast_edge_pairs(x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed,
+                    exclusion, edge_image, skin, allowance, fast, cell, cells, dims, mid, reach, start, order):
+    """Sorted keys i * ne + j (i < j) of the pairs of the ``fast`` edges whose gap is at least the skin (the
+    main search has the others) and below the sum of their edges' allowances; each fast edge searches as many
+    cells around its own as its reach needs. Same exclusions as :func:`_candidates_of_block`."""
+    ne = edge_a.shape[0]
+    widest = 0.0  # the largest reach a partner may have
+    for k in range(ne):
+        widest = max(widest, reach[k] - 0.5 * skin + allowance[k])
+    found = np.empty(64 * fast.shape[0], dtype=np.int64)
+    n = 0
+    for f in fast:
+        reach_f = reach[f] - 0.5 * skin + allowance[f]
+        span = int((reach_f + widest) / cell) + 1
+        x0 = max(cells[f, 0] - span, 0)
+        x1 = min(cells[f, 0] + span, dims[0] - 1)
+        for cz in range(max(cells[f, 2] - span, 0), min(cells[f, 2] + span, dims[2] - 1) + 1):
+            for cy in range(max(cells[f, 1] - span, 0), min(cells[f, 1] + span, dims[1] - 1) + 1):
+                row = (cz * dims[1] + cy) * dims[0]
+                for idx in range(start[row + x0], start[row + x1 + 1]):
+                    j = order[idx]
+                    if j == f or (edge_image[f] and edge_image[j]):
+                        continue
+                    r = reach_f + reach[j] - 0.5 * skin + allowance[j]
+                    if (mid[f, 0] - mid[j, 0]) ** 2 + (mid[f, 1] - mid[j, 1]) ** 2 + (mid[f, 2] - mid[j, 2]) ** 2 > r * r:
+                        continue
+                    y = edge_yarn[f]
+                    if y == edge_yarn[j]:
+                        gap = abs(edge_local[f] - edge_local[j])
+                        if yarn_closed[y]:
+                            gap = min(gap, yarn_edges[y] - gap)
+                        if gap <= exclusion[y]:
+                            continue
+                    first, second = min(f, j), max(f, j)
+                    dist, _, _ = segment_distance(x, edge_a, edge_b, edge_shift, first, second)
+                    # the complement of the main search's test, written as it is there
+                    if not dist < edge_radius[first] + edge_radius[second] + skin and dist < (
+                            edge_radius[first] + edge_radius[second] + allowance[first] + allowance[second]):
+                        if n == found.shape[0]:
+                            found = np.concatenate((found, np.empty(n, dtype=np.int64)))
+                        found[n] = first * ne + second
+                        n += 1
+    return np.unique(found[:n])  # sorted; a pair of two fast edges is found from both
+
+
+@njit(**NUMBA_OPTS)
+def merge_sorted_pairs(pairs, keys, n, extra, ne):
+    """Merge the sorted keys ``extra`` (none in ``keys[:n]``) into the sorted list ``pairs[:n]``, ``keys[:n]``, in
+    place from the back (the buffers hold n + len(extra))."""
+    i = n - 1
+    w = n + extra.shape[0] - 1
+    for q in range(extra.shape[0] - 1, -1, -1):
+        while i >= 0 and keys[i] > extra[q]:
+            keys[w] = keys[i]
+            pairs[w, 0] = pairs[i, 0]
+            pairs[w, 1] = pairs[i, 1]
+            i -= 1
+            w -= 1
+        keys[w] = extra[q]
+        pairs[w, 0] = extra[q] // ne
+        pairs[w, 1] = extra[q] % ne
+        w -= 1
 
 
 @njit(**PARALLEL_OPTS)
@@ -604,21 +684,40 @@ def _pair_contact_forces_in_blocks(
 
 
 @njit(**PARALLEL_OPTS)
-def edge_displacements(x, x_ref, edge_a, edge_b, out):
+def edge_displacements(x, x_ref, edge_a, edge_b, allowance, out):
     """Largest displacement of each edge's two ends since ``x_ref`` (the last rebuild) into ``out``; returns
-    the largest over the edges, which is the largest |x - x_ref| over the nodes where every node ends an
-    edge (sqrt is monotonic and correctly rounded: the same bits), so one pass serves the rebuild's test
-    and the narrow phase's skipping."""
-    largest = 0.0
+    the largest excess of an edge's displacement over its ``allowance`` (the list is stale when it is > 0).
+    With a zero allowance that is the largest |x - x_ref| over the nodes where every node ends an edge (sqrt
+    is monotonic and correctly rounded: the same bits), so one pass serves the rebuild's test and the narrow
+    phase's skipping."""
+    excess = -np.inf
     for k in prange(edge_a.shape[0]):
         a = edge_a[k]
         b = edge_b[k]
         da = (x[a, 0] - x_ref[a, 0]) ** 2 + (x[a, 1] - x_ref[a, 1]) ** 2 + (x[a, 2] - x_ref[a, 2]) ** 2
         db = (x[b, 0] - x_ref[b, 0]) ** 2 + (x[b, 1] - x_ref[b, 1]) ** 2 + (x[b, 2] - x_ref[b, 2]) ** 2
-        d2 = max(da, db)
-        out[k] = math.sqrt(d2)
-        largest = max(largest, d2)
-    return math.sqrt(largest)
+        out[k] = math.sqrt(max(da, db))
+        excess = max(excess, out[k] - allowance[k])
+    return excess
+
+
+@njit(**PARALLEL_OPTS)
+def edge_allowances(v, edge_a, edge_b, half_skin, lookahead, cap, out):
+    """Each edge's allowance, the displacement its pairs in the list are good for: half the skin, or for an edge
+    moving faster than half the skin per ``lookahead`` (a time), 1.5 x its fastest end's speed x ``lookahead``,
+    at most ``cap``. Returns how many edges have more than half the skin."""
+    n_fast = 0
+    for k in prange(edge_a.shape[0]):
+        a = edge_a[k]
+        b = edge_b[k]
+        speed2 = max(v[a, 0] ** 2 + v[a, 1] ** 2 + v[a, 2] ** 2, v[b, 0] ** 2 + v[b, 1] ** 2 + v[b, 2] ** 2)
+        reach = 1.5 * math.sqrt(speed2) * lookahead
+        if reach > half_skin:  # false for NaN
+            out[k] = min(reach, cap)
+            n_fast += 1
+        else:
+            out[k] = half_skin
+    return n_fast
 
 
 @njit(**NUMBA_OPTS)
@@ -727,15 +826,21 @@ def contact_energy(x, edge_a, edge_b, edge_shift, c, pairs, slip):
 
 
 @njit(**NUMBA_OPTS)
-def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
+def refresh_contacts(x, edge_a, edge_b, edge_shift, c, v=None, lookahead=0.0):
     """Rebuild the candidate list of ``c`` (a :class:`knitlad.engine.contact.Contacts`) if stale
-    or if a node moved by more than skin/2 since the last build (two segments then
-    may have approached by up to skin). Returns False on overflow: the old list is
-    kept, ``c.status[PAIRS_NEEDED]`` holds the pairs needed, and the caller must grow the buffer.
+    or if an edge moved by more than its allowance since the last build. Returns False on overflow: the
+    old list is kept, ``c.status[PAIRS_NEEDED]`` holds the pairs needed, and the caller must grow the buffer.
+
+    A pair is listed when its gap is below the sum of its edges' allowances, so while no edge has moved by
+    more than its own, no pair left out can touch (a Verlet list with a skin per edge). The allowance is half
+    the skin, except, with velocities ``v`` and a ``lookahead`` time, for the few edges fast enough to cross
+    half the skin within it (a cut yarn's flying ends, at 100 m/s and more): those get the reach of their
+    speed (:func:`edge_allowances`), so they no longer rebuild the whole list every few steps. Any valid list
+    gives the same forces to the bit (pairs apart add nothing, and the touching ones are summed in key order).
     """
     skin = c.params.skin
-    moved = edge_displacements(x, c.x_ref, edge_a, edge_b, c.edge_moved)
-    if c.status[STALE] == 0 and moved <= 0.5 * skin:
+    excess = edge_displacements(x, c.x_ref, edge_a, edge_b, c.edge_allowance, c.edge_moved)
+    if c.status[STALE] == 0 and excess <= 0.0:
         return True
     n_old = c.n_pairs[0]
     old_pairs = np.empty((n_old, 2), dtype=np.int64)
@@ -748,10 +853,16 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c):
     r_max = 0.0
     for k in range(c.edge_radius.shape[0]):
         r_max = max(r_max, c.edge_radius[k])
+    n_fast = 0
+    if v is not None and lookahead > 0.0:
+        n_fast = edge_allowances(v, edge_a, edge_b, 0.5 * skin, lookahead, MAX_ALLOWANCE_SKINS * skin,
+                                 c.edge_allowance)
+    else:
+        c.edge_allowance[:] = 0.5 * skin
     cell = longest + 2.0 * r_max + skin
     n = build_candidate_pairs(
         x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_yarn, c.edge_local, c.yarn_edges,
-        c.yarn_closed, c.exclusion, c.edge_image, cell, skin, c.pairs, c.keys, c.threads[0],
+        c.yarn_closed, c.exclusion, c.edge_image, cell, skin, c.pairs, c.keys, c.threads[0], c.edge_allowance, n_fast,
     )
     if n > c.pairs.shape[0]:
         c.pairs[:n_old] = old_pairs

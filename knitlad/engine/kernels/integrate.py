@@ -163,7 +163,7 @@ def compute_forces(m, s, w, c, twist, contact, drag, dt, axial=AXIAL_EXPLICIT, d
     else:
         elastic_forces_by_yarn(m, s, w, explicit, v_damp)
     if contact:
-        if not refresh_contacts(s.x, m.edge_a, m.edge_b, m.edge_shift, c):
+        if not refresh_contacts(s.x, m.edge_a, m.edge_b, m.edge_shift, c, s.v, c.params.lookahead_steps * dt):
             return False
         contact_forces(s.x, s.v, s.omega, twist, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt, w.force, w.torque,
                        v_damp, w.omega_damp if predicted else s.omega, predicted)
