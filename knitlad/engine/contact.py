@@ -177,7 +177,7 @@ class Contacts(NamedTuple):
     keys: np.ndarray  # (cap,) i * ne + j
     slip: np.ndarray  # (cap, 3) tangential spring elongation u_t per pair
     n_pairs: np.ndarray  # (1,) valid pairs
-    status: np.ndarray  # (2,) slots STALE (the list must be rebuilt), PAIRS_NEEDED (at the last overflow)
+    status: np.ndarray  # (N_STATUS,) slots STALE (the list must be rebuilt), PAIRS_NEEDED (at the last overflow), ...
     x_ref: np.ndarray  # (n, 3) positions at the last rebuild
     edge_radius: np.ndarray
     edge_prev: np.ndarray  # previous edge along the yarn, -1 at an open end
@@ -330,7 +330,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         keys=np.zeros(cap, dtype=np.int64),
         slip=np.zeros((cap, 3)),
         n_pairs=np.zeros(1, dtype=np.int64),
-        status=np.array([1, 0, 0], dtype=np.int64),  # STALE, PAIRS_NEEDED, GAPS_KNOWN
+        status=np.array([1, 0, 0, 0], dtype=np.int64),  # STALE, PAIRS_NEEDED, GAPS_KNOWN, REBUILDS
         x_ref=rods.state.x.copy(),
         edge_radius=edge_radius,
         edge_prev=edge_prev,

@@ -9,8 +9,10 @@ Every edge is a capsule (a cylinder of its yarn's radius with spherical caps).
 * Broad phase: edge midpoints binned in a grid of cells of size >= the longest
   interaction reach; candidate pairs closer than r_a + r_b + skin go to a
   fixed-capacity buffer. A count past the capacity is reported so the caller
-  can grow the buffer and rebuild (the kernel never allocates). The list stays
-  valid until some node has moved by skin / 2.
+  can grow the buffer and rebuild. The list stays valid until some edge has moved
+  by its allowance: skin / 2, or for an edge that moves faster than that in a few
+  dozen steps (a cut yarn's flying end), the reach of its speed, its pairs listed
+  to the sum of the two allowances (:func:`refresh_contacts`).
 * Normal force (overlap delta = r_a + r_b - |P - Q|): f_n = k_n delta + gamma_n d(delta)/dt,
   never pulling. Tangential force (Cundall & Strack 1979): a spring stretched by
   the tangential slip u_t accumulated per persistent pair, plus a dashpot,
@@ -57,8 +59,10 @@ TOUCHING, MAX_OVERLAP, NORMAL_FORCE_SUM, SLIDING_PAIRS, PEAK_OVERLAP = range(5)
 N_STATS = 5  # PEAK_OVERLAP is the deepest overlap since the caller last zeroed it
 # slots of Contacts.status: STALE = 1 when the candidate list must be rebuilt at the next
 # evaluation (set at start and on overflow); PAIRS_NEEDED = the pairs the last overflowing build found
-STALE, PAIRS_NEEDED, GAPS_KNOWN = range(3)
-N_STATUS = 3  # GAPS_KNOWN = 1 once the narrow phase after a rebuild has stored each pair's gap (Contacts.gap_ref)
+STALE, PAIRS_NEEDED, GAPS_KNOWN, REBUILDS = range(4)
+N_STATUS = 4  # GAPS_KNOWN = 1 once the narrow phase after a rebuild has stored each pair's gap (Contacts.gap_ref);
+# REBUILDS counts the list's rebuilds since the buffers were made
+
 # modes of counted_overlaps: every pair; every pair, storing its gap; pairs the stored gaps cannot rule out
 ALL_PAIRS_PLAIN, ALL_PAIRS_RECORD_GAPS, SKIP_BY_GAPS = range(3)
 # a pair is skipped only when its gap exceeds its edges' displacements by more than this [mm], far above round-off
@@ -877,6 +881,7 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c, v=None, lookahead=0.0):
     c.edge_moved[:] = 0.0  # |x - x_ref| = 0 exactly: what edge_displacements would give
     c.status[STALE] = 0
     c.status[GAPS_KNOWN] = 0
+    c.status[REBUILDS] += 1
     return True
 
 
