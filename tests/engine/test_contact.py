@@ -497,6 +497,8 @@ def test_a_fast_yarn_gets_its_own_allowance_and_the_run_keeps_every_bit():
     friction: the list that gives its fast edges an allowance of their own (ContactParams.lookahead_steps) is
     rebuilt far less often than the list of half a skin for all, and the two runs step to the same bits, which
     they could not if the first list ever missed a touching pair."""
+    from knitlad.engine.kernels.contact import REBUILDS
+
     def pulled(lookahead: bool):
         rods = pressed_weave()
         first = slice(int(rods.model.yarn_start[0]), int(rods.model.yarn_start[1]))
@@ -509,12 +511,13 @@ def test_a_fast_yarn_gets_its_own_allowance_and_the_run_keeps_every_bit():
         if not lookahead:
             sim.contacts = c._replace(params=c.params._replace(lookahead_steps=0.0))
         assert (sim.contacts.params.lookahead_steps > 0) == lookahead
-        rebuilds, widest = 0, 0.0
+        rebuilds, widest, counted = 0, 0.0, int(sim.contacts.status[REBUILDS])
         for _ in range(300):
             ref = sim.contacts.x_ref.copy()
             sim.step(1)
             rebuilds += not np.array_equal(ref, sim.contacts.x_ref)
             widest = max(widest, float(sim.contacts.edge_allowance.max() / (0.5 * sim.contacts.params.skin)))
+        assert sim.contacts.status[REBUILDS] - counted == rebuilds  # the kernel's count of its rebuilds
         last = float(sim.contacts.edge_allowance.max() / (0.5 * sim.contacts.params.skin))
         return sim.state.x.copy(), rebuilds, widest, last
 
