@@ -565,3 +565,22 @@ def test_a_fast_edge_lists_every_pair_within_the_sum_of_allowances():
         dist = segment_distance(x, m.edge_a, m.edge_b, m.edge_shift, *pair)[0]
         if dist < c.edge_radius[fast] + c.edge_radius[j] + 2 * skin:
             assert pair in wide
+
+
+def test_where_most_edges_move_fast_every_edge_keeps_half_the_skin():
+    """The fast edges' pass is serial: with more than MAX_FAST_FRACTION of the edges fast (the whole weave
+    flying), the rebuild falls back to half the skin for every edge; one fast yarn of eight keeps its own."""
+    from knitlad.engine.kernels.contact import STALE, refresh_contacts
+
+    rods = pressed_weave()
+    m, x = rods.model, rods.state.x
+    c = make_contacts(rods, ContactModel(stiffness=1e3), capacity=20_000)  # the widened list needs more room
+    half = 0.5 * c.params.skin
+    lookahead = 40 * 3e-5  # 40 steps of 3e-8 s, internal ms
+    first = slice(int(m.yarn_start[0]), int(m.yarn_start[1]))
+    for flying, widened in ((slice(None), False), (first, True)):
+        v = np.zeros_like(x)
+        v[flying] = 200.0  # mm/ms = m/s
+        c.status[STALE] = 1
+        assert refresh_contacts(x, m.edge_a, m.edge_b, m.edge_shift, c, v, lookahead)
+        assert (c.edge_allowance.max() > half) == widened and c.edge_allowance.min() == half

@@ -182,6 +182,8 @@ def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge
 
 # the largest allowance of a fast edge, in skins: its pairs reach this far (edge_allowances)
 MAX_ALLOWANCE_SKINS = 3.0
+# above this fraction of fast edges every edge gets half the skin (refresh_contacts)
+MAX_FAST_FRACTION = 0.25
 # a grid of more cells than this per edge is coarsened (a yarn flung far away must not
 # make the grid huge); cells larger than the reach only cost more distance tests
 MAX_CELLS_PER_EDGE = 8
@@ -861,8 +863,11 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c, v=None, lookahead=0.0):
     if v is not None and lookahead > 0.0:
         n_fast = edge_allowances(v, edge_a, edge_b, 0.5 * skin, lookahead, MAX_ALLOWANCE_SKINS * skin,
                                  c.edge_allowance)
-    else:
+    if n_fast > MAX_FAST_FRACTION * edge_a.shape[0] or n_fast == 0:
+        # the fast edges' pass is serial: where most edges move fast (a knit translated, a relaxation's
+        # velocities), half the skin for all, which is always valid
         c.edge_allowance[:] = 0.5 * skin
+        n_fast = 0
     cell = longest + 2.0 * r_max + skin
     n = build_candidate_pairs(
         x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_yarn, c.edge_local, c.yarn_edges,
