@@ -49,8 +49,9 @@ class Counting(str, Enum):
 COUNTING = tuple(c.value for c in Counting)
 # the contact list gives an edge fast enough to cross half the skin within this many steps an allowance
 # that lasts it as long (ContactParams.lookahead_steps, refresh_contacts): a cut yarn's flying ends rebuilt
-# the whole list every 12 steps of the accurate 42 x 42 ladder, now every 48 (docs/performance.md)
-LIST_LOOKAHEAD_STEPS = 40
+# the whole list every 12 steps of the accurate 42 x 42 ladder, every 46 at 40 steps, every 39 at 80 (4 % faster
+# than 40; 160 not resolved from 80: docs/performance.md)
+LIST_LOOKAHEAD_STEPS = 80
 
 
 def check_friction_coefficient(mu: float) -> None:

@@ -508,8 +508,9 @@ def test_a_fast_yarn_gets_its_own_allowance_and_the_run_keeps_every_bit():
         sim = kl.Simulation(rods, contact=ContactModel(stiffness=1e3, mu=0.4))
         sim.hold(sim.nodes_of(0, [0, -1]), velocity)
         c = sim.contacts
-        if not lookahead:
-            sim.contacts = c._replace(params=c.params._replace(lookahead_steps=0.0))
+        # 40 steps: at the default 80 the pushed yarns turn fast too, over a quarter of this small weave's
+        # edges, and the list falls back to half the skin for all (the next test)
+        sim.contacts = c._replace(params=c.params._replace(lookahead_steps=40.0 if lookahead else 0.0))
         assert (sim.contacts.params.lookahead_steps > 0) == lookahead
         rebuilds, widest, counted = 0, 0.0, int(sim.contacts.status[REBUILDS])
         for _ in range(300):
