@@ -29,6 +29,8 @@ from knitlad.engine.kernels.contact import (
     STALE,
     TOUCHING,
     ContactParams,
+    ListScratch,
+    list_scratch,
 )
 from knitlad.engine.state import RodModel, Rods
 from knitlad.engine.timestep import damped_limit_factor
@@ -199,6 +201,7 @@ class Contacts(NamedTuple):
     edge_class: np.ndarray  # (ne,) int64 row of ``stiffness`` for each edge's material (0: the default)
     stiffness: np.ndarray  # (c, c, 2) k_n and k_t of a pair of edge classes [mN/mm]
     edge_allowance: np.ndarray  # (ne,) how far each edge may move before the list is stale (half the skin, more if fast)
+    list_scratch: ListScratch  # work arrays of a rebuild, kept between rebuilds
 
 
 def edge_topology(m: RodModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -351,6 +354,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         edge_moved=np.zeros(ne),
         **pair_stiffness_table(m, model, params),
         edge_allowance=np.full(ne, 0.5 * params.skin),
+        list_scratch=list_scratch(ne, cap),
     )
     if previous is not None:
         m = int(previous.n_pairs[0])

@@ -472,19 +472,21 @@ def test_the_slip_history_carried_across_a_rebuild_is_the_same_in_any_number_of_
 
 
 def test_the_broad_phase_in_blocks_finds_the_serial_list_in_its_order():
-    """Midpoints, cells, search and concatenation run on blocks of edges: the list is the one-block list."""
-    from knitlad.engine.kernels.contact import build_candidate_pairs
+    """Midpoints, cells, search and concatenation run on blocks of edges: the list is the one-block list, with
+    fresh work arrays or with those of an earlier build (ListScratch)."""
+    from knitlad.engine.kernels.contact import build_candidate_pairs, list_scratch
 
     rods = pressed_weave()
     c = make_contacts(rods, ContactModel(stiffness=1e3))
     m, x = rods.model, rods.state.x
     lists = []
-    for blocks in (1, 2, 5):
+    kept = list_scratch(m.edge_a.shape[0], 0)  # the work arrays of a rebuild, reused as refresh_contacts does
+    for blocks, scratch in ((1, None), (2, None), (5, None), (2, kept), (1, kept)):
         pairs = np.full_like(c.pairs, -1)
         keys = np.full_like(c.keys, -1)
         n = build_candidate_pairs(x, m.edge_a, m.edge_b, m.edge_shift, c.edge_radius, c.edge_yarn, c.edge_local,
                                   c.yarn_edges, c.yarn_closed, c.exclusion, c.edge_image, 3 * D / kl.units.LENGTH,
-                                  c.params.skin, pairs, keys, blocks)
+                                  c.params.skin, pairs, keys, blocks, None, 0, scratch)
         assert 0 < n <= pairs.shape[0]
         lists.append((pairs[:n].copy(), keys[:n].copy()))
     for pairs, keys in lists[1:]:
@@ -566,6 +568,43 @@ def test_a_fast_edge_lists_every_pair_within_the_sum_of_allowances():
         dist = segment_distance(x, m.edge_a, m.edge_b, m.edge_shift, *pair)[0]
         if dist < c.edge_radius[fast] + c.edge_radius[j] + 2 * skin:
             assert pair in wide
+
+
+def test_many_fast_edges_list_exactly_the_pairs_within_their_allowances():
+    """A third of the edges fast, with allowances of 1 to 6 half-skins (fast partners of fast edges meet in the
+    sweep along x, slow ones in the cells): the list is exactly the pairs a search of every pair finds, those
+    within the skin and those of a fast edge within the sum of the two allowances; sorted, each pair once."""
+    from knitlad.engine.kernels.contact import build_candidate_pairs, excluded_along_yarn, segment_distance
+
+    rods = pressed_weave()
+    c = make_contacts(rods, ContactModel(stiffness=1e3), capacity=40_000)
+    m, x, skin = rods.model, rods.state.x, c.params.skin
+    ne = m.edge_a.shape[0]
+    rng = np.random.default_rng(3)
+    allowance = np.full(ne, 0.5 * skin)
+    fast = rng.random(ne) < 1 / 3
+    allowance[fast] = 0.5 * skin * rng.uniform(1.0, 6.0, fast.sum())
+    pairs = np.zeros_like(c.pairs)
+    keys = np.zeros_like(c.keys)
+    n = build_candidate_pairs(x, m.edge_a, m.edge_b, m.edge_shift, c.edge_radius, c.edge_yarn, c.edge_local,
+                              c.yarn_edges, c.yarn_closed, c.exclusion, c.edge_image, 3 * D / kl.units.LENGTH, skin,
+                              pairs, keys, 2, allowance, int(fast.sum()))
+    assert n <= pairs.shape[0] and np.all(np.diff(keys[:n]) > 0)
+    listed = {(int(i), int(j)) for i, j in pairs[:n]}
+    expected = set()
+    for i in range(ne):
+        for j in range(i + 1, ne):
+            if (c.edge_image[i] and c.edge_image[j]) or excluded_along_yarn(
+                    i, j, c.edge_yarn, c.edge_local, c.yarn_edges, c.yarn_closed, c.exclusion):
+                continue
+            dist = segment_distance(x, m.edge_a, m.edge_b, m.edge_shift, i, j)[0]
+            radii = c.edge_radius[i] + c.edge_radius[j]
+            if dist < radii + skin or ((fast[i] or fast[j]) and dist < radii + allowance[i] + allowance[j]):
+                expected.add((i, j))
+    assert listed == expected
+    beyond_skin = [p for p in listed if segment_distance(x, m.edge_a, m.edge_b, m.edge_shift, *p)[0]
+                   >= c.edge_radius[p[0]] + c.edge_radius[p[1]] + skin]
+    assert sum(fast[i] and fast[j] for i, j in beyond_skin) > 0  # the sweep found pairs of two fast edges
 
 
 def test_where_most_edges_move_fast_every_edge_keeps_half_the_skin():
