@@ -54,6 +54,11 @@ COUNTING = tuple(c.value for c in Counting)
 # the whole list every 12 steps of the accurate 42 x 42 ladder, every 46 at 40 steps, every 39 at 80 (4 % faster
 # than 40; 160 not resolved from 80: docs/performance.md)
 LIST_LOOKAHEAD_STEPS = 80
+# the list's skin when the model gives none, in the smallest yarn diameter: 0.75 lists 20 % fewer pairs than 1
+# for 25 % more rebuilds, since the allowances keep the fast edges from setting the rebuilds (0.91 x the time of
+# the accurate 42 x 42 ladder's steps, 0.86 x at the fast preset, paired; any skin gives the same bits:
+# docs/performance.md)
+DEFAULT_SKIN_DIAMETERS = 0.75
 
 
 def check_friction_coefficient(mu: float) -> None:
@@ -72,7 +77,7 @@ class ContactModel:
     damping_ratio   zeta_n [-]  normal dashpot as a fraction of critical (per contact)
     tangential_stiffness_ratio  k_t / k_n [-]
     tangential_damping_ratio    zeta_t [-]
-    skin            [m]         neighbour-list margin (default: the smallest yarn diameter)
+    skin            [m]         neighbour-list margin (default: 0.75 x the smallest yarn diameter)
     exclusion_diameters [-]     same-yarn edges closer than this many diameters of arc
                                 (and at least the adjacent edge) never interact
     contacts_per_node [-]       contacts one node may carry at once, for the time-step limit
@@ -313,7 +318,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
     else:
         cap = capacity if capacity is not None else max(16, model.capacity_per_edge * ne)
         d_min = 2.0 * float(yarn_radius.min())
-        skin = model.skin / units.LENGTH if model.skin is not None else d_min
+        skin = model.skin / units.LENGTH if model.skin is not None else DEFAULT_SKIN_DIAMETERS * d_min
         params = ContactParams(
             k_n=model.stiffness * units.LENGTH / units.FORCE,
             damping_n=float(model.damping_ratio),
