@@ -200,18 +200,13 @@ class Contacts(NamedTuple):
     params: ContactParams  # stiffnesses, dashpots, mu, skin (internal units)
     stats: np.ndarray  # (N_STATS,) slots TOUCHING ... PEAK_OVERLAP of knitlad.engine.kernels.contact
     threads: np.ndarray  # (1,) blocks the broad phase and the pair forces are split into (Numba threads)
-    pair_results: np.ndarray  # (cap, PAIR_RESULTS) scratch of contact_forces (a touching pair's row only is current)
-    overlap: np.ndarray  # (cap,) each pair's counted overlap at the last evaluation (0: apart, or a neighbour's)
+    pair_results: np.ndarray  # (cap, PAIR_RESULTS) scratch of contact_forces
     gap_ref: np.ndarray  # (cap,) each pair's gap at the list's first evaluation (a lower bound at its rebuild)
     edge_moved: np.ndarray  # (ne,) each edge's largest end displacement since the rebuild (scratch)
     edge_class: np.ndarray  # (ne,) int64 row of ``stiffness`` for each edge's material (0: the default)
     stiffness: np.ndarray  # (c, c, 2) k_n and k_t of a pair of edge classes [mN/mm]
     edge_allowance: np.ndarray  # (ne,) how far each edge may move before the list is stale (half the skin, more if fast)
     list_scratch: ListScratch  # work arrays of a rebuild, kept between rebuilds
-    edge_rod: np.ndarray  # (ne,) int64 the state's yarn (RodModel.yarn_start) whose nodes each edge moves
-    rod_sides_start: np.ndarray  # (n_yarns + 1,) int64 ... and the pairs' sides by that yarn (sides_by_rod)
-    rod_sides: np.ndarray  # (2 cap,) int64 2 p + (0: pair p's first edge, 1: its second)
-    rod_stats: np.ndarray  # (n_yarns, N_STATS) each yarn's share of ``stats`` (rod_contact_sum)
 
 
 def edge_topology(m: RodModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -360,16 +355,11 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         stats=np.zeros(N_STATS),
         threads=np.array([numba.get_num_threads()], dtype=np.int64),
         pair_results=np.zeros((cap, PAIR_RESULTS)),
-        overlap=np.zeros(cap),
         gap_ref=np.zeros(cap),
         edge_moved=np.zeros(ne),
         **pair_stiffness_table(m, model, params),
         edge_allowance=np.full(ne, 0.5 * params.skin),
         list_scratch=list_scratch(ne, cap),
-        edge_rod=m.node_yarn[m.edge_a].astype(np.int64),
-        rod_sides_start=np.zeros(m.n_yarns + 1, dtype=np.int64),
-        rod_sides=np.zeros(2 * cap, dtype=np.int64),
-        rod_stats=np.zeros((m.n_yarns, N_STATS)),
     )
     if previous is not None:
         m = int(previous.n_pairs[0])
@@ -463,12 +453,12 @@ class ContactPairs(NamedTuple):
     def of(contacts: Contacts, x: np.ndarray, edge_a: np.ndarray, edge_b: np.ndarray,
            edge_shift: np.ndarray) -> "ContactPairs":
         """From the kernel's per-pair scratch (:func:`knitlad.engine.kernels.contact.contact_forces`), internal units in."""
-        from knitlad.engine.kernels.contact import FORCE_X, FORCE_Z, S_PAIR, SLIDING, T_PAIR
+        from knitlad.engine.kernels.contact import FORCE_X, FORCE_Z, OVERLAP, S_PAIR, SLIDING, T_PAIR
 
         n = int(contacts.n_pairs[0])
-        results, pairs, overlap = contacts.pair_results[:n], contacts.pairs[:n], contacts.overlap[:n]
-        touching = overlap > 0.0  # separated pairs keep stale scratch: only touching rows count
-        results, pairs, overlap = results[touching], pairs[touching], overlap[touching]
+        results, pairs = contacts.pair_results[:n], contacts.pairs[:n]
+        touching = results[:, OVERLAP] > 0.0  # separated pairs keep stale scratch: only touching rows count
+        results, pairs = results[touching], pairs[touching]
         i, j = pairs[:, 0], pairs[:, 1]
 
         def on_axis(edge, frac):
@@ -484,7 +474,7 @@ class ContactPairs(NamedTuple):
         return ContactPairs(
             edges=pairs.copy(), yarns=contacts.edge_yarn[pairs], points_m=0.5 * (pi + pj) * units.LENGTH,
             normal_N=normal * units.FORCE, friction_N=(force - normal) * units.FORCE,
-            overlap_m=overlap * units.LENGTH, sliding=results[:, SLIDING] > 0,
+            overlap_m=results[:, OVERLAP] * units.LENGTH, sliding=results[:, SLIDING] > 0,
         )
 
 

@@ -108,6 +108,7 @@ FREE, TOUCHING, SLIDING = 0, 1, 2  # contact state of a node (FrameRecorder.cont
 
 def node_contact_state(sim) -> np.ndarray:
     """Per node: FREE, TOUCHING (an edge of it touches another yarn) or SLIDING (at the Coulomb limit)."""
+    from knitlad.engine.kernels.contact import OVERLAP
     from knitlad.engine.kernels.contact import SLIDING as SLIDING_COLUMN
 
     state = np.zeros(sim.model.n_nodes, dtype=np.uint8)
@@ -116,7 +117,7 @@ def node_contact_state(sim) -> np.ndarray:
     if n == 0:
         return state
     results, edges = c.pair_results[:n], c.pairs[:n]
-    touching = c.overlap[:n] > 0
+    touching = results[:, OVERLAP] > 0
     # a pair that separated keeps its last sliding flag in the scratch results (and a rebuild moves
     # it onto another pair): sliding counts only where the pair touches now
     for flag, mask in ((TOUCHING, touching), (SLIDING, touching & (results[:, SLIDING_COLUMN] > 0))):

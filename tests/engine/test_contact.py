@@ -253,59 +253,6 @@ def test_contact_forces_are_bit_for_bit_the_same_on_one_and_two_threads():
     assert np.array_equal(finals[0], finals[1])
 
 
-@pytest.mark.parametrize("spin", [False, True])
-def test_the_contact_sum_rod_by_rod_is_the_serial_sum_over_the_pairs_to_the_bit(spin):
-    """Each rod (a yarn of the state) adds its pairs' shares to its own nodes, on its own thread: every node
-    must receive them in pair order, the order of one serial sum over the pairs (forces already on the nodes,
-    so that another order would show in the bits), and the statistics must be those of all touching pairs."""
-    from numba import njit
-
-    from knitlad.engine import units
-    from knitlad.engine.kernels import contact as kc
-    from knitlad.engine.kernels.options import NUMBA_OPTS
-
-    @njit(**dict(NUMBA_OPTS, cache=False))
-    def serial_sum(pairs, n, overlap, res, edge_a, edge_b, spin, F, torque):
-        for p in range(n):
-            if overlap[p] <= 0.0:
-                continue
-            a0, a1 = edge_a[pairs[p, 0]], edge_b[pairs[p, 0]]
-            b0, b1 = edge_a[pairs[p, 1]], edge_b[pairs[p, 1]]
-            s, t = res[p, kc.S_PAIR], res[p, kc.T_PAIR]
-            for d in range(3):
-                f = res[p, kc.FORCE_X + d]
-                F[a0, d] += (1 - s) * f
-                F[a1, d] += s * f
-                F[b0, d] -= (1 - t) * f
-                F[b1, d] -= t * f
-            if spin:
-                torque[pairs[p, 0]] += res[p, kc.TORQUE_I]
-                torque[pairs[p, 1]] += res[p, kc.TORQUE_J]
-
-    rng = np.random.default_rng(11)
-    rods = plain_weave(20, spacing=4 * D, nodes_per_spacing=6, amplitude=0.45 * D).build()
-    m, x = rods.model, rods.state.x
-    v = rng.normal(scale=2.0, size=x.shape) / units.VELOCITY
-    omega = rng.normal(size=m.edge_a.shape[0])
-    c = make_contacts(rods, ContactModel(stiffness=1e3, mu=0.3))
-    assert kc.refresh_contacts(x, m.edge_a, m.edge_b, m.edge_shift, c)
-    base, base_torque = rng.normal(size=x.shape), rng.normal(size=m.edge_a.shape[0])
-    force, torque = base.copy(), base_torque.copy()
-    kc.contact_forces(x, v, omega, spin, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, 1e-5, force, torque, v, omega,
-                      False)
-    n = int(c.n_pairs[0])
-    assert n >= 2 * kc.MIN_PAIRS_PER_THREAD  # the rods run in parallel where there are two threads
-    expected, expected_torque = base.copy(), base_torque.copy()
-    serial_sum(c.pairs, n, c.overlap, c.pair_results, m.edge_a, m.edge_b, spin, expected, expected_torque)
-    assert np.array_equal(force, expected) and not np.array_equal(force, base)
-    assert np.array_equal(torque, expected_torque)
-    touching = c.overlap[:n] > 0.0
-    assert c.stats[kc.TOUCHING] == touching.sum() > 100
-    assert c.stats[kc.SLIDING_PAIRS] == c.pair_results[:n, kc.SLIDING][touching].sum()
-    assert c.stats[kc.MAX_OVERLAP] == c.overlap[:n].max()
-    assert c.stats[kc.NORMAL_FORCE_SUM] == pytest.approx(c.pair_results[:n, kc.NORMAL][touching].sum(), rel=1e-12)
-
-
 def test_the_sagitta_correction_is_the_mean_offset_of_an_arc_from_its_chord():
     """On a circle of radius R, the arc over a chord of length l lies l^2 s (1 - s) / (2 R) from it at s
     along the chord, l^2 / (12 R) on average (to O(l/R)^2): exactly what the correction takes off."""
@@ -478,7 +425,7 @@ def test_a_pair_that_parts_while_skipped_loses_its_tangential_spring():
     must have its tangential spring cleared, as a pair found apart does, or it would come back with a stale
     friction force."""
     from knitlad.engine import units
-    from knitlad.engine.kernels.contact import GAPS_KNOWN, contact_forces, refresh_contacts
+    from knitlad.engine.kernels.contact import GAPS_KNOWN, OVERLAP, contact_forces, refresh_contacts
 
     rods = plain_weave(4, spacing=4 * D, nodes_per_spacing=6, amplitude=0.55 * D).build()  # axes 1.1 d apart
     m, x0 = rods.model, rods.state.x.copy()
@@ -492,7 +439,7 @@ def test_a_pair_that_parts_while_skipped_loses_its_tangential_spring():
         contact_forces(x, v, omega, 0, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, 1e-5, force, torque, v, omega,
                        False)
         n = int(c.n_pairs[0])
-        return c.overlap[:n].copy(), np.abs(c.slip[:n]).sum(axis=1)
+        return c.pair_results[:n, OVERLAP].copy(), np.abs(c.slip[:n]).sum(axis=1)
 
     still = np.zeros_like(x0)
     overlap, _ = evaluate(x0, still)  # the list's first evaluation: every pair apart, gaps stored

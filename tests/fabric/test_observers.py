@@ -38,14 +38,14 @@ def test_a_pair_that_separated_is_not_read_as_sliding():
 
     import numpy as np
 
-    from knitlad.engine.kernels.contact import PAIR_RESULTS, SLIDING as SLIDING_COLUMN
+    from knitlad.engine.kernels.contact import OVERLAP, PAIR_RESULTS, SLIDING as SLIDING_COLUMN
     from knitlad.fabric.observers import FREE, SLIDING, TOUCHING, node_contact_state
 
-    results, overlap = np.zeros((3, PAIR_RESULTS)), np.zeros(3)
-    overlap[0], results[0, SLIDING_COLUMN] = 1e-3, 1.0  # touching and sliding
-    overlap[1], results[1, SLIDING_COLUMN] = 0.0, 1.0  # separated, a stale flag
-    overlap[2] = 1e-3  # touching, sticking
-    contacts = SimpleNamespace(n_pairs=np.array([3]), pair_results=results, overlap=overlap,
+    results = np.zeros((3, PAIR_RESULTS))
+    results[0, OVERLAP], results[0, SLIDING_COLUMN] = 1e-3, 1.0  # touching and sliding
+    results[1, OVERLAP], results[1, SLIDING_COLUMN] = 0.0, 1.0  # separated, a stale flag
+    results[2, OVERLAP] = 1e-3  # touching, sticking
+    contacts = SimpleNamespace(n_pairs=np.array([3]), pair_results=results,
                                pairs=np.array([[0, 1], [2, 3], [4, 5]]))
     model = SimpleNamespace(n_nodes=12, edge_a=np.arange(0, 12, 2), edge_b=np.arange(1, 12, 2))
     state = node_contact_state(SimpleNamespace(contacts=contacts, model=model))

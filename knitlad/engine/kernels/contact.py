@@ -97,11 +97,9 @@ N_STATUS = 4  # GAPS_KNOWN = 1 once the narrow phase after a rebuild has stored 
 ALL_PAIRS_PLAIN, ALL_PAIRS_RECORD_GAPS, SKIP_BY_GAPS = range(3)
 # a pair is skipped only when its gap exceeds its edges' displacements by more than this [mm], far above round-off
 GAP_MARGIN = 1e-9
-# columns of the per-pair results of :func:`pair_contact_forces`; the overlap is an array of its own
-# (``Contacts.overlap``): most candidate pairs are apart, and the contact sum finds the touching ones in a dense
-# array, not in rows scattered over 15 MB (the accurate 42 x 42 knit)
-FORCE_X, FORCE_Y, FORCE_Z, S_PAIR, T_PAIR, NORMAL, SLIDING, TORQUE_I, TORQUE_J = range(9)
-PAIR_RESULTS = 9
+# columns of the per-pair results of :func:`pair_contact_forces`
+FORCE_X, FORCE_Y, FORCE_Z, S_PAIR, T_PAIR, OVERLAP, NORMAL, SLIDING, TORQUE_I, TORQUE_J = range(10)
+PAIR_RESULTS = 10
 
 
 @njit(**INLINE_OPTS)
@@ -160,9 +158,9 @@ def segment_distance(x, edge_a, edge_b, edge_shift, i, j):
 
 
 @njit(**NUMBA_OPTS)
-def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi,
-                     overlaps, out, mode, gap_ref, edge_moved):
-    """Narrow phase of the pairs p in [lo, hi): the overlap into ``overlaps[p]``, s, t into ``out[p, S_PAIR]``,
+def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out,
+                     mode, gap_ref, edge_moved):
+    """Narrow phase of the pairs p in [lo, hi): overlap, s, t into ``out[p, OVERLAP]``, ``out[p, S_PAIR]``,
     ``out[p, T_PAIR]``. The overlap is 0 when apart or, with ``union`` counting, when the contact
     belongs to a neighbouring edge (else every touching pair counts: ``all_pairs``).
 
@@ -185,7 +183,7 @@ def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge
         i = pairs[p, 0]
         j = pairs[p, 1]
         if mode == SKIP_BY_GAPS and gap_ref[p] > edge_moved[i] + edge_moved[j] + GAP_MARGIN:
-            overlaps[p] = 0.0
+            out[p, OVERLAP] = 0.0
             continue
         dist, s, t = segment_distance(x, edge_a, edge_b, edge_shift, i, j)
         overlap = edge_radius[i] + edge_radius[j] - dist
@@ -207,7 +205,7 @@ def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge
                     owned = t_next <= 0.0
             if not owned:
                 overlap = 0.0
-        overlaps[p] = max(overlap, 0.0)
+        out[p, OVERLAP] = max(overlap, 0.0)
         out[p, S_PAIR] = s
         out[p, T_PAIR] = t
 
@@ -629,8 +627,8 @@ def coulomb_spring(ux, uy, uz, nx, ny, nz, vtx, vty, vtz, sx, sy, sz, dt, k_t, g
 @njit(**NUMBA_OPTS)
 def pair_contact_forces(
     lo, hi, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
-    edge_prev, edge_next, union, pairs, slip, edge_class, stiffness, damping_n, damping_t, mu, dt, out, overlaps, mode,
-    gap_ref, edge_moved,
+    edge_prev, edge_next, union, pairs, slip, edge_class, stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref,
+    edge_moved,
 ):
     """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``
     (the narrow phase in ``mode``, :func:`counted_overlaps`).
@@ -638,8 +636,8 @@ def pair_contact_forces(
     The buffers and parameters of :class:`knitlad.engine.contact.Contacts`, passed one by one:
     Numba's parallel regions (:func:`_pair_contact_forces_in_blocks`) take no named tuple.
 
-    ``overlaps[p]``: the overlap (0 when apart or owned by a neighbouring edge); ``out[p]``, current only for a
-    touching pair: the force (FORCE_X..Z), the closest-point parameters (S_PAIR, T_PAIR), the normal
+    ``out[p]``: the force (FORCE_X..Z), the closest-point parameters (S_PAIR, T_PAIR),
+    the overlap (OVERLAP, 0 when apart or owned by a neighbouring edge), the normal
     force and 1 if sliding. Advances the slip history of each pair. Pairs are
     independent here, so blocks of pairs can run on different threads.
 
@@ -653,12 +651,12 @@ def pair_contact_forces(
     of the step, :func:`knitlad.engine.kernels.integrate.predict_velocities`), the slip on the half-step
     ``v``, ``omega``; else both on ``v``, ``omega``.
     """
-    counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi,
-                     overlaps, out, mode, gap_ref, edge_moved)
+    counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out,
+                     mode, gap_ref, edge_moved)
     for p in range(lo, hi):
         i = pairs[p, 0]
         j = pairs[p, 1]
-        overlap = overlaps[p]
+        overlap = out[p, OVERLAP]
         if overlap <= 0.0:
             slip[p, 0] = 0.0
             slip[p, 1] = 0.0
@@ -756,14 +754,14 @@ def pair_contact_forces(
 @njit(**PARALLEL_OPTS)
 def _pair_contact_forces_in_blocks(
     n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
-    edge_prev, edge_next, union, pairs, slip, edge_class, stiffness, damping_n, damping_t, mu, dt, out, overlaps, mode,
-    gap_ref, edge_moved,
+    edge_prev, edge_next, union, pairs, slip, edge_class, stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref,
+    edge_moved,
 ):
     for blk in prange(n_blocks):
         pair_contact_forces(
             blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, omega, v_damp, omega_damp, predicted,
             spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, slip, edge_class,
-            stiffness, damping_n, damping_t, mu, dt, out, overlaps, mode, gap_ref, edge_moved,
+            stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref, edge_moved,
         )
 
 
@@ -805,91 +803,6 @@ def edge_allowances(v, edge_a, edge_b, half_skin, lookahead, cap, out):
 
 
 @njit(**NUMBA_OPTS)
-def sides_by_rod(pairs, n_pairs, edge_rod, start, sides):
-    """Index the two sides of each of the first ``n_pairs`` candidate pairs by the rod (a yarn of the state)
-    whose nodes they push: ``sides[start[r]:start[r + 1]]`` holds 2 p for pair p's first edge and 2 p + 1 for
-    its second where that edge is rod r's, in pair order (a stable counting sort)."""
-    n_rods = start.shape[0] - 1
-    start[:] = 0
-    for p in range(n_pairs):
-        start[edge_rod[pairs[p, 0]] + 1] += 1
-        start[edge_rod[pairs[p, 1]] + 1] += 1
-    for r in range(n_rods):
-        start[r + 1] += start[r]
-    fill = start[:n_rods].copy()
-    for p in range(n_pairs):
-        r = edge_rod[pairs[p, 0]]
-        sides[fill[r]] = 2 * p
-        fill[r] += 1
-        r = edge_rod[pairs[p, 1]]
-        sides[fill[r]] = 2 * p + 1
-        fill[r] += 1
-
-
-@njit(**NUMBA_OPTS)
-def rod_contact_sum(r, start, sides, pairs, overlaps, pair_results, edge_a, edge_b, spin, F, torque, rod_stats):
-    """Add the contact force f of each touching pair to the two nodes of its edge on rod r by the lever rule,
-    (1 - s) f and s f on the first edge, -(1 - t) f and -t f on the second (with ``spin`` the friction couple to
-    that edge's torque), in pair order (:func:`sides_by_rod`). A rod's edges move only its own nodes, so rods can run on
-    different threads, and each node receives its shares in the order of a serial sum over the pairs.
-
-    ``rod_stats[r]``, at the slots TOUCHING, MAX_OVERLAP, NORMAL_FORCE_SUM, SLIDING_PAIRS: those of the
-    touching pairs whose first edge is rod r's (each pair counted once)."""
-    n_touch = 0
-    max_overlap = 0.0
-    fn_sum = 0.0
-    n_slide = 0
-    for q in range(start[r], start[r + 1]):
-        p = sides[q] >> 1
-        overlap = overlaps[p]
-        if overlap <= 0.0:
-            continue
-        fx = pair_results[p, FORCE_X]
-        fy = pair_results[p, FORCE_Y]
-        fz = pair_results[p, FORCE_Z]
-        if sides[q] & 1 == 0:
-            k = pairs[p, 0]
-            s = pair_results[p, S_PAIR]
-            a0 = edge_a[k]
-            a1 = edge_b[k]
-            F[a0, 0] += (1 - s) * fx
-            F[a0, 1] += (1 - s) * fy
-            F[a0, 2] += (1 - s) * fz
-            F[a1, 0] += s * fx
-            F[a1, 1] += s * fy
-            F[a1, 2] += s * fz
-            if spin:
-                torque[k] += pair_results[p, TORQUE_I]
-            n_touch += 1
-            fn_sum += pair_results[p, NORMAL]
-            n_slide += int(pair_results[p, SLIDING])
-            max_overlap = max(max_overlap, overlap)
-        else:
-            k = pairs[p, 1]
-            t = pair_results[p, T_PAIR]
-            b0 = edge_a[k]
-            b1 = edge_b[k]
-            F[b0, 0] -= (1 - t) * fx
-            F[b0, 1] -= (1 - t) * fy
-            F[b0, 2] -= (1 - t) * fz
-            F[b1, 0] -= t * fx
-            F[b1, 1] -= t * fy
-            F[b1, 2] -= t * fz
-            if spin:
-                torque[k] += pair_results[p, TORQUE_J]
-    rod_stats[r, TOUCHING] = n_touch
-    rod_stats[r, MAX_OVERLAP] = max_overlap
-    rod_stats[r, NORMAL_FORCE_SUM] = fn_sum
-    rod_stats[r, SLIDING_PAIRS] = n_slide
-
-
-@njit(**PARALLEL_OPTS)
-def _contact_sums_by_rod(start, sides, pairs, overlaps, pair_results, edge_a, edge_b, spin, F, torque, rod_stats):
-    for r in prange(start.shape[0] - 1):
-        rod_contact_sum(r, start, sides, pairs, overlaps, pair_results, edge_a, edge_b, spin, F, torque, rod_stats)
-
-
-@njit(**NUMBA_OPTS)
 def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F, torque, v_damp, omega_damp,
                    predicted):
     """Add the contact forces of the candidate pairs of ``c`` (:class:`knitlad.engine.contact.Contacts`) to F
@@ -901,15 +814,13 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
     2 zeta sqrt(k m_eff)). ``c.stats`` receives, at slots TOUCHING, MAX_OVERLAP,
     NORMAL_FORCE_SUM and SLIDING_PAIRS, the state of this evaluation, and keeps at
     PEAK_OVERLAP the deepest overlap since the caller last zeroed it. The pairs are
-    evaluated on up to ``c.threads[0]`` threads into ``c.overlap`` and ``c.pair_results``, then added
-    to F rod by rod (:func:`rod_contact_sum`), each node's share in pair order: the forces
-    are bit for bit those of a serial sum over the pairs, on any number of threads.
+    evaluated on up to ``c.threads[0]`` threads into ``c.pair_results``, then added
+    to F one by one in pair order, so the forces are bit for bit the same on any
+    number of threads.
     """
     n_pairs = c.n_pairs[0]
     n_blocks = min(c.threads[0], n_pairs // MIN_PAIRS_PER_THREAD)
     p = c.params
-    if c.status[GAPS_KNOWN] == 0:  # a new list (made or rebuilt): its pairs' sides indexed by rod
-        sides_by_rod(c.pairs, n_pairs, c.edge_rod, c.rod_sides_start, c.rod_sides)
     # most candidate pairs stay apart between two rebuilds: after the first evaluation of a list, a pair
     # its stored gap rules out skips the distance test (counted_overlaps, SKIP_BY_GAPS)
     mode = SKIP_BY_GAPS if c.status[GAPS_KNOWN] == 1 else ALL_PAIRS_RECORD_GAPS
@@ -919,35 +830,54 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
             n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
             c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.stiffness, p.damping_n,
             p.damping_t,
-            p.mu, dt, c.pair_results, c.overlap, mode, c.gap_ref, c.edge_moved,
+            p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved,
         )
     else:
         pair_contact_forces(
             0, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
             c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.stiffness, p.damping_n,
             p.damping_t,
-            p.mu, dt, c.pair_results, c.overlap, mode, c.gap_ref, c.edge_moved,
+            p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved,
         )
     c.status[GAPS_KNOWN] = 1
-    # onto the nodes rod by rod, each rod's sides in pair order: each node's sum in the serial order
-    n_rods = c.rod_sides_start.shape[0] - 1
-    if n_blocks > 1:
-        _contact_sums_by_rod(c.rod_sides_start, c.rod_sides, c.pairs, c.overlap, c.pair_results, edge_a, edge_b, spin, F,
-                             torque, c.rod_stats)
-    else:
-        for r in range(n_rods):
-            rod_contact_sum(r, c.rod_sides_start, c.rod_sides, c.pairs, c.overlap, c.pair_results, edge_a, edge_b, spin,
-                            F, torque, c.rod_stats)
-    stats = c.stats
+    pairs, pair_results, stats = c.pairs, c.pair_results, c.stats
     n_touch = 0
     max_overlap = 0.0
     fn_sum = 0.0
     n_slide = 0
-    for r in range(n_rods):
-        n_touch += int(c.rod_stats[r, TOUCHING])
-        max_overlap = max(max_overlap, c.rod_stats[r, MAX_OVERLAP])
-        fn_sum += c.rod_stats[r, NORMAL_FORCE_SUM]
-        n_slide += int(c.rod_stats[r, SLIDING_PAIRS])
+    for p in range(n_pairs):
+        overlap = pair_results[p, OVERLAP]
+        if overlap <= 0.0:
+            continue
+        a0 = edge_a[pairs[p, 0]]
+        a1 = edge_b[pairs[p, 0]]
+        b0 = edge_a[pairs[p, 1]]
+        b1 = edge_b[pairs[p, 1]]
+        s = pair_results[p, S_PAIR]
+        t = pair_results[p, T_PAIR]
+        fx = pair_results[p, FORCE_X]
+        fy = pair_results[p, FORCE_Y]
+        fz = pair_results[p, FORCE_Z]
+        F[a0, 0] += (1 - s) * fx
+        F[a0, 1] += (1 - s) * fy
+        F[a0, 2] += (1 - s) * fz
+        F[a1, 0] += s * fx
+        F[a1, 1] += s * fy
+        F[a1, 2] += s * fz
+        F[b0, 0] -= (1 - t) * fx
+        F[b0, 1] -= (1 - t) * fy
+        F[b0, 2] -= (1 - t) * fz
+        F[b1, 0] -= t * fx
+        F[b1, 1] -= t * fy
+        F[b1, 2] -= t * fz
+        if spin:
+            torque[pairs[p, 0]] += pair_results[p, TORQUE_I]
+            torque[pairs[p, 1]] += pair_results[p, TORQUE_J]
+        n_touch += 1
+        fn_sum += pair_results[p, NORMAL]
+        n_slide += int(pair_results[p, SLIDING])
+        if overlap > max_overlap:
+            max_overlap = overlap
     stats[TOUCHING] = n_touch
     stats[MAX_OVERLAP] = max_overlap
     stats[NORMAL_FORCE_SUM] = fn_sum
@@ -964,12 +894,11 @@ def contact_energy(x, edge_a, edge_b, edge_shift, c, pairs, slip):
     ``pairs`` (m, 2) with their ``slip`` (m, 3) (``c.pairs[:n]``, ``c.slip[:n]``, or a subset)."""
     n_pairs = pairs.shape[0]
     narrow = np.empty((n_pairs, PAIR_RESULTS))
-    overlaps = np.empty(n_pairs)
     counted_overlaps(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, c.union, pairs, 0, n_pairs,
-                     overlaps, narrow, ALL_PAIRS_PLAIN, c.gap_ref, c.edge_moved)
+                     narrow, ALL_PAIRS_PLAIN, c.gap_ref, c.edge_moved)
     total = 0.0
     for p in range(n_pairs):
-        overlap = overlaps[p]
+        overlap = narrow[p, OVERLAP]
         if overlap > 0.0:
             k_n = c.stiffness[c.edge_class[pairs[p, 0]], c.edge_class[pairs[p, 1]], 0]
             k_t = c.stiffness[c.edge_class[pairs[p, 0]], c.edge_class[pairs[p, 1]], 1]
@@ -1044,13 +973,12 @@ def touching_pairs_among(x, edge_a, edge_b, edge_shift, c, in_a, in_b):
     set ``in_b`` (boolean masks over the edges: a part of a yarn and its images, say)."""
     n_pairs = c.n_pairs[0]
     narrow = np.empty((n_pairs, PAIR_RESULTS))
-    overlaps = np.empty(n_pairs)
     counted_overlaps(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, 0,
-                     n_pairs, overlaps, narrow, ALL_PAIRS_PLAIN, c.gap_ref, c.edge_moved)
+                     n_pairs, narrow, ALL_PAIRS_PLAIN, c.gap_ref, c.edge_moved)
     n = 0
     for p in range(n_pairs):
         i = c.pairs[p, 0]
         j = c.pairs[p, 1]
-        if ((in_a[i] and in_b[j]) or (in_a[j] and in_b[i])) and overlaps[p] > 0.0:
+        if ((in_a[i] and in_b[j]) or (in_a[j] and in_b[i])) and narrow[p, OVERLAP] > 0.0:
             n += 1
     return n
