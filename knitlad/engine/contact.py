@@ -93,7 +93,8 @@ class ContactModel:
                                 between a yarn of material a and one of material b (either order; the
                                 tangential spring keeps its ratio); every other pair has ``stiffness``.
                                 A yarn's material is known to the contact by its diameter and Young's
-                                modulus (what sets a contact's stiffness)
+                                modulus (what sets a contact's stiffness); a material that no edge has
+                                is refused (an EA softened by ``with_axial_stiffness`` hides a material)
     """
 
     stiffness: float
@@ -405,6 +406,10 @@ def pair_stiffness_table(m: RodModel, model: ContactModel | None, params: Contac
     for c, mat in enumerate(materials, start=1):
         same = (np.isclose(radius, 0.5 * mat.diameter / units.LENGTH, rtol=1e-9, atol=0.0)
                 & np.isclose(m.EA, mat.stretching_stiffness / units.FORCE, rtol=1e-9, atol=0.0))
+        if not same.any():
+            # else its contacts would silently keep the default stiffness
+            raise ValueError(f"pair_stiffness: no yarn of material {mat!r} in the rods (a material is found by its "
+                             "diameter and EA, and an EA softened by with_axial_stiffness hides it)")
         edge_class[same] = c
     for mat_a, mat_b, k in () if model is None else model.pair_stiffness:
         a, b = materials.index(mat_a) + 1, materials.index(mat_b) + 1

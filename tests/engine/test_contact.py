@@ -401,6 +401,11 @@ def test_each_pair_of_materials_has_its_own_contact_stiffness():
     rods = scene.build()  # the stiffest pair sets the step
     assert contact_time_step(rods.model, model) == pytest.approx(
         contact_time_step(rods.model, ContactModel(stiffness=7e3)), rel=1e-12)
+    # a material no yarn has (here hidden by a softened EA) is refused, not left at the default stiffness
+    from knitlad.engine.state import with_axial_stiffness
+
+    with pytest.raises(ValueError, match="pair_stiffness: no yarn of material"):
+        kl.Simulation(with_axial_stiffness(rods, 0.5), contact=model)
 
 
 def test_the_edges_largest_displacement_is_the_nodes_to_the_bit():
