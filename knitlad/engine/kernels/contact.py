@@ -369,6 +369,15 @@ def _beyond_skin_within_allowances(dist, r_i, r_j, skin, allowance_i, allowance_
     return not dist < r_i + r_j + skin and dist < r_i + r_j + allowance_i + allowance_j
 
 
+@njit(**INLINE_OPTS)
+def _appended_key(found, n, key):
+    """``found[:n]`` with ``key`` after it, and the new count; ``found`` doubled when full."""
+    if n == found.shape[0]:
+        found = np.concatenate((found, np.empty(max(n, 1), dtype=np.int64)))
+    found[n] = key
+    return found, n + 1
+
+
 @njit(**NUMBA_OPTS)
 def fast_edge_pairs(x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed,
                     exclusion, edge_image, skin, allowance, fast, cell, cells, dims, mid, reach, start, order):
@@ -405,10 +414,7 @@ def fast_edge_pairs(x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_
                     dist, _, _ = segment_distance(x, edge_a, edge_b, edge_shift, f, j)
                     if _beyond_skin_within_allowances(dist, edge_radius[f], edge_radius[j], skin, allowance[f],
                                                       allowance[j]):
-                        if n == found.shape[0]:
-                            found = np.concatenate((found, np.empty(n, dtype=np.int64)))
-                        found[n] = min(f, j) * ne + max(f, j)
-                        n += 1
+                        found, n = _appended_key(found, n, min(f, j) * ne + max(f, j))
     # two fast edges: a sweep along x, each pair once
     by_x = fast[np.argsort(mid[fast, 0])]
     widest = 0.0
@@ -430,10 +436,7 @@ def fast_edge_pairs(x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_
                 continue
             dist, _, _ = segment_distance(x, edge_a, edge_b, edge_shift, f, g)
             if _beyond_skin_within_allowances(dist, edge_radius[f], edge_radius[g], skin, allowance[f], allowance[g]):
-                if n == found.shape[0]:
-                    found = np.concatenate((found, np.empty(n, dtype=np.int64)))
-                found[n] = min(f, g) * ne + max(f, g)
-                n += 1
+                found, n = _appended_key(found, n, min(f, g) * ne + max(f, g))
     return np.sort(found[:n])
 
 
