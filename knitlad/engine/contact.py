@@ -25,6 +25,7 @@ from knitlad.engine.kernels.contact import (
     NORMAL_FORCE_SUM,
     PAIR_RESULTS,
     PEAK_OVERLAP,
+    SHARE_COLUMNS,
     SLIDING_PAIRS,
     STALE,
     TOUCHING,
@@ -208,6 +209,13 @@ class Contacts(NamedTuple):
     stiffness: np.ndarray  # (c, c, 2) k_n and k_t of a pair of edge classes [mN/mm]
     edge_allowance: np.ndarray  # (ne,) how far each edge may move before the list is stale (half the skin, more if fast)
     list_scratch: ListScratch  # work arrays of a rebuild, kept between rebuilds
+    edge_rod: np.ndarray  # (ne,) int64 the yarn of the state (RodModel.yarn_start) whose nodes each edge moves
+    share_layout: np.ndarray  # (1,) int64 the pair blocks ``bucket_start`` is laid out for (0: none yet)
+    bucket_start: np.ndarray  # (max threads, n_yarns) int64 first slot of each block's shares for each yarn
+    bucket_fill: np.ndarray  # (max threads, n_yarns) int64 the next free slot of each bucket, this evaluation
+    shares: np.ndarray  # (2 cap, SHARE_COLUMNS) each touching pair's share on each of its two edges
+    share_edge: np.ndarray  # (2 cap,) int64 2 k + (0: the pair's first edge k, 1: its second)
+    rod_stats: np.ndarray  # (n_yarns, N_STATS) each yarn's part of ``stats`` (rod_contact_sum)
 
 
 def edge_topology(m: RodModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -361,6 +369,13 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         **pair_stiffness_table(m, model, params),
         edge_allowance=np.full(ne, 0.5 * params.skin),
         list_scratch=list_scratch(ne, cap),
+        edge_rod=m.node_yarn[m.edge_a].astype(np.int64),
+        share_layout=np.zeros(1, dtype=np.int64),
+        bucket_start=np.zeros((numba.config.NUMBA_NUM_THREADS, m.n_yarns), dtype=np.int64),
+        bucket_fill=np.zeros((numba.config.NUMBA_NUM_THREADS, m.n_yarns), dtype=np.int64),
+        shares=np.empty((2 * cap, SHARE_COLUMNS)),
+        share_edge=np.empty(2 * cap, dtype=np.int64),
+        rod_stats=np.zeros((m.n_yarns, N_STATS)),
     )
     if previous is not None:
         m = int(previous.n_pairs[0])

@@ -253,6 +253,67 @@ def test_contact_forces_are_bit_for_bit_the_same_on_one_and_two_threads():
     assert np.array_equal(finals[0], finals[1])
 
 
+@pytest.mark.parametrize("spin", [False, True])
+def test_the_contact_sum_rod_by_rod_is_the_serial_sum_over_the_pairs_to_the_bit(spin):
+    """Each rod (a yarn of the state) adds its pairs' shares to its own nodes, on its own thread: every node
+    must receive them in pair order, the order of one serial sum over the pairs (forces already on the nodes,
+    so that another order would show in the bits), and the statistics must be those of all touching pairs."""
+    from numba import njit
+
+    from knitlad.engine import units
+    from knitlad.engine.kernels import contact as kc
+    from knitlad.engine.kernels.options import NUMBA_OPTS
+
+    @njit(**dict(NUMBA_OPTS, cache=False))
+    def serial_sum(pairs, n, res, edge_a, edge_b, spin, F, torque):
+        for p in range(n):
+            if res[p, kc.OVERLAP] <= 0.0:
+                continue
+            a0, a1 = edge_a[pairs[p, 0]], edge_b[pairs[p, 0]]
+            b0, b1 = edge_a[pairs[p, 1]], edge_b[pairs[p, 1]]
+            s, t = res[p, kc.S_PAIR], res[p, kc.T_PAIR]
+            for d in range(3):
+                f = res[p, kc.FORCE_X + d]
+                F[a0, d] += (1 - s) * f
+                F[a1, d] += s * f
+                F[b0, d] -= (1 - t) * f
+                F[b1, d] -= t * f
+            if spin:
+                torque[pairs[p, 0]] += res[p, kc.TORQUE_I]
+                torque[pairs[p, 1]] += res[p, kc.TORQUE_J]
+
+    # ten parallel yarns pressed side by side, stored so that neighbours fall in different halves of the
+    # list: many nodes get shares from both blocks of pairs, whose order then shows in the bits
+    scene = kl.Scene(kl.NYLON)
+    s = np.linspace(0.0, 150 * D, 151)
+    for k in (0, 5, 1, 6, 2, 7, 3, 8, 4, 9):
+        scene.add_yarn(np.column_stack([s + 0.3 * D * (k % 2), np.full_like(s, 0.95 * D * k), 0 * s]))
+    rods = scene.build()
+    rng = np.random.default_rng(11)
+    m, x = rods.model, rods.state.x
+    v = rng.normal(scale=2.0, size=x.shape) / units.VELOCITY
+    omega = rng.normal(size=m.edge_a.shape[0])
+    c = make_contacts(rods, ContactModel(stiffness=1e3, mu=0.3, capacity_per_edge=8))
+    assert kc.refresh_contacts(x, m.edge_a, m.edge_b, m.edge_shift, c)
+    base, base_torque = rng.normal(size=x.shape), rng.normal(size=m.edge_a.shape[0])
+    for evaluation in range(2):  # the list's first evaluation, then one that skips pairs by their gaps
+        force, torque = base.copy(), base_torque.copy()
+        kc.contact_forces(x, v, omega, spin, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, 1e-5, force, torque, v,
+                          omega, False)
+        n = int(c.n_pairs[0])
+        assert n >= 2 * kc.MIN_PAIRS_PER_THREAD  # the rods run in parallel where there are two threads
+        expected, expected_torque = base.copy(), base_torque.copy()
+        serial_sum(c.pairs, n, c.pair_results, m.edge_a, m.edge_b, spin, expected, expected_torque)
+        assert np.array_equal(force, expected) and not np.array_equal(force, base)
+        assert np.array_equal(torque, expected_torque)
+        touching = c.pair_results[:n, kc.OVERLAP] > 0.0
+        assert c.stats[kc.TOUCHING] == touching.sum() > 100
+        assert c.stats[kc.SLIDING_PAIRS] == c.pair_results[:n, kc.SLIDING][touching].sum()
+        assert c.stats[kc.MAX_OVERLAP] == c.pair_results[:n, kc.OVERLAP].max()
+        assert c.stats[kc.NORMAL_FORCE_SUM] == pytest.approx(c.pair_results[:n, kc.NORMAL][touching].sum(),
+                                                             rel=1e-12)
+
+
 def test_the_sagitta_correction_is_the_mean_offset_of_an_arc_from_its_chord():
     """On a circle of radius R, the arc over a chord of length l lies l^2 s (1 - s) / (2 R) from it at s
     along the chord, l^2 / (12 R) on average (to O(l/R)^2): exactly what the correction takes off."""

@@ -100,6 +100,11 @@ GAP_MARGIN = 1e-9
 # columns of the per-pair results of :func:`pair_contact_forces`
 FORCE_X, FORCE_Y, FORCE_Z, S_PAIR, T_PAIR, OVERLAP, NORMAL, SLIDING, TORQUE_I, TORQUE_J = range(10)
 PAIR_RESULTS = 10
+# columns of a touching pair's share on one of its edges (Contacts.shares: one 64-byte row): the pair's force on
+# its first edge, that edge's lever parameter (s, or t on the second edge), its friction couple, and for the
+# statistics the normal force, the overlap and 1 if sliding
+SHARE_X, SHARE_Y, SHARE_Z, SHARE_LEVER, SHARE_TORQUE, SHARE_NORMAL, SHARE_OVERLAP, SHARE_SLIDING = range(8)
+SHARE_COLUMNS = 8
 
 
 @njit(**INLINE_OPTS)
@@ -631,7 +636,7 @@ def coulomb_spring(ux, uy, uz, nx, ny, nz, vtx, vty, vtz, sx, sy, sz, dt, k_t, g
 def pair_contact_forces(
     lo, hi, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
     edge_prev, edge_next, union, pairs, slip, edge_class, stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref,
-    edge_moved,
+    edge_moved, blk, edge_rod, bucket_fill, shares, share_edge,
 ):
     """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``
     (the narrow phase in ``mode``, :func:`counted_overlaps`).
@@ -653,6 +658,10 @@ def pair_contact_forces(
     ``predicted``: the dashpots act on ``v_damp``, ``omega_damp`` (the velocities predicted at the end
     of the step, :func:`knitlad.engine.kernels.integrate.predict_velocities`), the slip on the half-step
     ``v``, ``omega``; else both on ``v``, ``omega``.
+
+    Each touching pair's two shares (one per edge: the force, s or t, the friction couple) are appended to the
+    bucket of this block ``blk`` and that edge's rod (``bucket_fill[blk, rod]``, the next free slot of
+    ``shares`` and ``share_edge``), for :func:`contact_sums_by_rod`.
     """
     counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out,
                      mode, gap_ref, edge_moved)
@@ -752,19 +761,34 @@ def pair_contact_forces(
             mx, my, mz = cross(nx, ny, nz, ftx, fty, ftz)
             out[p, TORQUE_I] = -edge_radius[i] * dot(d1x, d1y, d1z, mx, my, mz) / li
             out[p, TORQUE_J] = -edge_radius[j] * dot(d2x, d2y, d2z, mx, my, mz) / lj
+        for side in range(2):
+            k = i if side == 0 else j
+            r = edge_rod[k]
+            q = bucket_fill[blk, r]
+            bucket_fill[blk, r] = q + 1
+            share_edge[q] = 2 * k + side
+            shares[q, SHARE_X] = out[p, FORCE_X]
+            shares[q, SHARE_Y] = out[p, FORCE_Y]
+            shares[q, SHARE_Z] = out[p, FORCE_Z]
+            shares[q, SHARE_LEVER] = s if side == 0 else t
+            shares[q, SHARE_TORQUE] = (out[p, TORQUE_I] if side == 0 else out[p, TORQUE_J]) if spin else 0.0
+            shares[q, SHARE_NORMAL] = fn
+            shares[q, SHARE_OVERLAP] = overlap
+            shares[q, SHARE_SLIDING] = sliding
 
 
 @njit(**PARALLEL_OPTS)
 def _pair_contact_forces_in_blocks(
     n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
     edge_prev, edge_next, union, pairs, slip, edge_class, stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref,
-    edge_moved,
+    edge_moved, edge_rod, bucket_fill, shares, share_edge,
 ):
     for blk in prange(n_blocks):
         pair_contact_forces(
             blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, omega, v_damp, omega_damp, predicted,
             spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, slip, edge_class,
-            stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref, edge_moved,
+            stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref, edge_moved, blk, edge_rod, bucket_fill, shares,
+            share_edge,
         )
 
 
@@ -806,6 +830,79 @@ def edge_allowances(v, edge_a, edge_b, half_skin, lookahead, cap, out):
 
 
 @njit(**NUMBA_OPTS)
+def share_buckets(pairs, n_pairs, edge_rod, n_blocks, bucket_start):
+    """The slots of the touching pairs' shares in ``Contacts.shares`` for a list evaluated in ``n_blocks`` equal
+    blocks of pairs: ``bucket_start[b, r]`` is the first slot of what block b gives rod r (a yarn of the state;
+    one share per edge of rod r among the block's pairs at most). A rod's buckets follow each other in block
+    order, so a rod reads its shares in pair order."""
+    n_rods = bucket_start.shape[1]
+    count = np.zeros((n_blocks, n_rods), dtype=np.int64)
+    for b in range(n_blocks):
+        for p in range(b * n_pairs // n_blocks, (b + 1) * n_pairs // n_blocks):
+            count[b, edge_rod[pairs[p, 0]]] += 1
+            count[b, edge_rod[pairs[p, 1]]] += 1
+    q = 0
+    for r in range(n_rods):
+        for b in range(n_blocks):
+            bucket_start[b, r] = q
+            q += count[b, r]
+
+
+@njit(**NUMBA_OPTS)
+def rod_contact_sum(r, n_blocks, bucket_start, bucket_fill, shares, share_edge, edge_a, edge_b, spin, F, torque,
+                    rod_stats):
+    """Add rod r's shares to its nodes by the lever rule, (1 - s) f and s f on a pair's first edge, -(1 - t) f
+    and -t f on its second (with ``spin`` the friction couple to the edge's torque), block after block: in pair
+    order, as a serial sum over the pairs adds them. ``rod_stats[r]`` (slots TOUCHING, MAX_OVERLAP,
+    NORMAL_FORCE_SUM, SLIDING_PAIRS): those of the touching pairs whose first edge is rod r's."""
+    n_touch = 0
+    max_overlap = 0.0
+    fn_sum = 0.0
+    n_slide = 0
+    for b in range(n_blocks):
+        for q in range(bucket_start[b, r], bucket_fill[b, r]):
+            k = share_edge[q] >> 1
+            # +1 on a pair's first edge, -1 on its second; the products in one block, with no branch: a
+            # branch for each side made the compiler hoist (1 - w) f out of it and drop the fused multiply-adds
+            # that the serial sum gets, which changed the last bits (2026-12-04)
+            sign = 1.0 - 2.0 * (share_edge[q] & 1)
+            lever_a = sign * (1 - shares[q, SHARE_LEVER])
+            lever_b = sign * shares[q, SHARE_LEVER]
+            fx = shares[q, SHARE_X]
+            fy = shares[q, SHARE_Y]
+            fz = shares[q, SHARE_Z]
+            n0 = edge_a[k]
+            n1 = edge_b[k]
+            F[n0, 0] += lever_a * fx
+            F[n0, 1] += lever_a * fy
+            F[n0, 2] += lever_a * fz
+            F[n1, 0] += lever_b * fx
+            F[n1, 1] += lever_b * fy
+            F[n1, 2] += lever_b * fz
+            if share_edge[q] & 1 == 0:
+                n_touch += 1
+                fn_sum += shares[q, SHARE_NORMAL]
+                n_slide += int(shares[q, SHARE_SLIDING])
+                max_overlap = max(max_overlap, shares[q, SHARE_OVERLAP])
+            if spin:
+                torque[k] += shares[q, SHARE_TORQUE]
+    rod_stats[r, TOUCHING] = n_touch
+    rod_stats[r, MAX_OVERLAP] = max_overlap
+    rod_stats[r, NORMAL_FORCE_SUM] = fn_sum
+    rod_stats[r, SLIDING_PAIRS] = n_slide
+
+
+@njit(**PARALLEL_OPTS)
+def contact_sums_by_rod(n_blocks, bucket_start, bucket_fill, shares, share_edge, edge_a, edge_b, spin, F, torque,
+                        rod_stats):
+    """The contact forces onto the nodes, rod by rod in parallel (:func:`rod_contact_sum`): a rod's edges move
+    only its own nodes."""
+    for r in prange(rod_stats.shape[0]):
+        rod_contact_sum(r, n_blocks, bucket_start, bucket_fill, shares, share_edge, edge_a, edge_b, spin, F, torque,
+                        rod_stats)
+
+
+@njit(**NUMBA_OPTS)
 def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F, torque, v_damp, omega_damp,
                    predicted):
     """Add the contact forces of the candidate pairs of ``c`` (:class:`knitlad.engine.contact.Contacts`) to F
@@ -817,13 +914,18 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
     2 zeta sqrt(k m_eff)). ``c.stats`` receives, at slots TOUCHING, MAX_OVERLAP,
     NORMAL_FORCE_SUM and SLIDING_PAIRS, the state of this evaluation, and keeps at
     PEAK_OVERLAP the deepest overlap since the caller last zeroed it. The pairs are
-    evaluated on up to ``c.threads[0]`` threads into ``c.pair_results``, then added
-    to F one by one in pair order, so the forces are bit for bit the same on any
-    number of threads.
+    evaluated on up to ``c.threads[0]`` threads into ``c.pair_results``, each touching pair's two shares
+    into the buckets of its block and its edges' rods; each rod then adds its shares, block after block, to its
+    own nodes (:func:`contact_sums_by_rod`): every node gets its shares in pair order, so the forces are bit
+    for bit those of a serial sum over the pairs, on any number of threads.
     """
     n_pairs = c.n_pairs[0]
-    n_blocks = min(c.threads[0], n_pairs // MIN_PAIRS_PER_THREAD)
+    n_blocks = max(1, min(c.threads[0], n_pairs // MIN_PAIRS_PER_THREAD))
     p = c.params
+    if c.status[GAPS_KNOWN] == 0 or c.share_layout[0] != n_blocks:  # a new list, or new blocks
+        share_buckets(c.pairs, n_pairs, c.edge_rod, n_blocks, c.bucket_start)
+        c.share_layout[0] = n_blocks
+    c.bucket_fill[:n_blocks] = c.bucket_start[:n_blocks]
     # most candidate pairs stay apart between two rebuilds: after the first evaluation of a list, a pair
     # its stored gap rules out skips the distance test (counted_overlaps, SKIP_BY_GAPS)
     mode = SKIP_BY_GAPS if c.status[GAPS_KNOWN] == 1 else ALL_PAIRS_RECORD_GAPS
@@ -832,55 +934,32 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
         _pair_contact_forces_in_blocks(
             n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
             c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.stiffness, p.damping_n,
-            p.damping_t,
-            p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved,
+            p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, c.edge_rod, c.bucket_fill, c.shares,
+            c.share_edge,
         )
+        contact_sums_by_rod(n_blocks, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b, spin, F,
+                            torque, c.rod_stats)
     else:
         pair_contact_forces(
             0, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
             c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.stiffness, p.damping_n,
-            p.damping_t,
-            p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved,
+            p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, 0, c.edge_rod, c.bucket_fill,
+            c.shares, c.share_edge,
         )
+        for r in range(c.rod_stats.shape[0]):
+            rod_contact_sum(r, 1, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b, spin, F,
+                            torque, c.rod_stats)
     c.status[GAPS_KNOWN] = 1
-    pairs, pair_results, stats = c.pairs, c.pair_results, c.stats
+    stats = c.stats
     n_touch = 0
     max_overlap = 0.0
     fn_sum = 0.0
     n_slide = 0
-    for p in range(n_pairs):
-        overlap = pair_results[p, OVERLAP]
-        if overlap <= 0.0:
-            continue
-        a0 = edge_a[pairs[p, 0]]
-        a1 = edge_b[pairs[p, 0]]
-        b0 = edge_a[pairs[p, 1]]
-        b1 = edge_b[pairs[p, 1]]
-        s = pair_results[p, S_PAIR]
-        t = pair_results[p, T_PAIR]
-        fx = pair_results[p, FORCE_X]
-        fy = pair_results[p, FORCE_Y]
-        fz = pair_results[p, FORCE_Z]
-        F[a0, 0] += (1 - s) * fx
-        F[a0, 1] += (1 - s) * fy
-        F[a0, 2] += (1 - s) * fz
-        F[a1, 0] += s * fx
-        F[a1, 1] += s * fy
-        F[a1, 2] += s * fz
-        F[b0, 0] -= (1 - t) * fx
-        F[b0, 1] -= (1 - t) * fy
-        F[b0, 2] -= (1 - t) * fz
-        F[b1, 0] -= t * fx
-        F[b1, 1] -= t * fy
-        F[b1, 2] -= t * fz
-        if spin:
-            torque[pairs[p, 0]] += pair_results[p, TORQUE_I]
-            torque[pairs[p, 1]] += pair_results[p, TORQUE_J]
-        n_touch += 1
-        fn_sum += pair_results[p, NORMAL]
-        n_slide += int(pair_results[p, SLIDING])
-        if overlap > max_overlap:
-            max_overlap = overlap
+    for r in range(c.rod_stats.shape[0]):
+        n_touch += int(c.rod_stats[r, TOUCHING])
+        max_overlap = max(max_overlap, c.rod_stats[r, MAX_OVERLAP])
+        fn_sum += c.rod_stats[r, NORMAL_FORCE_SUM]
+        n_slide += int(c.rod_stats[r, SLIDING_PAIRS])
     stats[TOUCHING] = n_touch
     stats[MAX_OVERLAP] = max_overlap
     stats[NORMAL_FORCE_SUM] = fn_sum
