@@ -369,13 +369,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         **pair_stiffness_table(m, model, params),
         edge_allowance=np.full(ne, 0.5 * params.skin),
         list_scratch=list_scratch(ne, cap),
-        edge_rod=m.node_yarn[m.edge_a].astype(np.int64),
-        share_layout=np.zeros(1, dtype=np.int64),
-        bucket_start=np.zeros((numba.config.NUMBA_NUM_THREADS, m.n_yarns), dtype=np.int64),
-        bucket_fill=np.zeros((numba.config.NUMBA_NUM_THREADS, m.n_yarns), dtype=np.int64),
-        shares=np.empty((2 * cap, SHARE_COLUMNS)),
-        share_edge=np.empty(2 * cap, dtype=np.int64),
-        rod_stats=np.zeros((m.n_yarns, N_STATS)),
+        **share_buffers(m, cap),
     )
     if previous is not None:
         m = int(previous.n_pairs[0])
@@ -406,6 +400,22 @@ def carry_friction_history(old: Contacts, new: Contacts, edge_map: np.ndarray) -
     new.n_pairs[0] = m
     new.status[STALE], new.status[GAPS_KNOWN] = 1, 0
     return True
+
+
+def share_buffers(m: RodModel, cap: int) -> dict:
+    """The buffers of the contact sum yarn by yarn (:func:`knitlad.engine.kernels.contact.contact_sums_by_rod`)
+    for a list of ``cap`` pairs: two shares per pair, buckets for each block of pairs (at most one per thread)
+    and yarn."""
+    blocks = numba.config.NUMBA_NUM_THREADS
+    return dict(
+        edge_rod=m.node_yarn[m.edge_a].astype(np.int64),
+        share_layout=np.zeros(1, dtype=np.int64),
+        bucket_start=np.zeros((blocks, m.n_yarns), dtype=np.int64),
+        bucket_fill=np.zeros((blocks, m.n_yarns), dtype=np.int64),
+        shares=np.empty((2 * cap, SHARE_COLUMNS)),
+        share_edge=np.empty(2 * cap, dtype=np.int64),
+        rod_stats=np.zeros((m.n_yarns, N_STATS)),
+    )
 
 
 def pair_stiffness_table(m: RodModel, model: ContactModel | None, params: ContactParams) -> dict:
