@@ -220,7 +220,7 @@ class Contacts(NamedTuple):
 
 def edge_topology(m: RodModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Yarn of each edge, its index within the yarn, edges per yarn, closed flags."""
-    edge_yarn = m.node_yarn[m.edge_a]
+    edge_yarn = m.edge_yarn
     n_yarns = m.n_yarns
     yarn_edges = np.bincount(edge_yarn, minlength=n_yarns).astype(np.int64)
     first = np.concatenate([[0], np.cumsum(yarn_edges)[:-1]])
@@ -339,7 +339,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         )
         # exclusion: edges within `exclusion_diameters` d of arc, and always the adjacent edge
         # (per state yarn: an image is a copy of its master, whose id it carries as its physical yarn)
-        own_yarn = m.node_yarn[m.edge_a]
+        own_yarn = m.edge_yarn
         seg = np.bincount(own_yarn, weights=m.rest_length, minlength=m.n_yarns) / np.maximum(yarn_edges, 1)
         d_yarn = 2.0 * np.bincount(own_yarn, weights=yarn_radius, minlength=m.n_yarns) / np.maximum(yarn_edges, 1)
         exclusion = np.maximum(1, np.ceil(model.exclusion_diameters * d_yarn / seg)).astype(np.int64)
@@ -408,7 +408,7 @@ def share_buffers(m: RodModel, cap: int) -> dict:
     and yarn."""
     blocks = numba.config.NUMBA_NUM_THREADS
     return dict(
-        edge_rod=m.node_yarn[m.edge_a].astype(np.int64),
+        edge_rod=m.edge_yarn.astype(np.int64),
         share_layout=np.zeros(1, dtype=np.int64),
         bucket_start=np.zeros((blocks, m.n_yarns), dtype=np.int64),
         bucket_fill=np.zeros((blocks, m.n_yarns), dtype=np.int64),

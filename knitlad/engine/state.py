@@ -71,6 +71,11 @@ class RodModel(NamedTuple):
     def n_yarns(self) -> int:
         return self.yarn_start.shape[0] - 1
 
+    @property
+    def edge_yarn(self) -> np.ndarray:
+        """(ne,) int64 the yarn of each edge (that of its first node: an edge joins two nodes of one yarn)."""
+        return self.node_yarn[self.edge_a]
+
     def yarn_of(self, node: int) -> tuple[int, int]:
         """(yarn, index of the node within its yarn)."""
         y = int(self.node_yarn[node])
@@ -161,7 +166,7 @@ class Workspace(NamedTuple):
         ne = model.edge_a.shape[0]
         n = model.n_nodes
         yarns = np.arange(model.n_yarns + 1)
-        edge_yarn = model.node_yarn[model.edge_a]
+        edge_yarn = model.edge_yarn
         hinge_yarn = edge_yarn[model.hinge_e1]
         return Workspace(
             np.zeros((ne, 3)), np.zeros(ne), np.zeros((ne, 3)), np.zeros((ne, 3)), np.zeros((n, 3)), np.zeros(ne),
@@ -179,7 +184,7 @@ def frame_anchors(model: RodModel) -> np.ndarray:
     or the second edge of an earlier hinge: checked here.
     """
     ne, nh = model.edge_a.shape[0], model.hinge_e0.shape[0]
-    edge_yarn = model.node_yarn[model.edge_a]
+    edge_yarn = model.edge_yarn
     anchor = np.ones(ne, dtype=bool)
     anchor[model.hinge_e1] = False
     first = np.searchsorted(edge_yarn, np.arange(model.n_yarns + 1))
@@ -462,7 +467,7 @@ def _initial_frames(x: np.ndarray, model: RodModel, twist: bool, curved_yarns: l
     elen = np.zeros(ne)
     edge_vectors(x, model.edge_a, model.edge_b, model.edge_shift, e, elen)
     tangent = e / elen[:, None]
-    edge_yarn = model.node_yarn[model.edge_a]
+    edge_yarn = model.edge_yarn
     ref_u = _initial_reference_directors(tangent, edge_yarn)
     ref_twist = np.zeros(nh)
     kappa_bar = np.zeros((nh, 2))
@@ -549,7 +554,7 @@ def with_twist(rods: Rods, twist_over_bending: float) -> Rods:
     elen = np.zeros(ne)
     edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, e, elen)
     tangent = e / elen[:, None]
-    ref_u = _initial_reference_directors(tangent, m.node_yarn[m.edge_a])
+    ref_u = _initial_reference_directors(tangent, m.edge_yarn)
     ref_twist = np.zeros(m.hinge_e0.shape[0])
     update_reference_twist(tangent, ref_u, m.hinge_e0, m.hinge_e1, ref_twist)
     model = m._replace(GJ_over_l=m.B_over_l * twist_over_bending, twist_bar=ref_twist.copy())

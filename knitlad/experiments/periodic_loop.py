@@ -243,7 +243,7 @@ class PeriodicLoopRun:
     def _loop_edges(self) -> tuple[np.ndarray, np.ndarray, slice]:
         """Edge masks of the loop (its middle column, with its images) and of the upper row; the loop's nodes."""
         m, rows, n = self.sim.model, self.rows, self.s.nodes_per_stitch
-        edge_yarn = m.node_yarn[m.edge_a]
+        edge_yarn = m.edge_yarn
         first = m.yarn_start[edge_yarn]
         column = (m.edge_a - first) // n
         in_loop = np.isin(edge_yarn, rows.family(LOOP)) & (column == self.middle)

@@ -318,7 +318,7 @@ class KnitBox:
         n = self.knit.geometry.nodes_per_stitch
         src_model, src = cell.sim.model, cell.sim.state
         model, state = rods.model, rods.state
-        edge_yarn = model.node_yarn[model.edge_a]
+        edge_yarn = model.edge_yarn
         hinge_yarn = edge_yarn[model.hinge_e1]
         kappa_bar, twist_bar = model.kappa_bar.copy(), model.twist_bar.copy()
         for y in [self.knit.bars[0]] + self.knit.courses + [self.knit.bars[1]]:

@@ -65,7 +65,7 @@ class PeriodicRows:
     def real_edges(self) -> np.ndarray:
         """Edges of the rows present (not their images): the cell's own energy."""
         m = self.rods.model
-        return np.flatnonzero(self._present(m.node_yarn[m.edge_a]))
+        return np.flatnonzero(self._present(m.edge_yarn))
 
     @property
     def real_hinges(self) -> np.ndarray:
@@ -115,6 +115,6 @@ def build_periodic_rows(stitch_nodes: np.ndarray, lx: float, ly: float, rows: in
             raise ValueError(f"rest_length must have one entry per stitch edge ({k}), got shape {rest_length.shape}")
         m = rods.model
         # every yarn is closed (as many edges as nodes), so its first edge has its first node's index
-        local = (np.arange(m.edge_a.shape[0]) - m.yarn_start[m.node_yarn[m.edge_a]]) % k
+        local = (np.arange(m.edge_a.shape[0]) - m.yarn_start[m.edge_yarn]) % k
         rods = rods.replace_model(rest_length=np.asarray(rest_length, dtype=float)[local])
     return PeriodicRows(rods, rows, columns, lx, ly, images)

@@ -44,7 +44,7 @@ class PeriodicStitch:
     def real_edges(self) -> slice:
         """Edges of the real yarn (the first yarn: its edges come first)."""
         m = self.rods.model
-        return slice(0, int(np.count_nonzero(m.node_yarn[m.edge_a] == self.yarn)))
+        return slice(0, int(np.count_nonzero(m.edge_yarn == self.yarn)))
 
     @property
     def real_hinges(self) -> np.ndarray:
