@@ -205,7 +205,6 @@ class Contacts(NamedTuple):
     pair_results: np.ndarray  # (cap, PAIR_RESULTS) scratch of contact_forces
     gap_ref: np.ndarray  # (cap,) each pair's gap at the list's first evaluation (a lower bound at its rebuild)
     edge_moved: np.ndarray  # (ne,) each edge's largest end displacement since the rebuild (scratch)
-    rod_excess: np.ndarray  # (n_yarns,) each yarn's largest excess of an edge's displacement over its allowance
     edge_class: np.ndarray  # (ne,) int64 row of ``stiffness`` for each edge's material (0: the default)
     stiffness: np.ndarray  # (c, c, 2) k_n and k_t of a pair of edge classes [mN/mm]
     edge_allowance: np.ndarray  # (ne,) how far each edge may move before the list is stale (half the skin, more if fast)
@@ -367,7 +366,6 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         pair_results=np.zeros((cap, PAIR_RESULTS)),
         gap_ref=np.zeros(cap),
         edge_moved=np.zeros(ne),
-        rod_excess=np.zeros(m.n_yarns),
         **pair_stiffness_table(m, model, params),
         edge_allowance=np.full(ne, 0.5 * params.skin),
         list_scratch=list_scratch(ne, cap),

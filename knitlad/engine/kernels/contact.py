@@ -35,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from knitlad.engine.kernels.options import INLINE_OPTS, NUMBA_OPTS, PARALLEL_OPTS, PASS_BLOCKS
+from knitlad.engine.kernels.options import INLINE_OPTS, NUMBA_OPTS, PARALLEL_OPTS
 from knitlad.engine.kernels.vec import cross, dot
 
 
@@ -792,32 +792,21 @@ def _pair_contact_forces_in_blocks(
         )
 
 
-@njit(**NUMBA_OPTS)
-def edge_displacements_of(x, x_ref, edge_a, edge_b, allowance, out, first, last):
-    """Largest displacement of each edge's two ends since ``x_ref`` (the last rebuild) into ``out``, for edges
-    [first, last); returns the largest excess of an edge's displacement over its ``allowance`` (-inf for none).
+@njit(**PARALLEL_OPTS)
+def edge_displacements(x, x_ref, edge_a, edge_b, allowance, out):
+    """Largest displacement of each edge's two ends since ``x_ref`` (the last rebuild) into ``out``; returns
+    the largest excess of an edge's displacement over its ``allowance`` (the list is stale when it is > 0).
     With a zero allowance that is the largest |x - x_ref| over the nodes where every node ends an edge (sqrt
     is monotonic and correctly rounded: the same bits), so one pass serves the rebuild's test and the narrow
     phase's skipping."""
     excess = -np.inf
-    for k in range(first, last):
+    for k in prange(edge_a.shape[0]):
         a = edge_a[k]
         b = edge_b[k]
         da = (x[a, 0] - x_ref[a, 0]) ** 2 + (x[a, 1] - x_ref[a, 1]) ** 2 + (x[a, 2] - x_ref[a, 2]) ** 2
         db = (x[b, 0] - x_ref[b, 0]) ** 2 + (x[b, 1] - x_ref[b, 1]) ** 2 + (x[b, 2] - x_ref[b, 2]) ** 2
         out[k] = math.sqrt(max(da, db))
         excess = max(excess, out[k] - allowance[k])
-    return excess
-
-
-@njit(**PARALLEL_OPTS)
-def edge_displacements(x, x_ref, edge_a, edge_b, allowance, out):
-    """:func:`edge_displacements_of` over every edge (the list is stale when the excess it returns is > 0)."""
-    excess = -np.inf
-    ne = edge_a.shape[0]
-    for blk in prange(PASS_BLOCKS):
-        excess = max(excess, edge_displacements_of(x, x_ref, edge_a, edge_b, allowance, out, blk * ne // PASS_BLOCKS,
-                                                   (blk + 1) * ne // PASS_BLOCKS))
     return excess
 
 
@@ -925,29 +914,11 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
     2 zeta sqrt(k m_eff)). ``c.stats`` receives, at slots TOUCHING, MAX_OVERLAP,
     NORMAL_FORCE_SUM and SLIDING_PAIRS, the state of this evaluation, and keeps at
     PEAK_OVERLAP the deepest overlap since the caller last zeroed it. The pairs are
-    evaluated on up to ``c.threads[0]`` threads (:func:`evaluate_contact_pairs`); each rod then adds its shares,
-    block after block, to its own nodes (:func:`contact_sums_by_rod`): every node gets its shares in pair order,
-    so the forces are bit for bit those of a serial sum over the pairs, on any number of threads.
+    evaluated on up to ``c.threads[0]`` threads into ``c.pair_results``, each touching pair's two shares
+    into the buckets of its block and its edges' rods; each rod then adds its shares, block after block, to its
+    own nodes (:func:`contact_sums_by_rod`): every node gets its shares in pair order, so the forces are bit
+    for bit those of a serial sum over the pairs, on any number of threads.
     """
-    n_blocks = evaluate_contact_pairs(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, v_damp, omega_damp,
-                                      predicted)
-    if n_blocks > 1:
-        contact_sums_by_rod(n_blocks, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b, spin, F,
-                            torque, c.rod_stats)
-    else:
-        for r in range(c.rod_stats.shape[0]):
-            rod_contact_sum(r, 1, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b, spin, F,
-                            torque, c.rod_stats)
-    gather_contact_stats(c)
-
-
-@njit(**NUMBA_OPTS)
-def evaluate_contact_pairs(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, v_damp, omega_damp,
-                           predicted):
-    """The pair pass of :func:`contact_forces`: every candidate pair's force into ``c.pair_results``, each
-    touching pair's two shares into the buckets of its block and its edges' rods, the slip history advanced.
-    Returns the number of blocks; the shares are then added to the nodes rod by rod
-    (:func:`rod_contact_sum`) and the statistics gathered (:func:`gather_contact_stats`)."""
     n_pairs = c.n_pairs[0]
     n_blocks = max(1, min(c.threads[0], n_pairs // MIN_PAIRS_PER_THREAD))
     p = c.params
@@ -966,6 +937,8 @@ def evaluate_contact_pairs(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, 
             p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, c.edge_rod, c.bucket_fill, c.shares,
             c.share_edge,
         )
+        contact_sums_by_rod(n_blocks, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b, spin, F,
+                            torque, c.rod_stats)
     else:
         pair_contact_forces(
             0, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
@@ -973,14 +946,10 @@ def evaluate_contact_pairs(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, 
             p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, 0, c.edge_rod, c.bucket_fill,
             c.shares, c.share_edge,
         )
+        for r in range(c.rod_stats.shape[0]):
+            rod_contact_sum(r, 1, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b, spin, F,
+                            torque, c.rod_stats)
     c.status[GAPS_KNOWN] = 1
-    return n_blocks
-
-
-@njit(**NUMBA_OPTS)
-def gather_contact_stats(c):
-    """``c.stats`` from the rods' parts (``c.rod_stats``, filled by :func:`rod_contact_sum`), rod by rod; the
-    peak overlap kept over every evaluation since the caller last zeroed it."""
     stats = c.stats
     n_touch = 0
     max_overlap = 0.0
@@ -995,7 +964,8 @@ def gather_contact_stats(c):
     stats[MAX_OVERLAP] = max_overlap
     stats[NORMAL_FORCE_SUM] = fn_sum
     stats[SLIDING_PAIRS] = n_slide
-    # an interpenetration lasting a few steps between two observations must not go unseen
+    # the peak over every evaluation since the caller last zeroed it: an interpenetration
+    # lasting a few steps between two observations must not go unseen
     if max_overlap > stats[PEAK_OVERLAP]:
         stats[PEAK_OVERLAP] = max_overlap
 
@@ -1032,15 +1002,8 @@ def refresh_contacts(x, edge_a, edge_b, edge_shift, c, v=None, lookahead=0.0):
     speed (:func:`edge_allowances`), so they no longer rebuild the whole list every few steps. Any valid list
     gives the same forces to the bit (pairs apart add nothing, and the touching ones are summed in key order).
     """
-    excess = edge_displacements(x, c.x_ref, edge_a, edge_b, c.edge_allowance, c.edge_moved)
-    return refresh_stale_contacts(x, edge_a, edge_b, edge_shift, c, excess, v, lookahead)
-
-
-@njit(**NUMBA_OPTS)
-def refresh_stale_contacts(x, edge_a, edge_b, edge_shift, c, excess, v=None, lookahead=0.0):
-    """:func:`refresh_contacts` with the edges' displacements already in ``c.edge_moved`` and their largest
-    ``excess`` over the allowances (:func:`edge_displacements_of`, edge by edge or yarn by yarn)."""
     skin = c.params.skin
+    excess = edge_displacements(x, c.x_ref, edge_a, edge_b, c.edge_allowance, c.edge_moved)
     if c.status[STALE] == 0 and excess <= 0.0:
         return True
     n_old = c.n_pairs[0]

@@ -20,21 +20,10 @@ before they return (:func:`complete_frames`), so the state they hand back is com
 
 import math
 
-import numpy as np
 from numba import njit, prange
 
-from knitlad.engine.kernels.options import NUMBA_OPTS, PARALLEL_OPTS, PASS_BLOCKS
-from knitlad.engine.kernels.contact import (
-    contact_energy,
-    contact_forces,
-    edge_displacements,
-    edge_displacements_of,
-    evaluate_contact_pairs,
-    gather_contact_stats,
-    refresh_contacts,
-    refresh_stale_contacts,
-    rod_contact_sum,
-)
+from knitlad.engine.kernels.options import NUMBA_OPTS, PARALLEL_OPTS
+from knitlad.engine.kernels.contact import contact_energy, contact_forces, refresh_contacts
 from knitlad.engine.kernels.obstacles import advance_obstacles, obstacle_forces
 from knitlad.engine.kernels.elastic import (
     bending_energy,
@@ -141,101 +130,6 @@ def reference_frames_by_yarn(m, s, w):
 
 
 @njit(**NUMBA_OPTS)
-def yarn_elastic_forces(m, s, w, y, twist, explicit_stretch, v_damp):
-    """Yarn y's elastic forces and torques onto its own nodes and edges, as the yarn-by-yarn passes above
-    compute them (the same calls in the same order: the same bits)."""
-    e0, e1 = w.yarn_edges[y], w.yarn_edges[y + 1]
-    h0, h1 = w.yarn_hinges[y], w.yarn_hinges[y + 1]
-    edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen, e0, e1)
-    if explicit_stretch:
-        stretching_forces(w.e, w.elen, v_damp, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force,
-                          e0, e1)
-    if twist == TWIST_FRAMED:
-        transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u, e0, e1)
-        update_reference_twist(s.tangent, s.ref_u, m.hinge_e0, m.hinge_e1, s.ref_twist, h0, h1)
-        material_frames(s.tangent, s.ref_u, s.theta, w.d1, w.d2, e0, e1)
-        framed_bending_twisting_forces(
-            w.e, w.elen, w.d1, w.d2, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1,
-            m.B_over_l, m.GJ_over_l, m.kappa_bar, s.ref_twist, m.twist_bar, s.theta, w.force, w.torque, h0, h1,
-        )
-    elif twist:
-        straight_bending_twisting_forces(
-            w.e, w.elen, s.tangent, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1,
-            m.B_over_l, m.GJ_over_l, s.ref_twist, m.twist_bar, s.theta, w.force, w.torque, h0, h1,
-        )
-        store_tangents(w.e, w.elen, s.tangent, s.ref_u, w.frame_anchor, e0, e1)
-    else:
-        bending_forces(w.e, w.elen, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1, m.B_over_l, w.force, h0, h1)
-
-
-@njit(**NUMBA_OPTS)
-def zero_torques_of(torque, first, last):
-    for j in range(first, last):
-        torque[j] = 0.0
-
-
-@njit(**PARALLEL_OPTS)
-def step_yarns(m, s, w, twist, contact, n_blocks, bucket_start, bucket_fill, shares, share_edge, rod_stats, x_ref,
-               allowance, edge_moved, rod_excess, v_damp, drag, dt, drift):
-    """Yarn by yarn in parallel: the external forces, the elastic forces, the contact shares
-    (:func:`rod_contact_sum`, after :func:`evaluate_contact_pairs`) and the kick and drift of the yarn's nodes
-    and edges (without ``drift``, the kick alone), then, with contact, its edges' displacements since the last
-    rebuild and their largest excess over the allowances into ``rod_excess[y]`` (the next step's test of the
-    list, :func:`edge_displacements_of`). Each node gets its forces in the order :func:`compute_forces` adds
-    them, and each yarn touches only its own nodes and edges: the same bits as the force evaluation followed by
-    :func:`kick_drift_nodes`, with four parallel regions and four sweeps of the node arrays fewer per step."""
-    for y in prange(w.yarn_edges.shape[0] - 1):
-        n0, n1, e0, e1 = m.yarn_start[y], m.yarn_start[y + 1], w.yarn_edges[y], w.yarn_edges[y + 1]
-        external_forces_of(m.f_ext, m.held, m.mass, v_damp, drag, w.force, n0, n1)
-        if twist:
-            zero_torques_of(w.torque, e0, e1)  # without twist no kernel writes a torque
-        yarn_elastic_forces(m, s, w, y, twist, True, v_damp)
-        if contact:
-            rod_contact_sum(y, n_blocks, bucket_start, bucket_fill, shares, share_edge, m.edge_a, m.edge_b, twist,
-                            w.force, w.torque, rod_stats)
-        if drift:
-            kick_drift_nodes_of(m.held, m.mass, w.force, m.v_prescribed, s.v, s.x, dt, n0, n1)
-            if twist:
-                kick_drift_edges_of(m.theta_held, m.twist_inertia, w.torque, s.omega, s.theta, dt, e0, e1)
-            if contact:  # the next step's test of the list, while the yarn's positions are at hand
-                rod_excess[y] = edge_displacements_of(s.x, x_ref, m.edge_a, m.edge_b, allowance, edge_moved, e0, e1)
-        else:
-            kick_nodes_of(m.held, m.mass, w.force, s.v, dt, n0, n1)
-            if twist:
-                kick_edges_of(m.theta_held, m.twist_inertia, w.torque, s.omega, dt, e0, e1)
-
-
-@njit(**NUMBA_OPTS)
-def fused_step(m, s, w, c, twist, contact, drag, dt, dashpots, drift, moved_known):
-    """One step's forces (:func:`compute_forces`) and closing kick with the next drift (:func:`kick_drift_nodes`;
-    without ``drift``, a half-kick), the yarns' part in one parallel pass (:func:`step_yarns`). For a scene
-    whose forces all come from its yarns, their contacts and the external loads (:func:`verlet_steps` says
-    which). ``moved_known``: the last step was one of these, with its drift, so its pass left the edges'
-    displacements for these positions. Returns False on a contact-buffer overflow, as :func:`compute_forces`
-    does (the step drifted, not closed)."""
-    predicted = dashpots == DASHPOTS_PREDICTED
-    v_damp = w.v_damp if predicted else s.v
-    n_blocks = 1
-    if contact:
-        if moved_known:
-            excess = -np.inf
-            for y in range(c.rod_excess.shape[0]):
-                excess = max(excess, c.rod_excess[y])
-        else:
-            excess = edge_displacements(s.x, c.x_ref, m.edge_a, m.edge_b, c.edge_allowance, c.edge_moved)
-        if not refresh_stale_contacts(s.x, m.edge_a, m.edge_b, m.edge_shift, c, excess, s.v,
-                                      c.params.lookahead_steps * dt):
-            return False
-        n_blocks = evaluate_contact_pairs(s.x, s.v, s.omega, twist, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt,
-                                          v_damp, w.omega_damp if predicted else s.omega, predicted)
-    step_yarns(m, s, w, twist, contact, n_blocks, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, c.rod_stats,
-               c.x_ref, c.edge_allowance, c.edge_moved, c.rod_excess, v_damp, drag, dt if drift else 0.5 * dt, drift)
-    if contact:
-        gather_contact_stats(c)
-    return True
-
-
-@njit(**NUMBA_OPTS)
 def complete_frames(m, s, w, twist):
     """Every edge's reference frame up to date: TWIST_STRAIGHT's steps carry only the anchors'
     (:func:`knitlad.engine.kernels.frames.store_tangents`), so :func:`verlet_steps`, :func:`fire_relax` and
@@ -290,23 +184,13 @@ def implicit_stretching_by_yarn(m, s, w, dt):
                                    m.stretch_damping, dt, w.force, w.axial_sweep, w.yarn_edges[y], w.yarn_edges[y + 1])
 
 
-@njit(**NUMBA_OPTS)
-def external_forces_of(f_ext, held, mass, v, drag, force, first, last):
-    """force = f_ext - drag m v on nodes [first, last) (the drag on free nodes only: on a held node it would
-    leak into its reaction)."""
-    for i in range(first, last):
-        damp = 0.0 if held[i] else drag * mass[i]
-        force[i, 0] = f_ext[i, 0] - damp * v[i, 0]
-        force[i, 1] = f_ext[i, 1] - damp * v[i, 1]
-        force[i, 2] = f_ext[i, 2] - damp * v[i, 2]
-
-
 @njit(**PARALLEL_OPTS)
 def external_forces(f_ext, held, mass, v, drag, force):
-    """:func:`external_forces_of` on every node."""
-    n = force.shape[0]
-    for blk in prange(PASS_BLOCKS):
-        external_forces_of(f_ext, held, mass, v, drag, force, blk * n // PASS_BLOCKS, (blk + 1) * n // PASS_BLOCKS)
+    """force = f_ext - drag m v (the drag on free nodes only: on a held node it would leak into its reaction)."""
+    for i in prange(force.shape[0]):
+        damp = 0.0 if held[i] else drag * mass[i]
+        for k in range(3):
+            force[i, k] = f_ext[i, k] - damp * v[i, k]
 
 
 @njit(**NUMBA_OPTS)
@@ -378,23 +262,15 @@ def kinetic_energy(m, s):
 # The per-node kernels take arrays, not the model and state tuples: with parallel=True, Numba
 # (0.68 here) drops writes to a named tuple's array under a branch in a prange loop, silently
 # (numba/numba#5872; seen here as a wrong drift of the held nodes).
-@njit(**NUMBA_OPTS)
-def kick_nodes_of(held, mass, force, v, half_dt, first, last):
-    """v += half_dt F / m on the free nodes of [first, last)."""
-    for i in range(first, last):
+@njit(**PARALLEL_OPTS)
+def kick_nodes(held, mass, force, v, half_dt):
+    """v += half_dt F / m on every free node."""
+    for i in prange(v.shape[0]):
         if not held[i]:
             step = half_dt / mass[i]
             v[i, 0] += force[i, 0] * step
             v[i, 1] += force[i, 1] * step
             v[i, 2] += force[i, 2] * step
-
-
-@njit(**PARALLEL_OPTS)
-def kick_nodes(held, mass, force, v, half_dt):
-    """:func:`kick_nodes_of` on every node."""
-    n = v.shape[0]
-    for blk in prange(PASS_BLOCKS):
-        kick_nodes_of(held, mass, force, v, half_dt, blk * n // PASS_BLOCKS, (blk + 1) * n // PASS_BLOCKS)
 
 
 @njit(**PARALLEL_OPTS)
@@ -410,12 +286,12 @@ def drift_nodes(held, v_prescribed, v, x, dt):
         x[i, 2] += dt * v[i, 2]
 
 
-@njit(**NUMBA_OPTS)
-def kick_drift_nodes_of(held, mass, force, v_prescribed, v, x, dt, first, last):
-    """One step's closing kick and the next one's drift on nodes [first, last) (:func:`kick_nodes` with
-    half_dt = dt, then :func:`drift_nodes`): the same operations on each node in the same order, so the same
-    bits, with one sweep of the node arrays fewer per step."""
-    for i in range(first, last):
+@njit(**PARALLEL_OPTS)
+def kick_drift_nodes(held, mass, force, v_prescribed, v, x, dt):
+    """One step's closing kick and the next one's drift in one pass (:func:`kick_nodes` with half_dt = dt, then
+    :func:`drift_nodes`): the same operations on each node in the same order, so the same bits, with one
+    parallel region and one sweep of the node arrays fewer per step."""
+    for i in prange(v.shape[0]):
         if held[i]:
             v[i, 0] = v_prescribed[i, 0]
             v[i, 1] = v_prescribed[i, 1]
@@ -431,18 +307,9 @@ def kick_drift_nodes_of(held, mass, force, v_prescribed, v, x, dt, first, last):
 
 
 @njit(**PARALLEL_OPTS)
-def kick_drift_nodes(held, mass, force, v_prescribed, v, x, dt):
-    """:func:`kick_drift_nodes_of` on every node."""
-    n = v.shape[0]
-    for blk in prange(PASS_BLOCKS):
-        kick_drift_nodes_of(held, mass, force, v_prescribed, v, x, dt, blk * n // PASS_BLOCKS,
-                            (blk + 1) * n // PASS_BLOCKS)
-
-
-@njit(**NUMBA_OPTS)
-def kick_drift_edges_of(theta_held, twist_inertia, torque, omega, theta, dt, first, last):
-    """:func:`kick_edges` with half_dt = dt, then :func:`drift_edges`, in one pass over edges [first, last)."""
-    for j in range(first, last):
+def kick_drift_edges(theta_held, twist_inertia, torque, omega, theta, dt):
+    """:func:`kick_edges` with half_dt = dt, then :func:`drift_edges`, in one pass (as :func:`kick_drift_nodes`)."""
+    for j in prange(omega.shape[0]):
         if theta_held[j]:
             omega[j] = 0.0
         else:
@@ -451,29 +318,11 @@ def kick_drift_edges_of(theta_held, twist_inertia, torque, omega, theta, dt, fir
 
 
 @njit(**PARALLEL_OPTS)
-def kick_drift_edges(theta_held, twist_inertia, torque, omega, theta, dt):
-    """:func:`kick_drift_edges_of` on every edge."""
-    n = omega.shape[0]
-    for blk in prange(PASS_BLOCKS):
-        kick_drift_edges_of(theta_held, twist_inertia, torque, omega, theta, dt, blk * n // PASS_BLOCKS,
-                            (blk + 1) * n // PASS_BLOCKS)
-
-
-@njit(**NUMBA_OPTS)
-def kick_edges_of(theta_held, twist_inertia, torque, omega, half_dt, first, last):
-    """omega += half_dt torque / I on the edges of [first, last) free to twist."""
-    for j in range(first, last):
+def kick_edges(theta_held, twist_inertia, torque, omega, half_dt):
+    """omega += half_dt torque / I on every edge free to twist."""
+    for j in prange(omega.shape[0]):
         if not theta_held[j]:
             omega[j] += half_dt * torque[j] / twist_inertia[j]
-
-
-@njit(**PARALLEL_OPTS)
-def kick_edges(theta_held, twist_inertia, torque, omega, half_dt):
-    """:func:`kick_edges_of` on every edge."""
-    n = omega.shape[0]
-    for blk in prange(PASS_BLOCKS):
-        kick_edges_of(theta_held, twist_inertia, torque, omega, half_dt, blk * n // PASS_BLOCKS,
-                      (blk + 1) * n // PASS_BLOCKS)
 
 
 @njit(**PARALLEL_OPTS)
@@ -534,19 +383,7 @@ def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, drag, axial=AXIAL_EXPL
     # the closing half-kick of one step and the opening one of the next are fused, and with the next drift
     half_kick(m, s, w, 0.5 * dt, twist)
     _drift(m, s, dt, twist)
-    # every force from the yarns, their contacts and the external loads: one yarn-by-yarn pass (fused_step)
-    fuse = obstacles is None
-    fuse = fuse and axial == AXIAL_EXPLICIT and m.rail_node.shape[0] == 0 and m.image_node.shape[0] == 0
     for step in range(n_steps):
-        if fuse:
-            if dashpots == DASHPOTS_PREDICTED:
-                predict_velocities(m.held, m.mass, w.force, s.v, 0.5 * dt, w.v_damp)
-                if twist:
-                    predict_spins(m.theta_held, m.twist_inertia, w.torque, s.omega, 0.5 * dt, w.omega_damp)
-            if not fused_step(m, s, w, c, twist, contact, drag, dt, dashpots, step < n_steps - 1, step > 0):
-                complete_frames(m, s, w, twist)
-                return step
-            continue
         if obstacles is not None:
             advance_obstacles(obstacles, dt)
         if dashpots == DASHPOTS_PREDICTED:  # w.force still holds the last step's forces

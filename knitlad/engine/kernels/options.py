@@ -9,7 +9,3 @@ PARALLEL_OPTS = dict(NUMBA_OPTS, parallel=True)
 # helpers called once or twice per pair and step, inlined into their callers at Numba IR level:
 # as compiled calls returning tuples they cost twice the pair's arithmetic (same results to the bit)
 INLINE_OPTS = dict(NUMBA_OPTS, inline="always")
-# the per-node and per-edge passes are range functions, run in this many blocks by their parallel kernels and
-# yarn by yarn by integrate.step_yarns: one body for both. Inlined per node (inline="always") with a branch,
-# they ran 20 x slower (2026-12-04, Numba 0.68): the arrays' reference counts were no longer pruned from the loop.
-PASS_BLOCKS = 64
