@@ -96,6 +96,30 @@ def idle_cpu_ticks(cpus: tuple[int, ...]) -> tuple[int, int] | None:
     return (idle, total) if total else None
 
 
+def other_runnable_tasks(readings: int = 3, apart_s: float = 1e-3) -> int | None:
+    """The fewest tasks of other processes running or ready to run, over ``readings`` readings ``apart_s``
+    apart: /proc/loadavg's count of runnable tasks (the whole machine) less this process's running threads
+    (/proc/self/task). None where these cannot be read (not Linux)."""
+    fewest = None
+    for k in range(readings):
+        if k:
+            time.sleep(apart_s)
+        try:
+            with open("/proc/loadavg") as f:
+                runnable = int(f.read().split()[3].split("/")[0])
+            own = 0
+            for task in os.listdir("/proc/self/task"):
+                try:
+                    with open(f"/proc/self/task/{task}/stat") as f:
+                        own += f.read().rsplit(")", 1)[1].split()[0] == "R"
+                except OSError:  # the thread ended
+                    continue
+        except (OSError, ValueError, IndexError):
+            return None
+        fewest = runnable - own if fewest is None else min(fewest, runnable - own)
+    return fewest
+
+
 class ThreadGovernor:
     """Chooses, as a run goes, between the Numba threads it was given and one thread: whichever steps faster.
 
@@ -107,7 +131,14 @@ class ThreadGovernor:
     read, it tries anyway). It times every chunk, keeps the faster count, and tries again more
     rarely each time the choice holds (after 1 chunk, then 2, 4, ... 256, and at least 20 times
     as many chunks as the probe was slower, so that probing costs 5 % at most; a chunk twice as slow
-    as the one before it, as when another process starts, tries the other count next). Results do not
+    as the one before it, as when another process starts, tries the other count next). A probe of one
+    thread is put off by one chunk, again and again, while the other processes use less than a quarter
+    of a core (/proc/stat's busy time less this process's CPU time, over the chunk before it): with
+    nobody to share the cores with, it could only cost (two such probes took 3 % of a 42 x 42 run), and
+    once another process runs, it comes at once. The first chunk runs on one thread unless no task of
+    another process is running or ready to run in three readings 1 ms apart (/proc/loadavg less this
+    process's running threads): then on all the threads it was given, and the next chunk reads the
+    processors as above. Results do not
     change: every kernel gives the same bits on any number of threads (the contact pairs are
     evaluated in blocks fixed when the buffers are made, and summed in pair order), and a probe is
     a whole chunk, so the chunks (whose fused half-kicks round differently from two halves) fall
@@ -115,6 +146,8 @@ class ThreadGovernor:
     """
 
     FIRST_INTERVAL, LAST_INTERVAL = 1, 256
+    QUIET_OTHERS = 0.25  # cores the other processes may use for a probe of one thread to be skipped
+    MIN_TICKS = 20  # clock ticks (all processors) a chunk must span for its reading of the others to count
 
     def __init__(self) -> None:
         self.seconds_per_step: dict[int, float] = {}
@@ -122,6 +155,9 @@ class ThreadGovernor:
         self.interval = self.FIRST_INTERVAL
         self.until_probe = self.FIRST_INTERVAL
         self.idle_cores: float | None = None  # idle processors during the last chunk (None: unknown)
+        self.other_cores: float | None = None  # the cores other processes used then (None: unknown)
+        self._cpu_s = 0.0  # this process's CPU time at the start of the chunk
+        self._started = False  # the first chunk's count chosen
         self.cpus = tuple(sorted(os.sched_getaffinity(0))) if hasattr(os, "sched_getaffinity") else ()
         self._ticks = None
 
@@ -130,12 +166,21 @@ class ThreadGovernor:
         if allowed <= 1:
             self._ticks = None
             return 1
+        if not self.seconds_per_step and not self._started and self.cpus:
+            self._started = True
+            others = other_runnable_tasks()
+            if others is not None and others <= 0:  # nobody to share the cores with: start on all of them
+                self.current = allowed
         self.current = min(self.current, allowed)
-        # the idle processors matter only before a try of more threads: read /proc/stat for that chunk alone
-        self._ticks = idle_cpu_ticks(self.cpus) if self.current == 1 and self.until_probe <= 1 else None
+        # the processors' load matters only before a probe: read /proc/stat for that chunk alone
+        self._ticks = idle_cpu_ticks(self.cpus) if self.until_probe <= 1 else None
+        self._cpu_s = time.process_time()
         if self.until_probe > 0 or not self.seconds_per_step:
             return self.current
         if self.current > 1:
+            if self.other_cores is not None and self.other_cores < self.QUIET_OTHERS:
+                self.until_probe = 1  # a reading costs nothing: look again after the next chunk
+                return self.current
             return 1
         room = self.idle_cores is None or self.idle_cores >= 0.5 * (allowed - 1)
         return allowed if room else 1
@@ -172,6 +217,12 @@ class ThreadGovernor:
         ticks = idle_cpu_ticks(self.cpus) if self._ticks is not None else None
         if ticks is not None and ticks[1] > self._ticks[1]:
             self.idle_cores = len(self.cpus) * (ticks[0] - self._ticks[0]) / (ticks[1] - self._ticks[1])
+            self.other_cores = None
+            if ticks[1] - self._ticks[1] >= self.MIN_TICKS and seconds > 0.0:
+                own_cores = (time.process_time() - self._cpu_s) / seconds
+                self.other_cores = len(self.cpus) - self.idle_cores - own_cores
+        elif self._ticks is not None:
+            self.other_cores = None
         before = self.seconds_per_step.get(threads)
         self.seconds_per_step[threads] = seconds / steps
         if threads == self.current:  # a chunk at the chosen count, or a probe the machine had no room for

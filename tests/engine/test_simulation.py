@@ -1,4 +1,5 @@
 import math
+import time
 
 import numpy as np
 import pytest
@@ -219,8 +220,9 @@ def test_held_nodes_change_velocity_and_are_released_mid_run():
         sim.nodes_of(0, [11])
 
 
-def _governed(g, chunks: int, seconds_per_step, idle=None) -> list[int]:
-    """Threads the governor chose for each chunk of 500 steps, the machine's speed given per count."""
+def _governed(g, chunks: int, seconds_per_step, idle=None, others=None) -> list[int]:
+    """Threads the governor chose for each chunk of 500 steps, the machine's speed given per count (and the
+    idle cores and the cores other processes used, as /proc/stat would say)."""
     seen = []
     for k in range(chunks):
         threads = g.plan(2)
@@ -228,6 +230,8 @@ def _governed(g, chunks: int, seconds_per_step, idle=None) -> list[int]:
         g.record(threads, 500, 500 * seconds_per_step(k, threads))
         if idle is not None:
             g.idle_cores = idle
+        if others is not None:
+            g.other_cores = others
     return seen
 
 
@@ -275,6 +279,73 @@ def test_switching_thread_counts_mid_run_changes_no_bit():
 
     np.testing.assert_array_equal(run(2, probe_often=True), run(1, probe_often=False))
     assert set(counts) == {1, 2}  # both counts ran
+
+
+def test_the_governor_skips_its_probes_of_one_thread_while_no_other_process_runs():
+    """Two threads twice as fast: with the other processes below a quarter of a core, one thread is never
+    tried after the choice; with another process on a core, it is probed as before, and taken when faster;
+    a light load that slows nothing brings the probe back at once."""
+    from knitlad.engine.simulation import ThreadGovernor
+
+    def governor():
+        g = ThreadGovernor()
+        g.cpus = ()
+        return g
+
+    quiet = _governed(governor(), 200, lambda k, n: 2.5e-4 if n == 2 else 5e-4, idle=1.0, others=0.05)
+    assert quiet[:2] == [1, 2] and quiet[2:].count(1) == 0
+    busy = _governed(governor(), 200, lambda k, n: 2.5e-4 if n == 2 else 5e-4, idle=1.0, others=0.6)
+    assert busy[:4] == [1, 2, 2, 1] and 2 <= busy.count(1) <= 6  # probed, ever more rarely
+    # another process starts: the run on two threads slows ten times, and one thread takes over
+    g = governor()
+    _governed(g, 300, lambda k, n: 2.5e-4 if n == 2 else 5e-4, idle=1.0, others=0.05)
+    seen = _governed(g, 3, lambda k, n: 2.5e-3 if n == 2 else 5e-4, idle=0.0, others=1.0)
+    assert seen == [2, 1, 1] and g.current == 1
+    # after 300 quiet chunks, a process that takes a third of a core and slows nothing: probed next chunk
+    g = governor()
+    _governed(g, 300, lambda k, n: 2.5e-4 if n == 2 else 5e-4, idle=1.0, others=0.05)
+    g.other_cores = 0.35
+    assert _governed(g, 2, lambda k, n: 2.5e-4 if n == 2 else 5e-4, idle=0.6, others=0.35) == [1, 2]
+
+
+def test_the_first_chunk_runs_on_every_thread_only_where_no_other_process_is_runnable(monkeypatch):
+    """A run starts on one thread, unless the machine shows no other runnable task: then on its threads. The
+    chunks after it are chosen as always (here: another process appears, and one thread takes over)."""
+    from knitlad.engine import simulation
+
+    monkeypatch.setattr(simulation, "idle_cpu_ticks", lambda cpus: None)
+
+    def first_chunks(others, n=3, slow_two=False):
+        monkeypatch.setattr(simulation, "other_runnable_tasks", lambda: others)
+        g = simulation.ThreadGovernor()
+        g.cpus = (0, 1)
+        # the other process, when it comes, leaves no idle core
+        return _governed(g, n, lambda k, t: (5e-3 if slow_two else 2.5e-4) if t == 2 else 5e-4,
+                         idle=0.0 if slow_two else None)
+
+    assert first_chunks(0)[0] == 2
+    assert first_chunks(1)[0] == 1 and first_chunks(None)[0] == 1
+    # started on two threads, which then turn out ten times slower than one: one thread from the third chunk
+    assert first_chunks(0, n=4, slow_two=True) == [2, 1, 1, 1]
+
+
+def test_the_governor_reads_the_other_processes_load_from_the_processors_and_its_own_cpu_time():
+    """On Linux, a chunk before a probe reads /proc/stat and this process's CPU time: a process spinning
+    alone on both its processors sees almost no other load."""
+    from knitlad.engine.simulation import ThreadGovernor, idle_cpu_ticks, other_runnable_tasks
+
+    g = ThreadGovernor()
+    if len(g.cpus) < 2 or idle_cpu_ticks(g.cpus) is None:
+        pytest.skip("one processor, or no /proc/stat here")
+    assert other_runnable_tasks() is not None  # /proc/loadavg and /proc/self/task, read where /proc/stat is
+    g.until_probe = 1
+    g.plan(2)
+    t0 = time.perf_counter()
+    while time.perf_counter() - t0 < 0.5:  # one busy thread: the process uses one core
+        pass
+    g.record(g.current, 500, time.perf_counter() - t0)
+    assert g.other_cores is not None
+    assert -0.3 < g.other_cores < len(g.cpus) - 0.7  # not the core this process used
 
 
 def test_a_relaxation_takes_the_chunks_choice_or_one_thread_when_the_load_says_the_cores_are_taken(monkeypatch):
