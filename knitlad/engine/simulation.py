@@ -96,30 +96,6 @@ def idle_cpu_ticks(cpus: tuple[int, ...]) -> tuple[int, int] | None:
     return (idle, total) if total else None
 
 
-def other_runnable_tasks(readings: int = 3, apart_s: float = 1e-3) -> int | None:
-    """The fewest tasks of other processes running or ready to run, over ``readings`` readings ``apart_s``
-    apart: /proc/loadavg's count of runnable tasks (the whole machine) less this process's running threads
-    (/proc/self/task). None where these cannot be read (not Linux)."""
-    fewest = None
-    for k in range(readings):
-        if k:
-            time.sleep(apart_s)
-        try:
-            with open("/proc/loadavg") as f:
-                runnable = int(f.read().split()[3].split("/")[0])
-            own = 0
-            for task in os.listdir("/proc/self/task"):
-                try:
-                    with open(f"/proc/self/task/{task}/stat") as f:
-                        own += f.read().rsplit(")", 1)[1].split()[0] == "R"
-                except OSError:  # the thread ended
-                    continue
-        except (OSError, ValueError, IndexError):
-            return None
-        fewest = runnable - own if fewest is None else min(fewest, runnable - own)
-    return fewest
-
-
 class ThreadGovernor:
     """Chooses, as a run goes, between the Numba threads it was given and one thread: whichever steps faster.
 
@@ -135,10 +111,9 @@ class ThreadGovernor:
     thread is put off by one chunk, again and again, while the other processes use less than a quarter
     of a core (/proc/stat's busy time less this process's CPU time, over the chunk before it): with
     nobody to share the cores with, it could only cost (two such probes took 3 % of a 42 x 42 run), and
-    once another process runs, it comes at once. The first chunk runs on one thread unless no task of
-    another process is running or ready to run in three readings 1 ms apart (/proc/loadavg less this
-    process's running threads): then on all the threads it was given, and the next chunk reads the
-    processors as above. Results do not
+    once another process runs, it comes at once (only a count chosen over one thread by the timings is
+    spared its probes: the first chunk runs on one thread, since on a small scene one thread may be the
+    faster even on a quiet machine). Results do not
     change: every kernel gives the same bits on any number of threads (the contact pairs are
     evaluated in blocks fixed when the buffers are made, and summed in pair order), and a probe is
     a whole chunk, so the chunks (whose fused half-kicks round differently from two halves) fall
@@ -157,7 +132,6 @@ class ThreadGovernor:
         self.idle_cores: float | None = None  # idle processors during the last chunk (None: unknown)
         self.other_cores: float | None = None  # the cores other processes used then (None: unknown)
         self._cpu_s = 0.0  # this process's CPU time at the start of the chunk
-        self._started = False  # the first chunk's count chosen
         self.cpus = tuple(sorted(os.sched_getaffinity(0))) if hasattr(os, "sched_getaffinity") else ()
         self._ticks = None
 
@@ -166,11 +140,6 @@ class ThreadGovernor:
         if allowed <= 1:
             self._ticks = None
             return 1
-        if not self.seconds_per_step and not self._started and self.cpus:
-            self._started = True
-            others = other_runnable_tasks()
-            if others is not None and others <= 0:  # nobody to share the cores with: start on all of them
-                self.current = allowed
         self.current = min(self.current, allowed)
         # the processors' load matters only before a probe: read /proc/stat for that chunk alone
         self._ticks = idle_cpu_ticks(self.cpus) if self.until_probe <= 1 else None
@@ -178,7 +147,8 @@ class ThreadGovernor:
         if self.until_probe > 0 or not self.seconds_per_step:
             return self.current
         if self.current > 1:
-            if self.other_cores is not None and self.other_cores < self.QUIET_OTHERS:
+            # the timings chose this count over one thread; with nobody to share the cores, nothing threatens it
+            if self.other_cores is not None and self.other_cores < self.QUIET_OTHERS and 1 in self.seconds_per_step:
                 self.until_probe = 1  # a reading costs nothing: look again after the next chunk
                 return self.current
             return 1
