@@ -185,14 +185,12 @@ class ThreadGovernor:
         if steps <= 0:
             return
         ticks = idle_cpu_ticks(self.cpus) if self._ticks is not None else None
+        self.other_cores = None  # known only for a chunk read from start to end: a stale "quiet" would hide a load
         if ticks is not None and ticks[1] > self._ticks[1]:
             self.idle_cores = len(self.cpus) * (ticks[0] - self._ticks[0]) / (ticks[1] - self._ticks[1])
-            self.other_cores = None
             if ticks[1] - self._ticks[1] >= self.MIN_TICKS and seconds > 0.0:
                 own_cores = (time.process_time() - self._cpu_s) / seconds
                 self.other_cores = len(self.cpus) - self.idle_cores - own_cores
-        elif self._ticks is not None:
-            self.other_cores = None
         before = self.seconds_per_step.get(threads)
         self.seconds_per_step[threads] = seconds / steps
         if threads == self.current:  # a chunk at the chosen count, or a probe the machine had no room for

@@ -304,6 +304,10 @@ def test_the_governor_skips_its_probes_of_one_thread_while_no_other_process_runs
     _governed(g, 300, lambda k, n: 2.5e-4 if n == 2 else 5e-4, idle=1.0, others=0.05)
     seen = _governed(g, 3, lambda k, n: 2.5e-3 if n == 2 else 5e-4, idle=0.0, others=1.0)
     assert seen == [2, 1, 1] and g.current == 1
+    # the same where the slow chunk went unread (the 2 x rule alone): the last quiet reading does not count
+    g = governor()
+    _governed(g, 300, lambda k, n: 2.5e-4 if n == 2 else 5e-4, idle=1.0, others=0.05)
+    assert _governed(g, 3, lambda k, n: 2.5e-3 if n == 2 else 5e-4, idle=0.0) == [2, 1, 1]
     # after 300 quiet chunks, a process that takes a third of a core and slows nothing: probed next chunk
     g = governor()
     _governed(g, 300, lambda k, n: 2.5e-4 if n == 2 else 5e-4, idle=1.0, others=0.05)
