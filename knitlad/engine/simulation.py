@@ -147,8 +147,9 @@ class ThreadGovernor:
         if self.until_probe > 0 or not self.seconds_per_step:
             return self.current
         if self.current > 1:
-            # the timings chose this count over one thread; with nobody to share the cores, nothing threatens it
-            if self.other_cores is not None and self.other_cores < self.QUIET_OTHERS and 1 in self.seconds_per_step:
+            # a run starts on one thread, so the timings chose this count over it; with nobody to share the
+            # cores, nothing threatens the choice
+            if self.other_cores is not None and self.other_cores < self.QUIET_OTHERS:
                 self.until_probe = 1  # a reading costs nothing: look again after the next chunk
                 return self.current
             return 1
