@@ -374,9 +374,10 @@ def _beyond_skin_within_allowances(dist, r_i, r_j, skin, allowance_i, allowance_
     return not dist < r_i + r_j + skin and dist < r_i + r_j + allowance_i + allowance_j
 
 
-@njit(**INLINE_OPTS)
+@njit(**NUMBA_OPTS)
 def _appended_key(found, n, key):
-    """``found[:n]`` with ``key`` after it, and the new count; ``found`` doubled when full."""
+    """``found[:n]`` with ``key`` after it, and the new count; ``found`` doubled when full. Compiled, not inlined:
+    inlined, its branch on an array would put reference counting into the caller's loops (docs/performance.md)."""
     if n == found.shape[0]:
         found = np.concatenate((found, np.empty(max(n, 1), dtype=np.int64)))
     found[n] = key
