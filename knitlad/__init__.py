@@ -8,13 +8,14 @@ names load on first use, so that ``import knitlad`` stays light.
 import importlib
 
 from knitlad.engine.contact import ContactModel, ContactPairs, ContactStats
+from knitlad.engine.dissipation import AirDrag, EnergyLedger, MaterialDamping
 from knitlad.engine.obstacles import Cylinder, Plane
 from knitlad.engine.simulation import Simulation, SimulationBlowUp, UnstableTimeStep
 from knitlad.engine.state import RodModel, Rods, RodState, Scene
 from knitlad.engine import units  # the internal unit system (knitlad.units.LENGTH, ...), as before the folders
 from knitlad.engine.units import NYLON, Material, Scales
 
-__version__ = "0.5.6"
+__version__ = "0.6.0"
 
 # the laddering experiment: name -> module that defines it (loaded on first use, PEP 562)
 _EXPERIMENT = {
@@ -38,11 +39,14 @@ _EXPERIMENT = {
 }
 
 __all__ = [
+    "AirDrag",
     "ContactModel",
     "ContactPairs",
     "ContactStats",
     "Cylinder",
+    "EnergyLedger",
     "Material",
+    "MaterialDamping",
     "NYLON",
     "Plane",
     "RodModel",

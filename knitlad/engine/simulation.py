@@ -27,6 +27,7 @@ from knitlad.engine.contact import (
     contact_time_step,
     make_contacts,
 )
+from knitlad.engine.dissipation import AirDrag, DissipationControl, MaterialDamping, damping_params
 from knitlad.engine.kernels.contact import GAPS_KNOWN, PAIRS_NEEDED, PEAK_OVERLAP, STALE, refresh_contacts, touching_pairs_among
 from knitlad.engine.kernels.integrate import (
     AXIAL_EXPLICIT,
@@ -347,7 +348,7 @@ class ContactReadout:
         return int(touching_pairs_among(self.state.x, m.edge_a, m.edge_b, m.edge_shift, c, in_a, in_b))
 
 
-class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics):
+class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, DissipationControl):
     """Explicit dynamics and FIRE statics of a rod scene.
 
     Parameters
@@ -357,7 +358,10 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics):
     dt_s: time step [s]; default ``safety`` x the stability limit. A larger one
         than the limit is refused with :class:`UnstableTimeStep`.
     safety: fraction of the stability limit used when ``dt_s`` is not given.
-    drag_per_s: global viscous drag rate [1/s] (0 for true dynamics).
+    drag_per_s: global viscous drag rate [1/s] (0 for true dynamics; :mod:`knitlad.engine.dissipation`).
+    material_damping: the yarn's viscoelasticity (:class:`knitlad.engine.dissipation.MaterialDamping`), or None.
+        Its branch stiffens the rods at high frequency, which the step counts: set here, not later.
+    air: air drag (:class:`knitlad.engine.dissipation.AirDrag`), or None; :meth:`set_air` changes it.
     guard_every: steps between blow-up checks.
     contact: yarn-yarn contact (:class:`knitlad.engine.contact.ContactModel`), or None.
     framed_twist: with twist, bend and twist through material frames even without natural curvature.
@@ -369,7 +373,8 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics):
 
     def __init__(self, rods: Rods, dt_s: float | None = None, safety: float = DEFAULT_SAFETY, drag_per_s: float = 0.0,
                  guard_every: int = 500, contact: ContactModel | None = None, framed_twist: bool = False,
-                 implicit_axial: bool = False, predicted_dashpots: bool = False, obstacles: Sequence[Obstacle] = ()) -> None:
+                 implicit_axial: bool = False, predicted_dashpots: bool = False, obstacles: Sequence[Obstacle] = (),
+                 material_damping: MaterialDamping | None = None, air: AirDrag | None = None) -> None:
         if not 0.0 < safety <= 1.0:
             raise ValueError(f"safety must lie in (0, 1], got {safety}")
         if rods.twist and not rods.framed and np.any(rods.model.kappa_bar):
@@ -390,16 +395,21 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics):
         wall_limit = obstacle_time_step(self.model, list(obstacles), predicted=predicted_dashpots)
         if math.isfinite(wall_limit):  # springs in parallel: omega^2 adds
             contact_limit = 1.0 / math.sqrt(1.0 / contact_limit**2 + 1.0 / wall_limit**2)
-        self.limits: TimeStepLimits = critical_time_steps(self.model, self.twist, contact_limit, bool(implicit_axial),
-                                                          bool(predicted_dashpots))
+        self.material_damping = material_damping
+        self.limits: TimeStepLimits = critical_time_steps(
+            self.model, self.twist, contact_limit, bool(implicit_axial), bool(predicted_dashpots),
+            material_damping.branch_ratio if material_damping else 0.0)
         self.dt = self.limits.time_step(dt_s, safety)
         self.set_drag(drag_per_s)
+        self.set_air(air)
         self.guard_every = int(guard_every)
         self.steps = 0
         self.time = 0.0  # internal ms
         self.threads = ThreadGovernor()
         self.max_speed = axial_wave_speed(self.model)
+        self.relax_branches()
         self.compute_forces()
+        self.reset_ledger()
 
     def _grow_contacts(self) -> None:
         """Double the pair buffer (past what the last build needed), keeping the history."""
@@ -414,7 +424,7 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics):
             self.work.v_damp[:], self.work.omega_damp[:] = self.state.v, self.state.omega
         with self.threads.one_call():
             while not compute_forces(self.model, self.state, self.work, self.contacts, self.twist_mode,
-                                     self.has_contact, self.drag, self.dt, self.axial_mode, self.dashpot_mode,
+                                     self.has_contact, self.damping, self.dt, self.axial_mode, self.dashpot_mode,
                                      *self._obstacle_args):
                 self._grow_contacts()
 
@@ -424,12 +434,6 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics):
             raise ValueError("this simulation has no contact model")
         check_friction_coefficient(mu)
         self.contacts = self.contacts._replace(params=self.contacts.params._replace(mu=float(mu)))
-
-    def set_drag(self, per_s: float) -> None:
-        """A global viscous drag -gamma m v on every free node from the next step on [1/s] (0: none)."""
-        if not (per_s >= 0 and math.isfinite(per_s)):
-            raise ValueError(f"drag must be >= 0 per second, got {per_s!r}")
-        self.drag = per_s * units.TIME
 
     @property
     def model(self):
@@ -495,7 +499,8 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics):
             t0 = time.perf_counter()
             try:
                 done = verlet_steps(self.model, self.state, self.work, self.contacts, self.dt, chunk, self.twist_mode,
-                                    self.has_contact, self.drag, self.axial_mode, self.dashpot_mode, *self._obstacle_args)
+                                    self.has_contact, self.damping, self.axial_mode, self.dashpot_mode,
+                                    *self._obstacle_args)
             finally:
                 numba.set_num_threads(allowed)
             self.threads.record(threads, done, time.perf_counter() - t0)
@@ -556,7 +561,9 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics):
                     break
                 self._grow_contacts()
         self._guard()
+        self.relax_branches()
         self.compute_forces()
+        self.reset_ledger()
         return {
             "steps": int(steps),
             "max_force_N": float(fmax * units.FORCE),

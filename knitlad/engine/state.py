@@ -12,9 +12,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import NamedTuple, Sequence
 
+import numba
 import numpy as np
 
 from knitlad.engine import units
+from knitlad.engine.kernels.dissipation import N_LEDGER
 from knitlad.engine.kernels.elastic import edge_vectors, material_curvatures
 from knitlad.engine.kernels.frames import bishop_reference_directors, material_frames, update_reference_twist
 from knitlad.engine.units import Material
@@ -156,10 +158,17 @@ class Workspace(NamedTuple):
     torque: np.ndarray  # (ne,) torque about each edge tangent
     yarn_edges: np.ndarray  # (n_yarns + 1,) first edge of each yarn (edges are stored yarn by yarn)
     yarn_hinges: np.ndarray  # (n_yarns + 1,) first hinge of each yarn
-    axial_sweep: np.ndarray  # (ne, 2) the tridiagonal solve of implicit axial forces
+    axial_sweep: np.ndarray  # (ne, 4) the tridiagonal solve of implicit axial forces (and the ledger's terms)
     v_damp: np.ndarray  # (n, 3) the velocities the dashpots see with DASHPOTS_PREDICTED ...
     omega_damp: np.ndarray  # (ne,) ... and the spins
     frame_anchor: np.ndarray  # (ne,) bool: the edges whose reference frame the frame-free twist carries each step
+    # the energy ledger: what each mechanism took out since it was zeroed [uJ], per yarn or per block of contact
+    # pairs (rows), per channel (knitlad.engine.kernels.dissipation.LEDGER_NAMES)
+    ledger: np.ndarray  # (max(n_yarns, threads), N_LEDGER)
+    # the viscoelastic branches' internal variables (knitlad.engine.kernels.dissipation.viscoelastic_forces):
+    # state of the material, kept with the simulation that advances it and relaxed when it starts
+    branch_ext: np.ndarray  # (ne,) the extension each edge's branch has relaxed to [mm]
+    branch_kb: np.ndarray  # (nh, 3) the curvature binormal each hinge's branch has relaxed to [-]
 
     @staticmethod
     def for_model(model: RodModel) -> "Workspace":
@@ -168,10 +177,12 @@ class Workspace(NamedTuple):
         yarns = np.arange(model.n_yarns + 1)
         edge_yarn = model.edge_yarn
         hinge_yarn = edge_yarn[model.hinge_e1]
+        rows = max(model.n_yarns, numba.config.NUMBA_NUM_THREADS, 1)
         return Workspace(
             np.zeros((ne, 3)), np.zeros(ne), np.zeros((ne, 3)), np.zeros((ne, 3)), np.zeros((n, 3)), np.zeros(ne),
             np.searchsorted(edge_yarn, yarns).astype(np.int64), np.searchsorted(hinge_yarn, yarns).astype(np.int64),
-            np.zeros((ne, 2)), np.zeros((n, 3)), np.zeros(ne), frame_anchors(model),
+            np.zeros((ne, 4)), np.zeros((n, 3)), np.zeros(ne), frame_anchors(model),
+            np.zeros((rows, N_LEDGER)), np.zeros(ne), np.zeros((model.hinge_e0.shape[0], 3)),
         )
 
 

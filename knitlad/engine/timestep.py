@@ -102,13 +102,19 @@ def stiffness_row_sums(model: RodModel, twist: bool) -> tuple[np.ndarray, np.nda
 
 
 def critical_time_steps(model: RodModel, twist: bool, contact: float = math.inf,
-                        implicit_axial: bool = False, predicted_dashpots: bool = False) -> TimeStepLimits:
+                        implicit_axial: bool = False, predicted_dashpots: bool = False,
+                        branch_ratio: float = 0.0) -> TimeStepLimits:
     """Stability limits dt_crit = 2 / omega_max; ``contact`` is the contact springs' own limit.
 
     ``implicit_axial``: the axial springs are implicit (AXIAL_IMPLICIT of :mod:`knitlad.engine.kernels.integrate`),
     so they set no limit (``stretching`` is inf) and the rest is bending, twist and contact.
-    ``predicted_dashpots``: the axial dashpot acts on predicted velocities (:func:`damped_limit_factor`)."""
+    ``predicted_dashpots``: the axial dashpot acts on predicted velocities (:func:`damped_limit_factor`).
+    ``branch_ratio``: the material damping's viscoelastic branch (:mod:`knitlad.engine.dissipation`), explicit
+    stiffness of that many times the elastic one in stretching and bending (with implicit axial springs the
+    branch's axial part is still explicit and limits the step)."""
     stretch, bend, twist_rows = stiffness_row_sums(model, twist)
+    branch_stretch = branch_ratio * stretch
+    stretch, bend = stretch + branch_stretch, bend * (1.0 + branch_ratio)
     free = ~model.held  # none free: the twist (and contact) limits may still apply
     mass = model.mass[free]
 
@@ -125,7 +131,8 @@ def critical_time_steps(model: RodModel, twist: bool, contact: float = math.inf,
     dt_b = limit(bend[free], mass)
     dt_all = limit(stretch[free] + bend[free], mass) * damping_factor
     if implicit_axial:
-        dt_s, dt_all = math.inf, dt_b
+        dt_s = limit(branch_stretch[free], mass)
+        dt_all = limit(branch_stretch[free] + bend[free], mass)
     free_edges = ~model.theta_held
     dt_t = limit(twist_rows[free_edges], model.twist_inertia[free_edges]) if twist else math.inf
     # contact and rod stiffness add: 1/dt^2 add in quadrature (omega^2 adds)

@@ -83,7 +83,7 @@ class CutConfig(_WithPreset):
         "contact_damping_ratio", "stretch_damping_ratio", "stretch_increment", "steps_per_increment",
         "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor",
         "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
-        "stop_at_edge")
+        "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -99,8 +99,19 @@ class CutConfig(_WithPreset):
         "interval between stored frames (positions, velocities, laddered cells) [us]; default: 1/60 of the "
         "ladder's expected duration, n_y l_y / 2 over the paper's velocity 0.1 f_x^ini c_b, for a movie of 50+ frames"))
     drag_per_s: float = Field(0.0, ge=0, le=1e5, json_schema_extra={"cli": "--drag"}, description=(
-        "global drag -gamma m v on every node during the laddering [1/s]; 0 is the physics (its effect on v_lad: "
-        "docs/accuracy.md)"))
+        "global drag -gamma m v on every node during the laddering [1/s]: the damping of the paper's engine, "
+        "not physics (0: none; docs/dissipation.md)"))
+    loss_factor: float = Field(0.0, ge=0, le=1, description=(
+        "the yarn's material damping: peak loss factor of its viscoelasticity, a standard linear solid in "
+        "stretching and bending [-]; Nylon: 0.03 (0.01 dry to 0.1 humid); 0: none (docs/dissipation.md)"))
+    loss_peak_hz: float = Field(3.1e3, gt=0, le=1e7, description=(
+        "frequency of the material damping's loss peak [Hz]; default: a stitch's bending wave, c_b kappa0 / 2 pi"))
+    air_drag: bool = Field(False, json_schema_extra={"cli": "--air"}, description=(
+        "still air around the yarns during the laddering: a cylinder's cross-flow drag at its Reynolds number "
+        "and a skin friction along it [-] (docs/dissipation.md)"))
+    stop_after_stitches: int | None = Field(None, ge=3, le=200, description=(
+        "stop once a front has run this many stitches from the cut row [-]: enough for v_lad when above 10, "
+        "at a fraction of the cost; n_lad/n_y and f_x^fin are then those of that moment; none: not"))
     twist: bool = Field(False, description=(
         "the yarns carry twist during the laddering, so friction also turns them (the friction couple) [-]; "
         "costs more (docs/performance.md)"))
@@ -237,7 +248,8 @@ class CutConfig(_WithPreset):
             observe_every_s=self.observe_every_us * 1e-6, arrest_s=self.arrest_ms * 1e-3,
             max_time_s=self.max_time_ms * 1e-3,
             frame_every_s=None if self.frame_every_us is None else self.frame_every_us * 1e-6,
-            stop_at_edge=self.stop_at_edge,
+            stop_at_edge=self.stop_at_edge, loss_factor=self.loss_factor, loss_peak_hz=self.loss_peak_hz,
+            air_drag=self.air_drag, stop_after_stitches=self.stop_after_stitches,
         )
 
     def settings(self):

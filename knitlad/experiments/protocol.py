@@ -37,6 +37,7 @@ import numpy as np
 
 from knitlad.engine import units
 from knitlad.engine.contact import ContactModel, Counting, contact_time_step
+from knitlad.engine.dissipation import STITCH_BENDING_HZ, AirDrag, EnergyLedger, MaterialDamping
 from knitlad.fabric.measure import (
     cell_overlap,
     course_tensions,
@@ -50,6 +51,8 @@ from knitlad.fabric.observers import (
     Arrested,
     CellTimes,
     EdgeReached,
+    EnergyRecorder,
+    FrontRan,
     FrameRecorder,
     FrontRecorder,
     Interpenetration,
@@ -149,6 +152,18 @@ class DynamicsSettings:
     max_time_s: float
     frame_every_s: float | None  # None: AUTO_FRAMES over the expected ladder duration (frame_interval)
     stop_at_edge: bool = True  # stop when a ladder reaches an edge course (else: when every front has stopped)
+    loss_factor: float = 0.0  # the yarn's material damping, peak loss factor (0: none; knitlad.engine.dissipation)
+    loss_peak_hz: float = STITCH_BENDING_HZ  # ... at this frequency [Hz]
+    air_drag: bool = False  # still air around the yarns
+    stop_after_stitches: int | None = None  # stop once a front has run this many stitches (enough for v_lad)
+
+    @property
+    def material_damping(self) -> MaterialDamping | None:
+        return MaterialDamping(self.loss_factor, self.loss_peak_hz) if self.loss_factor > 0 else None
+
+    @property
+    def air(self) -> AirDrag | None:
+        return AirDrag() if self.air_drag else None
 
 
 @dataclass(frozen=True)
@@ -548,10 +563,13 @@ def laddering_time_step(rods: Rods, contact: ContactModel, dynamics: DynamicsSet
     """
     predicted = dynamics.predicted_dashpots
 
+    material = dynamics.material_damping
+    ratio = material.branch_ratio if material else 0.0
+
     def limit_s(twist: bool) -> float:
         contact_limit = contact_time_step(rods.model, contact, spin=twist, predicted=predicted)
         return critical_time_steps(rods.model, twist, contact_limit, dynamics.implicit_axial,
-                                   predicted).combined * units.TIME
+                                   predicted, ratio).combined * units.TIME
 
     dt = dynamics.dt_safety * limit_s(False)
     return min(dt, DEFAULT_SAFETY * limit_s(True)) if rods.twist else dt
@@ -581,7 +599,8 @@ def dynamics_simulation(rods: Rods, knit: StretchedKnit, dynamics: DynamicsSetti
     stretch_step = math.inf if dynamics.implicit_axial else knit.dt_s / math.sqrt(dynamics.axial_stiffness_factor)
     sim = Simulation(rods, contact=contact, dt_s=min(stretch_step, laddering_time_step(rods, contact, dynamics)),
                      drag_per_s=dynamics.drag_per_s, framed_twist=dynamics.framed_twist,
-                     implicit_axial=dynamics.implicit_axial, predicted_dashpots=dynamics.predicted_dashpots)
+                     implicit_axial=dynamics.implicit_axial, predicted_dashpots=dynamics.predicted_dashpots,
+                     material_damping=dynamics.material_damping, air=dynamics.air)
     check_feasible(sim.dt_s, dynamics)
     return sim
 
@@ -653,6 +672,7 @@ class LadderTrace:
     cell_centres: np.ndarray  # (n_y, n_x, 2) x, y of each cell at the cut [m]
     peak_overlap_over_d: float
     wall_s: float
+    energy: dict  # the energy ledger's series [J] (EnergyRecorder.series), one reading per observation
 
 
 def cell_centres(run: Laddering) -> np.ndarray:
@@ -695,9 +715,10 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
     columns = (run.cut_column - 1, run.cut_column)
     guard = OverlapGuard(run.knit.settings.material.diameter)
     fronts, tension, cell_times = FrontRecorder(columns, run.cut_row), TensionRecorder(), CellTimes()
-    frames = FrameRecorder(frame_interval(run))
+    frames, energy = FrameRecorder(frame_interval(run)), EnergyRecorder()
     rules = list(stop_rules) if stop_rules is not None else (
-        [EdgeReached()] * d.stop_at_edge + [Arrested(d.arrest_s), TimeLimit(d.max_time_s)])
+        [EdgeReached()] * d.stop_at_edge + [Arrested(d.arrest_s), TimeLimit(d.max_time_s)]
+        + ([FrontRan(d.stop_after_stitches, columns, run.cut_row)] if d.stop_after_stitches else []))
     undone = np.zeros_like(run.baseline)
     frames.observe(0.0, run, undone)  # the stretched knit just cut, before the first step
     times: list[float] = []
@@ -706,7 +727,7 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
         guard.check(run.sim, f"at t = {t * 1e3:.3f} ms after the cut")
         undone[...] |= run.laddered() & ~run.baseline  # an undone cell does not knit itself again
         times.append(t)
-        for obs in (fronts, tension, cell_times, frames, *observers):
+        for obs in (fronts, tension, cell_times, frames, energy, *observers):
             obs.observe(t, run, undone)
         if progress:  # the ladder's reach (it stops at an edge course) or the time limit, whichever is further
             progress("propagate", max(min(t / d.max_time_s, 1.0), fronts.reach(run.knit.settings.n_y)))
@@ -716,7 +737,8 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
     frames.observe(t, run, undone, last=True)  # the state at the stop
     return LadderTrace(
         knit=run.knit, dynamics=d, cut_row=run.cut_row, columns=columns, times_s=np.array(times),
-        fx=np.array(tension.fx), fx_courses=np.array(tension.fx_courses), fronts=fronts.extents(), column_cells=fronts.cells(), frames=frames,
+        fx=np.array(tension.fx), fx_courses=np.array(tension.fx_courses), fronts=fronts.extents(),
+        column_cells=fronts.cells(), frames=frames, energy=energy.series(),
         baseline=run.baseline, final_laddered=undone, undone_at=cell_times.undone_at, stop_reason=reason,
         reached_edge=EdgeReached.reached(undone), steps=run.sim.steps,
         yarn_start=run.sim.model.yarn_start.copy(), peak_overlap_over_d=guard.peak_over_d,
@@ -773,6 +795,18 @@ class LadderResult:
     fx_within_tolerance: bool = True  # force control: f_x^ini within fx_tolerance of the target
     box_lx_over_l0: float = math.nan  # the affine stretch of the held ends and edge courses
     peak_overlap_over_d: float = 0.0  # deepest yarn-yarn overlap at any step (stretch, relaxation, laddering), in d
+    energy_series: dict = field(default_factory=dict)  # the energy ledger at each observation [J] (EnergyLedger)
+
+    def energy_record(self) -> dict:
+        """The ledger at the stop [J]: the energy stored at the cut and now, what each mechanism took out,
+        and the balance's residual over the energy turned over (the integrator's error)."""
+        if not self.energy_series:
+            return {}
+        last = {k: float(v[-1]) for k, v in self.energy_series.items()}
+        out = {"energy_start_J": last["start"], "energy_end_J": last["stored"]}
+        out.update({f"dissipated_{k}_J": last[k] for k in EnergyLedger.DISSIPATED})
+        out["ledger_residual"] = last["residual"] / last["turnover"] if last["turnover"] > 0 else 0.0
+        return out
 
     def summary(self) -> dict:
         """The scalar results, and the settings a reader needs beside them (mu, twist, drag)."""
@@ -781,11 +815,12 @@ class LadderResult:
                 "column_history", "frames",
                 "frame_times_s", "final_laddered", "baseline_laddered", "yarn_start", "frame_velocities",
                 "frame_laddered", "frame_contact", "stretch_tension", "node_course", "cut_node", "cell_centres", "edges",
-                "undone_at"}
+                "undone_at", "energy_series"}
         out = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in skip}
         out["v_fit_stitches"] = list(self.v_fit_stitches)
-        out.update(mu=d.mu, twist=d.twist, drag_per_s=d.drag_per_s, natural_curvature=self.settings.stretch.natural_curvature,
-                   wall_s=float(sum(self.wall_s.values())))
+        out.update(mu=d.mu, twist=d.twist, drag_per_s=d.drag_per_s, loss_factor=d.loss_factor, air_drag=d.air_drag,
+                   natural_curvature=self.settings.stretch.natural_curvature, wall_s=float(sum(self.wall_s.values())))
+        out.update(self.energy_record())
         out.update({f"wall_{k}_s": v for k, v in self.wall_s.items()})
         out.update(self.loop_record())
         return out
@@ -849,7 +884,7 @@ def analyse(trace: LadderTrace) -> LadderResult:
         undone_at=trace.undone_at, cut_row=trace.cut_row,
         nodes=knit.knit.rods.model.n_nodes, steps=trace.steps, relax_steps=knit.relax_steps,
         fx_within_tolerance=knit.fx_within_tolerance, box_lx_over_l0=knit.box_lx,
-        peak_overlap_over_d=max(knit.peak_overlap_over_d, trace.peak_overlap_over_d),
+        peak_overlap_over_d=max(knit.peak_overlap_over_d, trace.peak_overlap_over_d), energy_series=trace.energy,
     )
 
 

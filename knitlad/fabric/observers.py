@@ -90,6 +90,38 @@ class CellTimes:
         self.undone_at[undone & np.isnan(self.undone_at)] = t
 
 
+class EnergyRecorder:
+    """The energy ledger (:meth:`knitlad.engine.simulation.Simulation.ledger`) at every observation: where the
+    cut released energy went, as series [J] (``series``) and at the stop (``last``)."""
+
+    def __init__(self) -> None:
+        self.readings: list[dict[str, float]] = []
+
+    def observe(self, t: float, run, undone: np.ndarray) -> None:
+        self.readings.append(run.sim.ledger().as_dict())
+
+    def series(self) -> dict[str, np.ndarray]:
+        if not self.readings:
+            return {}
+        return {k: np.array([r[k] for r in self.readings]) for k in self.readings[0]}
+
+    @property
+    def last(self) -> dict[str, float]:
+        return self.readings[-1] if self.readings else {}
+
+
+class FrontRan:
+    """A front has run ``stitches`` stitches from the cut row in one of ``columns``: enough for a velocity fit
+    over stitches 2 to 10 when ``stitches`` > 10, at a fraction of a whole run's cost (a velocity study's rule)."""
+
+    def __init__(self, stitches: int, columns: tuple[int, ...], cut_row: int) -> None:
+        self.stitches, self.columns, self.cut_row = stitches, columns, cut_row
+
+    def check(self, t: float, undone: np.ndarray) -> str | None:
+        ran = max(max(ladder_front(undone, col, self.cut_row)) for col in self.columns)
+        return f"a front ran {self.stitches} stitches" if ran >= self.stitches else None
+
+
 class TensionRecorder:
     """f_x at every observation, and each free course's own (``fx_courses``)."""
 

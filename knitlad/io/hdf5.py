@@ -16,6 +16,10 @@ A laddering run (``ladder.h5``, a sweep's ``jobs/<id>.h5``)::
     /series/fx          tension per thread f_x
 /series/fx_courses  (n_obs, n_y) each free course's own f_x (bottom to top)
     /series/laddering_column_cells  (n_obs, n_y) bool
+    /ledger/<name>      (n_obs,) [J] the energy ledger at each observation (knitlad.engine.dissipation.EnergyLedger):
+                        stored (stretching, bending, twisting, branches, contact, kinetic, external), put in
+                        (support_work, obstacle_work), taken out (axial_dashpot, contact_dashpot, friction,
+                        global_drag, material, air), start, residual, turnover; time_s [s]
     /stretch/relax_steps, box_lx_over_l0, fx   the stretch's tension readings (FIRE steps so far, box, f_x)
     /final/laddered     (n_y, n_x) bool
     /cells/centres      (n_y, n_x, 2) x, y of each cell at the cut [m]
@@ -51,6 +55,7 @@ from knitlad import __version__
 from knitlad.io.atomic import atomic_path
 from knitlad.io.kinds import TRAJECTORY_KIND, is_trajectory
 from knitlad.io.provenance import code_identity
+from knitlad.engine.dissipation import EnergyLedger
 from knitlad.engine.units import Scales
 
 
@@ -200,6 +205,10 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
             checksummed_dataset(g, "fx_courses", np.asarray(result.fx_course_series, dtype=float))
         if result.column_history:
             checksummed_dataset(g, "laddering_column_cells", result.column_history)
+        if result.energy_series:
+            g = f.create_group("ledger")
+            for name, values in result.energy_series.items():
+                checksummed_dataset(g, name, np.asarray(values, dtype=float))
         if result.final_laddered is not None:
             checksummed_dataset(f.require_group("final"), "laddered", result.final_laddered)
         if result.undone_at is not None:
@@ -232,6 +241,11 @@ RUN_UNITS = {
     "topology/edges": "1", "topology/node_course": "1", "contacts/offsets": "1", "contacts/points": "m",
     "contacts/normal_force": "N", "contacts/friction_force": "N", "contacts/sliding": "1",
     "cycle/readings": "cycle, leg (1 loading, 0 hold, -1 unloading), s, l0 (the box's l_x), f0 (f_x)",
+    # the energy ledger at each observation (knitlad.engine.dissipation.EnergyLedger)
+    **{f"ledger/{name}": "J" for name in (*EnergyLedger.STORED, *EnergyLedger.DISSIPATED, "support_work",
+                                          "obstacle_work", "start", "stored", "dissipated", "work_in", "residual",
+                                          "turnover")},
+    "ledger/time_s": "s",
 }
 
 

@@ -145,7 +145,7 @@ def main() -> None:
 
         def steps(n=20):
             sim.compute_forces()
-            verlet_steps(m, s, w, c, dt, n, tw, True, sim.drag, sim.axial_mode)
+            verlet_steps(m, s, w, c, dt, n, tw, True, sim.damping, sim.axial_mode)
 
         rows.append(("step (20 steps, per step)", median_ms(steps, 10) / 20))
         x_a = s.x.copy()
@@ -161,15 +161,15 @@ def main() -> None:
         rows.append(("edge vectors + stretching", median_ms(lambda: stretch_by_yarn(m, s, w))))
         rows.append(("implicit axial springs (a tridiagonal solve per yarn)", median_ms(
             lambda: implicit_stretching_by_yarn(m, s, w, dt))))
-        rows.append(("twist-free elastic (stretch + bend)", median_ms(lambda: elastic_forces_by_yarn(m, s, w, True, s.v))))
+        rows.append(("twist-free elastic (stretch + bend)", median_ms(lambda: elastic_forces_by_yarn(m, s, w, True, s.v, dt))))
         if tw:
             rows.append(("straight twisting path (frame-free)", median_ms(
-                lambda: straight_twisting_forces_by_yarn(m, s, w, True, s.v))))
+                lambda: straight_twisting_forces_by_yarn(m, s, w, True, s.v, dt))))
             rows.append(("  edge vectors + reference twist by holonomy", median_ms(
                 lambda: holonomy_by_yarn(m, s, w, flip[0]))))
             rows.append(("  isotropic bending and twisting (the holonomy in the pass)", median_ms(
                 lambda: straight_bending_by_yarn(m, s, w))))
-            rows.append(("framed elastic (all of the framed path)", median_ms(lambda: framed_forces_by_yarn(m, s, w, True, s.v))))
+            rows.append(("framed elastic (all of the framed path)", median_ms(lambda: framed_forces_by_yarn(m, s, w, True, s.v, dt))))
             rows.append(("  edge vectors + transport of the frames", median_ms(transport)))
             rows.append(("  reference twist", median_ms(lambda: twist_by_yarn(m, s, w))))
             rows.append(("  material frames", median_ms(lambda: frames_by_yarn(s, w))))
@@ -178,12 +178,12 @@ def main() -> None:
             name = "contact pair forces" + (" with the friction couple" if spin else "")
             rows.append((name, median_ms(
                 lambda: contact_forces(s.x, s.v, s.omega, spin, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt,
-                                       w.force, w.torque, s.v, s.omega, False))))
+                                       w.force, w.torque, s.v, s.omega, False, w.ledger))))
 
         def every_pair_tested():
             c.status[GAPS_KNOWN] = 0  # as at the first evaluation after a rebuild: no pair skipped by its gap
             contact_forces(s.x, s.v, s.omega, 0, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt, w.force, w.torque,
-                           s.v, s.omega, False)
+                           s.v, s.omega, False, w.ledger)
 
         rows.append(("contact pair forces, every pair's distance tested", median_ms(every_pair_tested)))
         rows.append(("half kick", median_ms(lambda: half_kick(m, s, w, 0.0, tw))))

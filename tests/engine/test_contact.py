@@ -299,7 +299,7 @@ def test_the_contact_sum_rod_by_rod_is_the_serial_sum_over_the_pairs_to_the_bit(
     for evaluation in range(2):  # the list's first evaluation, then one that skips pairs by their gaps
         force, torque = base.copy(), base_torque.copy()
         kc.contact_forces(x, v, omega, spin, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, 1e-5, force, torque, v,
-                          omega, False)
+                          omega, False, np.zeros((4, 8)))
         n = int(c.n_pairs[0])
         assert n >= 2 * kc.MIN_PAIRS_PER_THREAD  # the rods run in parallel where there are two threads
         expected, expected_torque = base.copy(), base_torque.copy()
@@ -503,7 +503,7 @@ def test_a_pair_that_parts_while_skipped_loses_its_tangential_spring():
         assert refresh_contacts(x, m.edge_a, m.edge_b, m.edge_shift, c)
         force[:] = 0.0
         contact_forces(x, v, omega, 0, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, 1e-5, force, torque, v, omega,
-                       False)
+                       False, np.zeros((4, 8)))
         n = int(c.n_pairs[0])
         return c.pair_results[:n, OVERLAP].copy(), np.abs(c.slip[:n]).sum(axis=1)
 

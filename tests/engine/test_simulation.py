@@ -137,8 +137,8 @@ def test_the_damped_limit_factor_is_the_integrators_stability_limit(predicted):
         s.x[1, 0] += 1e-6
         sim = kl.Simulation(rods)  # its workspace and buffers; the steps below bypass its limit
         sim.work.v_damp[:] = s.v
-        compute_forces(m, s, sim.work, sim.contacts, 0, False, 0.0, dt, 0, mode)
-        verlet_steps(m, s, sim.work, sim.contacts, dt, 3000, 0, False, 0.0, 0, mode)
+        compute_forces(m, s, sim.work, sim.contacts, 0, False, sim.damping, dt, 0, mode)
+        verlet_steps(m, s, sim.work, sim.contacts, dt, 3000, 0, False, sim.damping, 0, mode)
         amplitudes.append(abs(s.x[1, 0] - x0) / 1e-6)
     assert amplitudes[0] < 1.0 and amplitudes[1] > 1e3, amplitudes
 

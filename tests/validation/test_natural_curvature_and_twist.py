@@ -9,6 +9,7 @@ import pytest
 
 import knitlad as kl
 from knitlad.engine.contact import make_contacts
+from knitlad.engine.kernels.dissipation import no_damping
 from knitlad.engine.kernels.integrate import TWIST_FRAMED, compute_forces
 from knitlad.engine.state import Workspace
 
@@ -34,7 +35,7 @@ def test_pre_curved_ring_is_force_free_in_its_rest_shape():
     scene.add_yarn(circle(R, 40), closed=True, natural_curvature="rest")
     rods = scene.build()
     w = Workspace.for_model(rods.model)
-    compute_forces(rods.model, rods.state, w, make_contacts(rods, None), TWIST_FRAMED, False, 0.0, 1.0)
+    compute_forces(rods.model, rods.state, w, make_contacts(rods, None), TWIST_FRAMED, False, no_damping(), 1.0)
     scale = B / R**2 / kl.units.FORCE
     assert np.max(np.abs(w.force)) < 1e-9 * scale
     assert np.max(np.abs(w.torque)) < 1e-9 * scale * R / kl.units.LENGTH

@@ -35,6 +35,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
+from knitlad.engine.kernels.dissipation import CONTACT_DASHPOT, FRICTION
 from knitlad.engine.kernels.options import INLINE_OPTS, NUMBA_OPTS, PARALLEL_OPTS
 from knitlad.engine.kernels.vec import cross, dot
 
@@ -637,7 +638,7 @@ def coulomb_spring(ux, uy, uz, nx, ny, nz, vtx, vty, vtz, sx, sy, sz, dt, k_t, g
 def pair_contact_forces(
     lo, hi, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
     edge_prev, edge_next, union, pairs, slip, edge_class, stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref,
-    edge_moved, blk, edge_rod, bucket_fill, shares, share_edge,
+    edge_moved, blk, edge_rod, bucket_fill, shares, share_edge, ledger,
 ):
     """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``
     (the narrow phase in ``mode``, :func:`counted_overlaps`).
@@ -663,14 +664,25 @@ def pair_contact_forces(
     Each touching pair's two shares (one per edge: the force, s or t, the friction couple) are appended to the
     bucket of this block ``blk`` and that edge's rod (``bucket_fill[blk, rod]``, the next free slot of
     ``shares`` and ``share_edge``), for :func:`contact_sums_by_rod`.
+
+    The energy the contacts take out over the step goes to ``ledger[blk]``: at CONTACT_DASHPOT the normal
+    force's excess over the spring's, (f_n - k_n delta) d(delta)/dt dt (the dashpot, and a spring cut off when the
+    force would pull); at FRICTION the tangential force's work on the slip less the change of its spring's
+    energy, -f_t.s dt - k_t (|u'|^2 - |u|^2)/2 (sliding at the Coulomb limit and the tangential dashpot), and
+    the spring's energy k_t |u|^2/2 when a pair separates (its history is reset).
     """
     counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out,
                      mode, gap_ref, edge_moved)
+    friction = 0.0
+    dashpot = 0.0
     for p in range(lo, hi):
         i = pairs[p, 0]
         j = pairs[p, 1]
         overlap = out[p, OVERLAP]
         if overlap <= 0.0:
+            stored = slip[p, 0] * slip[p, 0] + slip[p, 1] * slip[p, 1] + slip[p, 2] * slip[p, 2]
+            if stored > 0.0:
+                friction += 0.5 * stiffness[edge_class[i], edge_class[j], 1] * stored
             slip[p, 0] = 0.0
             slip[p, 1] = 0.0
             slip[p, 2] = 0.0
@@ -748,6 +760,9 @@ def pair_contact_forces(
         ftx, fty, ftz, ux, uy, uz, slides = coulomb_spring(slip[p, 0], slip[p, 1], slip[p, 2], nx, ny, nz, vtx, vty,
                                                            vtz, sx, sy, sz, dt, k_t, gamma_t, mu * fn)
         sliding = 1.0 if slides else 0.0
+        dashpot -= (fn - k_n * overlap) * vn * dt
+        friction -= (ftx * sx + fty * sy + ftz * sz) * dt + 0.5 * k_t * (
+            ux * ux + uy * uy + uz * uz - slip[p, 0] * slip[p, 0] - slip[p, 1] * slip[p, 1] - slip[p, 2] * slip[p, 2])
         slip[p, 0] = ux
         slip[p, 1] = uy
         slip[p, 2] = uz
@@ -776,20 +791,22 @@ def pair_contact_forces(
             shares[q, SHARE_NORMAL] = fn
             shares[q, SHARE_OVERLAP] = overlap
             shares[q, SHARE_SLIDING] = sliding
+    ledger[blk, FRICTION] += friction
+    ledger[blk, CONTACT_DASHPOT] += dashpot
 
 
 @njit(**PARALLEL_OPTS)
 def _pair_contact_forces_in_blocks(
     n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
     edge_prev, edge_next, union, pairs, slip, edge_class, stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref,
-    edge_moved, edge_rod, bucket_fill, shares, share_edge,
+    edge_moved, edge_rod, bucket_fill, shares, share_edge, ledger,
 ):
     for blk in prange(n_blocks):
         pair_contact_forces(
             blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, omega, v_damp, omega_damp, predicted,
             spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, slip, edge_class,
             stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref, edge_moved, blk, edge_rod, bucket_fill, shares,
-            share_edge,
+            share_edge, ledger,
         )
 
 
@@ -905,7 +922,7 @@ def contact_sums_by_rod(n_blocks, bucket_start, bucket_fill, shares, share_edge,
 
 @njit(**NUMBA_OPTS)
 def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F, torque, v_damp, omega_damp,
-                   predicted):
+                   predicted, ledger):
     """Add the contact forces of the candidate pairs of ``c`` (:class:`knitlad.engine.contact.Contacts`) to F
     (and, with ``spin``, the friction couples to ``torque``); advance the slip history. ``predicted``:
     the dashpots act on ``v_damp``, ``omega_damp`` (:func:`pair_contact_forces`). Call
@@ -918,7 +935,8 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
     evaluated on up to ``c.threads[0]`` threads into ``c.pair_results``, each touching pair's two shares
     into the buckets of its block and its edges' rods; each rod then adds its shares, block after block, to its
     own nodes (:func:`contact_sums_by_rod`): every node gets its shares in pair order, so the forces are bit
-    for bit those of a serial sum over the pairs, on any number of threads.
+    for bit those of a serial sum over the pairs, on any number of threads. The energy the contacts take out
+    goes to ``ledger`` (rows: the blocks; :func:`pair_contact_forces`).
     """
     n_pairs = c.n_pairs[0]
     n_blocks = max(1, min(c.threads[0], n_pairs // MIN_PAIRS_PER_THREAD))
@@ -936,7 +954,7 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
             n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
             c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.stiffness, p.damping_n,
             p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, c.edge_rod, c.bucket_fill, c.shares,
-            c.share_edge,
+            c.share_edge, ledger,
         )
         contact_sums_by_rod(n_blocks, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b, spin, F,
                             torque, c.rod_stats)
@@ -945,7 +963,7 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
             0, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
             c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.stiffness, p.damping_n,
             p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, 0, c.edge_rod, c.bucket_fill,
-            c.shares, c.share_edge,
+            c.shares, c.share_edge, ledger,
         )
         for r in range(c.rod_stats.shape[0]):
             rod_contact_sum(r, 1, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b, spin, F,

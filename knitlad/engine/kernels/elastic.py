@@ -37,7 +37,7 @@ def edge_vectors(x, edge_a, edge_b, edge_shift, e, elen, first=0, last=-1):
 
 
 @njit(inline="always", **NUMBA_OPTS)
-def _add_hinge_forces(F, prev, centre, nxt, gax, gay, gaz, gbx, gby, gbz):
+def add_hinge_forces(F, prev, centre, nxt, gax, gay, gaz, gbx, gby, gbz):
     """Forces of a hinge energy E(e0, e1), e0 = x_c - x_p, e1 = x_n - x_c, from g_a = dE/de0, g_b = dE/de1."""
     F[prev, 0] += gax
     F[prev, 1] += gay
@@ -51,16 +51,18 @@ def _add_hinge_forces(F, prev, centre, nxt, gax, gay, gaz, gbx, gby, gbz):
 
 
 @njit(**NUMBA_OPTS)
-def stretching_forces(e, elen, v, edge_a, edge_b, rest_length, EA, damping, F, first=0, last=-1):
+def stretching_forces(e, elen, v, edge_a, edge_b, rest_length, EA, damping, F, first=0, last=-1, loss=None, dt=0.0):
     """Axial spring plus internal dashpot on every edge.
 
     Energy E_s = EA (|e| - |e_bar|)^2 / (2 |e_bar|); tension
     T = EA (|e|/|e_bar| - 1) + c d|e|/dt, with c the edge's dashpot coefficient
     (Kelvin-Voigt: it damps axial vibration, never rigid motion or bending).
-    Edges [first, last) (all by default).
+    Edges [first, last) (all by default). With ``loss`` (a slice of the ledger), adds to ``loss[0]`` what the
+    dashpots took out over ``dt``, sum c (d|e|/dt)^2 dt [uJ].
     """
     if last < 0:
         last = edge_a.shape[0]
+    power = 0.0
     for k in range(first, last):
         a = edge_a[k]
         b = edge_b[k]
@@ -76,11 +78,14 @@ def stretching_forces(e, elen, v, edge_a, edge_b, rest_length, EA, damping, F, f
         F[b, 0] -= tension * tx
         F[b, 1] -= tension * ty
         F[b, 2] -= tension * tz
+        power += damping[k] * stretch_rate * stretch_rate
+    if loss is not None:
+        loss[0] += dt * power
 
 
 @njit(**NUMBA_OPTS)
 def implicit_stretching_forces(e, elen, v, held, mass, edge_a, edge_b, rest_length, EA, damping, dt, F, sweep,
-                               first, last):
+                               first, last, loss=None):
     """Axial springs and dashpots of edges [first, last) at the end of the step (linearly implicit).
 
     The tension of :func:`stretching_forces`, T = g/eps + c dg/dt with g = |e| - |e_bar| and the
@@ -94,12 +99,17 @@ def implicit_stretching_forces(e, elen, v, held, mass, edge_a, edge_b, rest_leng
 
     where G v = t.(v_b - v_a) is the stretch rate and F the other forces. G M^-1 G^T is
     tridiagonal along a chain of edges (diagonal 1/m_a + 1/m_b, t_k.t_k+1/m at the shared node,
-    1/m = 0 on held nodes), solved by the Thomas algorithm in ``sweep`` (ne, 2). A static state
+    1/m = 0 on held nodes), solved by the Thomas algorithm in ``sweep`` (ne, 4: its two coefficients, and the
+    stretch rate and elastic tension the returned power needs). A static state
     keeps the explicit tension T = g/eps exactly; the axial waves, which the laddering does not
     need, lose their stability limit and are damped (without a dashpot, by 1/sqrt(1 + (omega dt)^2)
     per step).
     Consecutive edges couple where they share a node (edge_b[k] == edge_a[k + 1]); a ring's
     closing node is not coupled, so the caller keeps rings explicit. Adds T t to F[a], -T t to F[b].
+    With ``loss``, adds to ``loss[0]`` the energy taken out over dt by what is not the elastic tension,
+    sum (T - EA g/|e_bar|) dg/dt dt at the half-step velocity [uJ]: the dashpot and the scheme's own damping
+    of the axial waves (a caller's slice of the ledger: a value returned into a parallel loop's array costs
+    the solve a fifth).
     """
     if last <= first:
         return
@@ -135,10 +145,13 @@ def implicit_stretching_forces(e, elen, v, held, mass, edge_a, edge_b, rest_leng
         previous_d = (rhs - couple * previous_d) * inv_denom
         sweep[k, 0] = previous_c
         sweep[k, 1] = previous_d
+        sweep[k, 2] = rate  # for the ledger: the stretch rate and the elastic tension
+        sweep[k, 3] = (elen[k] - rest_length[k]) * EA[k] / rest_length[k]
         couple = nxt
         inv_a = inv_b
         inv_l = inv_l_next
     tension = 0.0
+    power = 0.0
     for k in range(last - 1, first - 1, -1):
         tension = sweep[k, 1] - sweep[k, 0] * tension  # sweep[k, 0] is 0 at a chain's last edge
         a = edge_a[k]
@@ -150,6 +163,9 @@ def implicit_stretching_forces(e, elen, v, held, mass, edge_a, edge_b, rest_leng
         F[b, 0] -= scale * e[k, 0]
         F[b, 1] -= scale * e[k, 1]
         F[b, 2] -= scale * e[k, 2]
+        power += (tension - sweep[k, 3]) * sweep[k, 2]
+    if loss is not None:
+        loss[0] += dt * power
 
 
 @njit(**NUMBA_OPTS)
@@ -163,7 +179,7 @@ def stretching_energy(elen, rest_length, EA):
 
 
 @njit(inline="always", **NUMBA_OPTS)
-def _isotropic_bending_gradient(ax, ay, az, bx, by, bz, la, lb, s):
+def isotropic_bending_gradient(ax, ay, az, bx, by, bz, la, lb, s):
     """kb and (dE/da, dE/db) of E = s |kb|^2 / 2 at the hinge of edges a, b (see :func:`bending_forces`)."""
     inv_D = 1.0 / (la * lb + dot(ax, ay, az, bx, by, bz))
     cx, cy, cz = cross(ax, ay, az, bx, by, bz)
@@ -199,9 +215,9 @@ def bending_forces(e, elen, edge_a, edge_b, hinge_e0, hinge_e1, B_over_l, F, fir
     for h in range(first, last):
         k0 = hinge_e0[h]
         k1 = hinge_e1[h]
-        _, _, _, gax, gay, gaz, gbx, gby, gbz = _isotropic_bending_gradient(
+        _, _, _, gax, gay, gaz, gbx, gby, gbz = isotropic_bending_gradient(
             e[k0, 0], e[k0, 1], e[k0, 2], e[k1, 0], e[k1, 1], e[k1, 2], elen[k0], elen[k1], B_over_l[h])
-        _add_hinge_forces(F, edge_a[k0], edge_b[k0], edge_b[k1], gax, gay, gaz, gbx, gby, gbz)
+        add_hinge_forces(F, edge_a[k0], edge_b[k0], edge_b[k1], gax, gay, gaz, gbx, gby, gbz)
 
 
 @njit(**NUMBA_OPTS)
@@ -232,12 +248,12 @@ def straight_bending_twisting_forces(
         ref_twist[h] += holonomy_twist_change(
             tangent[k0, 0], tangent[k0, 1], tangent[k0, 2], tangent[k1, 0], tangent[k1, 1], tangent[k1, 2],
             e[k0, 0] * i0, e[k0, 1] * i0, e[k0, 2] * i0, e[k1, 0] * i1, e[k1, 1] * i1, e[k1, 2] * i1)
-        kbx, kby, kbz, gax, gay, gaz, gbx, gby, gbz = _isotropic_bending_gradient(
+        kbx, kby, kbz, gax, gay, gaz, gbx, gby, gbz = isotropic_bending_gradient(
             e[k0, 0], e[k0, 1], e[k0, 2], e[k1, 0], e[k1, 1], e[k1, 2], la, lb, B_over_l[h])
         gm = GJ_over_l[h] * (theta[k1] - theta[k0] + ref_twist[h] - twist_bar[h])
         ga = 0.5 * gm / la
         gb = 0.5 * gm / lb
-        _add_hinge_forces(F, edge_a[k0], edge_b[k0], edge_b[k1], gax + ga * kbx, gay + ga * kby, gaz + ga * kbz,
+        add_hinge_forces(F, edge_a[k0], edge_b[k0], edge_b[k1], gax + ga * kbx, gay + ga * kby, gaz + ga * kbz,
                           gbx + gb * kbx, gby + gb * kby, gbz + gb * kbz)
         torque[k0] += gm
         torque[k1] -= gm
@@ -341,7 +357,7 @@ def framed_bending_twisting_forces(
         gbx = i1 * (g1 * (-kap1 * ttx - c3x) + g2 * (-kap2 * ttx + c4x) + 0.5 * gm * kbx)
         gby = i1 * (g1 * (-kap1 * tty - c3y) + g2 * (-kap2 * tty + c4y) + 0.5 * gm * kby)
         gbz = i1 * (g1 * (-kap1 * ttz - c3z) + g2 * (-kap2 * ttz + c4z) + 0.5 * gm * kbz)
-        _add_hinge_forces(F, edge_a[k0], edge_b[k0], edge_b[k1], gax, gay, gaz, gbx, gby, gbz)
+        add_hinge_forces(F, edge_a[k0], edge_b[k0], edge_b[k1], gax, gay, gaz, gbx, gby, gbz)
         # torques -dE/dtheta
         kd1_0 = dot(kbx, kby, kbz, d1[k0, 0], d1[k0, 1], d1[k0, 2])
         kd2_0 = dot(kbx, kby, kbz, d2[k0, 0], d2[k0, 1], d2[k0, 2])

@@ -24,6 +24,19 @@ from numba import njit, prange
 
 from knitlad.engine.kernels.options import NUMBA_OPTS, PARALLEL_OPTS
 from knitlad.engine.kernels.contact import contact_energy, contact_forces, refresh_contacts
+from knitlad.engine.kernels.dissipation import (
+    AIR,
+    AXIAL_DASHPOT,
+    GLOBAL_DRAG,
+    MATERIAL,
+    OBSTACLE_WORK,
+    SUPPORT_WORK,
+    air_drag_forces,
+    drag_dissipation,
+    no_damping,
+    support_power,
+    viscoelastic_forces,
+)
 from knitlad.engine.kernels.obstacles import advance_obstacles, obstacle_forces
 from knitlad.engine.kernels.elastic import (
     bending_energy,
@@ -63,8 +76,9 @@ DASHPOTS_PREDICTED = 1
 
 
 @njit(**PARALLEL_OPTS)
-def elastic_forces_by_yarn(m, s, w, explicit_stretch, v_damp):
-    """Stretching and isotropic bending, yarn by yarn in parallel.
+def elastic_forces_by_yarn(m, s, w, explicit_stretch, v_damp, dt):
+    """Stretching and isotropic bending, yarn by yarn in parallel (the axial dashpots' loss over ``dt`` to the
+    ledger: each kernel adds into its yarn's slice, as a value returned into the loop's array costs a fifth).
 
     A yarn's edges and hinges only touch its own nodes, so threads never write
     the same node (edges and hinges are stored yarn by yarn: see Workspace).
@@ -74,13 +88,13 @@ def elastic_forces_by_yarn(m, s, w, explicit_stretch, v_damp):
         edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen, e0, e1)
         if explicit_stretch:
             stretching_forces(w.e, w.elen, v_damp, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force,
-                              e0, e1)
+                              e0, e1, w.ledger[y, AXIAL_DASHPOT:AXIAL_DASHPOT + 1], dt)
         bending_forces(w.e, w.elen, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1, m.B_over_l, w.force,
                        w.yarn_hinges[y], w.yarn_hinges[y + 1])
 
 
 @njit(**PARALLEL_OPTS)
-def framed_forces_by_yarn(m, s, w, explicit_stretch, v_damp):
+def framed_forces_by_yarn(m, s, w, explicit_stretch, v_damp, dt):
     """Stretching, and bending and twisting with material frames (framed DER), yarn by yarn in
     parallel: the frames of a yarn's edges and its hinges' forces and torques touch only its own
     nodes and edges (as :func:`elastic_forces_by_yarn`)."""
@@ -90,7 +104,7 @@ def framed_forces_by_yarn(m, s, w, explicit_stretch, v_damp):
         edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen, e0, e1)
         if explicit_stretch:
             stretching_forces(w.e, w.elen, v_damp, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force,
-                              e0, e1)
+                              e0, e1, w.ledger[y, AXIAL_DASHPOT:AXIAL_DASHPOT + 1], dt)
         transport_reference_frames(w.e, w.elen, s.tangent, s.ref_u, e0, e1)
         update_reference_twist(s.tangent, s.ref_u, m.hinge_e0, m.hinge_e1, s.ref_twist, h0, h1)
         material_frames(s.tangent, s.ref_u, s.theta, w.d1, w.d2, e0, e1)
@@ -101,7 +115,7 @@ def framed_forces_by_yarn(m, s, w, explicit_stretch, v_damp):
 
 
 @njit(**PARALLEL_OPTS)
-def straight_twisting_forces_by_yarn(m, s, w, explicit_stretch, v_damp):
+def straight_twisting_forces_by_yarn(m, s, w, explicit_stretch, v_damp, dt):
     """Stretching, and isotropic bending and twisting of yarns straight at rest (TWIST_STRAIGHT), yarn by
     yarn in parallel: the reference twist by holonomy from the stored tangents with the forces and
     torques, then the new tangents stored (and the frames of the anchor edges carried:
@@ -112,7 +126,7 @@ def straight_twisting_forces_by_yarn(m, s, w, explicit_stretch, v_damp):
         edge_vectors(s.x, m.edge_a, m.edge_b, m.edge_shift, w.e, w.elen, e0, e1)
         if explicit_stretch:
             stretching_forces(w.e, w.elen, v_damp, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, w.force,
-                              e0, e1)
+                              e0, e1, w.ledger[y, AXIAL_DASHPOT:AXIAL_DASHPOT + 1], dt)
         straight_bending_twisting_forces(
             w.e, w.elen, s.tangent, m.edge_a, m.edge_b, m.hinge_e0, m.hinge_e1,
             m.B_over_l, m.GJ_over_l, s.ref_twist, m.twist_bar, s.theta, w.force, w.torque, h0, h1,
@@ -138,40 +152,70 @@ def complete_frames(m, s, w, twist):
         reference_frames_by_yarn(m, s, w)
 
 
+@njit(**PARALLEL_OPTS)
+def dissipative_forces_by_yarn(m, w, v_damp, ratio, decay, lead, air_density, air_viscosity, skin_friction, dt):
+    """The viscoelastic branches (``ratio`` > 0, relaxing by ``decay`` = exp(-dt/tau) and ``lead`` a step) and the air
+    drag (``air_density`` > 0), yarn by yarn in parallel, each one's loss over the step to the ledger
+    (:mod:`knitlad.engine.kernels.dissipation`). Reads the edge vectors of the elastic pass."""
+    for y in prange(w.yarn_edges.shape[0] - 1):
+        e0, e1 = w.yarn_edges[y], w.yarn_edges[y + 1]
+        h0, h1 = w.yarn_hinges[y], w.yarn_hinges[y + 1]
+        if ratio > 0.0:
+            viscoelastic_forces(w.e, w.elen, v_damp, m.edge_a, m.edge_b, m.rest_length, m.EA, m.hinge_e0, m.hinge_e1,
+                                m.B_over_l, ratio, decay, lead, w.branch_ext, w.branch_kb, w.force, e0, e1, h0, h1,
+                                w.ledger[y, MATERIAL:MATERIAL + 1])
+        if air_density > 0.0:
+            air_drag_forces(w.e, w.elen, v_damp, m.edge_a, m.edge_b, m.radius, air_density, air_viscosity,
+                            skin_friction, w.force, e0, e1, dt, w.ledger[y, AIR:AIR + 1])
+
+
 @njit(**NUMBA_OPTS)
-def compute_forces(m, s, w, c, twist, contact, drag, dt, axial=AXIAL_EXPLICIT, dashpots=DASHPOTS_HALF_STEP,
+def compute_forces(m, s, w, c, twist, contact, damping, dt, axial=AXIAL_EXPLICIT, dashpots=DASHPOTS_HALF_STEP,
                    obstacles=None):
     """Total force on every node (``w.force``) and torque on every edge (``w.torque``).
 
     ``twist``, ``contact``, ``axial``, ``dashpots``: the modes (module docstring; with DASHPOTS_PREDICTED the
-    dashpots act on ``w.v_damp``, ``w.omega_damp``, which the caller fills). ``drag`` [1/ms]: a global viscous drag
-    -drag m v, used only while relaxing. ``dt``: the step over which contact slip accumulates, and
-    with AXIAL_IMPLICIT the kick that follows (a full step: :func:`verlet_steps` fuses the half-kicks).
+    dashpots act on ``w.v_damp``, ``w.omega_damp``, which the caller fills). ``damping``: a
+    :class:`~knitlad.engine.kernels.dissipation.DampingParams` (the global drag, the material's viscoelastic
+    branches, the air; ``no_damping()`` for statics). ``dt``: the step over which contact slip accumulates, the
+    branches relax and the ledger counts, and with AXIAL_IMPLICIT the kick that follows (a full step:
+    :func:`verlet_steps` fuses the half-kicks).
     ``obstacles``: an :class:`~knitlad.engine.kernels.obstacles.ObstacleState`, or None (none: compiled away).
-    Returns False if the contact buffer overflowed (forces incomplete).
+    Every mechanism adds what it took out over ``dt`` (and the supports and obstacles the work they did) to
+    ``w.ledger``. Returns False if the contact buffer overflowed (forces incomplete).
     """
     follow_images(s.x, s.v, m.image_node, m.image_master, m.image_shift)
     predicted = dashpots == DASHPOTS_PREDICTED
     v_damp = w.v_damp if predicted else s.v
-    external_forces(m.f_ext, m.held, m.mass, v_damp, drag, w.force)
+    external_forces(m.f_ext, m.held, m.mass, v_damp, damping.drag, w.force)
+    if damping.drag > 0.0:
+        w.ledger[0, GLOBAL_DRAG] += dt * drag_dissipation(m.held, m.mass, v_damp, damping.drag)
     w.torque[:] = 0.0
     explicit = axial == AXIAL_EXPLICIT
     if twist == TWIST_FRAMED:
-        framed_forces_by_yarn(m, s, w, explicit, v_damp)
+        framed_forces_by_yarn(m, s, w, explicit, v_damp, dt)
     elif twist:
-        straight_twisting_forces_by_yarn(m, s, w, explicit, v_damp)
+        straight_twisting_forces_by_yarn(m, s, w, explicit, v_damp, dt)
     else:
-        elastic_forces_by_yarn(m, s, w, explicit, v_damp)
+        elastic_forces_by_yarn(m, s, w, explicit, v_damp, dt)
+    if damping.branch_ratio > 0.0 or damping.air_density > 0.0:
+        decay = math.exp(-dt / damping.relaxation_time)
+        dissipative_forces_by_yarn(m, w, v_damp, damping.branch_ratio, decay,
+                                   dt - damping.relaxation_time * (1.0 - decay), damping.air_density,
+                                   damping.air_viscosity, damping.skin_friction, dt)
     if contact:
         if not refresh_contacts(s.x, m.edge_a, m.edge_b, m.edge_shift, c, s.v, c.params.lookahead_steps * dt):
             return False
         contact_forces(s.x, s.v, s.omega, twist, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt, w.force, w.torque,
-                       v_damp, w.omega_damp if predicted else s.omega, predicted)
+                       v_damp, w.omega_damp if predicted else s.omega, predicted, w.ledger)
     if obstacles is not None:
-        obstacle_forces(s.x, v_damp, m.mass, m.radius, m.held, obstacles, dt, w.force)
+        w.ledger[0, OBSTACLE_WORK] += dt * obstacle_forces(s.x, v_damp, m.mass, m.radius, m.held, obstacles, dt,
+                                                           w.force)
     rail_forces(m.rail_node, m.rail_axis, w.force)
     if not explicit:
         implicit_stretching_by_yarn(m, s, w, dt)  # last: its tensions balance every other force
+    if damping.supports_moving:  # every force on the held nodes is known: the supports' work
+        w.ledger[0, SUPPORT_WORK] += dt * support_power(m.held, m.v_prescribed, w.force)
     return True
 
 
@@ -180,8 +224,9 @@ def implicit_stretching_by_yarn(m, s, w, dt):
     """The axial forces at the end of the coming kick (AXIAL_IMPLICIT), yarn by yarn in parallel:
     a yarn's tridiagonal system couples only its own edges and nodes."""
     for y in prange(w.yarn_edges.shape[0] - 1):
-        implicit_stretching_forces(w.e, w.elen, s.v, m.held, m.mass, m.edge_a, m.edge_b, m.rest_length, m.EA,
-                                   m.stretch_damping, dt, w.force, w.axial_sweep, w.yarn_edges[y], w.yarn_edges[y + 1])
+        implicit_stretching_forces(
+            w.e, w.elen, s.v, m.held, m.mass, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, dt, w.force,
+            w.axial_sweep, w.yarn_edges[y], w.yarn_edges[y + 1], w.ledger[y, AXIAL_DASHPOT:AXIAL_DASHPOT + 1])
 
 
 @njit(**PARALLEL_OPTS)
@@ -366,7 +411,7 @@ def _drift(m, s, dt, twist):
 
 
 @njit(**NUMBA_OPTS)
-def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, drag, axial=AXIAL_EXPLICIT, dashpots=DASHPOTS_HALF_STEP,
+def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, damping, axial=AXIAL_EXPLICIT, dashpots=DASHPOTS_HALF_STEP,
                  obstacles=None):
     """Advance ``n_steps`` of velocity Verlet (kick-drift-kick); return the steps completed.
 
@@ -390,7 +435,7 @@ def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, drag, axial=AXIAL_EXPL
             predict_velocities(m.held, m.mass, w.force, s.v, 0.5 * dt, w.v_damp)
             if twist:
                 predict_spins(m.theta_held, m.twist_inertia, w.torque, s.omega, 0.5 * dt, w.omega_damp)
-        if not compute_forces(m, s, w, c, twist, contact, drag, dt, axial, dashpots, obstacles):
+        if not compute_forces(m, s, w, c, twist, contact, damping, dt, axial, dashpots, obstacles):
             complete_frames(m, s, w, twist)
             return step
         if step < n_steps - 1:
@@ -442,7 +487,7 @@ def fire_relax(m, s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, t
         for k in range(3):
             s.v[i, k] = 0.0
     s.omega[:] = 0.0
-    if not compute_forces(m, s, w, c, twist, contact, 0.0, dt, AXIAL_EXPLICIT, DASHPOTS_HALF_STEP, obstacles):
+    if not compute_forces(m, s, w, c, twist, contact, no_damping(), dt, AXIAL_EXPLICIT, DASHPOTS_HALF_STEP, obstacles):
         return -1, 0.0, 0.0
     fmax, tmax = max_free_force(m, w, twist)
     step = 0
@@ -502,7 +547,8 @@ def fire_relax(m, s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, t
                 if not m.theta_held[j]:
                     s.omega[j] = (1.0 - alpha) * s.omega[j] + tscale * w.torque[j]
                     s.theta[j] += dt * s.omega[j]
-        if not compute_forces(m, s, w, c, twist, contact, 0.0, dt, AXIAL_EXPLICIT, DASHPOTS_HALF_STEP, obstacles):
+        if not compute_forces(m, s, w, c, twist, contact, no_damping(), dt, AXIAL_EXPLICIT, DASHPOTS_HALF_STEP,
+                              obstacles):
             return -1, 0.0, 0.0
         fmax, tmax = max_free_force(m, w, twist)
     for i in range(s.x.shape[0]):

@@ -67,8 +67,10 @@ def obstacle_gap(kind, point, axis, radius, x, i, o):
 @njit(**NUMBA_OPTS)
 def obstacle_forces(x, v, mass, node_radius, held, o, dt, force):
     """Add each obstacle's contact force on every free node to ``force``; the opposite sum to ``o.reaction``.
-    Advances the slip history (module docstring)."""
+    Advances the slip history (module docstring). Returns the power the obstacles put into the nodes,
+    sum f.v [uJ/ms] (negative while they take energy out: their dashpots and friction)."""
     o.reaction[:] = 0.0
+    power = 0.0
     for i in range(x.shape[0]):
         for b in range(o.kind.shape[0]):
             gap, nx, ny, nz = obstacle_gap(o.kind, o.point, o.axis, o.radius, x, i, b)
@@ -106,6 +108,8 @@ def obstacle_forces(x, v, mass, node_radius, held, o, dt, force):
             o.reaction[b, 0] -= fx
             o.reaction[b, 1] -= fy
             o.reaction[b, 2] -= fz
+            power += fx * v[i, 0] + fy * v[i, 1] + fz * v[i, 2]
+    return power
 
 
 @njit(**NUMBA_OPTS)
