@@ -11,11 +11,12 @@ straight yarn; l_y/l0 = 0.25 for the 42 x 42 crosses of Fig. 5a). Each point is 
     d/l0 1/60     the public engine's yarn (its own stretched knits)
     k x0.5, k x2  the contact stiffness halved and doubled (their own stretched knits)
 
-Paired ensembles: member k of a point is stretched once (force-control targets 0.5 % apart,
-knitlad/studies/ensemble.py) and cut under every variant that keeps its knit. A run stops once a front has run
-``--stop-after`` stitches (the velocity is fitted from stitch 2 to 10). Runs are shared out between
-``--shards`` processes (one per core, one Numba thread each), each taking whole knits; rows go to
-``<out>/attribution<size>.csv`` after every run (resumable).
+Paired ensembles: member k of a point is one knit (force-control targets 0.5 % apart,
+knitlad/studies/ensemble.py) cut under every variant that keeps its knit. A run stops once a front has run
+``--stop-after`` stitches (the velocity is fitted from stitch 2 to 10). Runs are dealt out in turn between
+``--shards`` processes (one per core, one Numba thread each), each stretching the knits of its runs (the
+stretch is deterministic: the same knit in each); rows go to ``<out>/attribution<size>.csv`` after every run
+(resumable).
 
     python scripts/paper/dissipation_attribution.py --shard 0 --shards 2 &
     python scripts/paper/dissipation_attribution.py --shard 1 --shards 2 &
@@ -60,16 +61,21 @@ def commit() -> str:
         return "unknown"
 
 
-def groups(points: list[float], members: list[int], variants: list[str]) -> list[tuple]:
-    """(point, member, the stretch's changes, the variants laddered from that knit), in a fixed order."""
-    out = []
+def runs(points: list[float], members: list[int], variants: list[str], shard: int, shards: int) -> list[tuple]:
+    """This shard's runs, (point, member, members, variant), knit by knit: the runs of one knit (one stretch)
+    are dealt out in turn between the shards (each stretches it: the stretch is deterministic, so both get the
+    same knit), so the shards end together."""
+    out, turn = [], 0
     for fx, n in zip(points, members):
         for k in range(n):
             by_stretch: dict[str, list[str]] = {}
             for v in variants:
                 by_stretch.setdefault(repr(sorted(VARIANTS[v][0].items())), []).append(v)
             for names in by_stretch.values():
-                out.append((fx, k, n, VARIANTS[names[0]][0], names))
+                for v in names:
+                    if turn % shards == shard:
+                        out.append((fx, k, n, v))
+                    turn += 1
     return out
 
 
@@ -89,44 +95,41 @@ def main() -> None:
     csv, rows = resumed_rows(args.out, f"attribution{args.size}")
     done = {(r["fx_nominal"], r["member"], r["variant"], r["preset"]) for r in rows}
     code = commit()
-    for g, (fx, k, n, stretch_changes, names) in enumerate(groups(args.points, args.members, args.variants)):
-        if g % args.shards != args.shard:
-            continue
-        todo = [v for v in names if (fx, k, v, args.preset) not in done]
-        if not todo:
+    knit, knit_key, stretch_s = None, None, 0.0
+    for fx, k, n, variant in runs(args.points, args.members, args.variants, args.shard, args.shards):
+        if (fx, k, variant, args.preset) in done:
             continue
         base = CutConfig(n_x=args.size, n_y=args.size, fx=fx * (1 + target_offsets(n)[k]), ly=args.ly,
-                         preset=args.preset, stop_after_stitches=args.stop_after, **stretch_changes)
-        t0 = time.perf_counter()
-        knit = stretch(base.stretch_settings())
-        stretch_s = time.perf_counter() - t0
-        for variant in todo:
-            cfg = base.replace(**VARIANTS[variant][1])
-            row = {"fx_nominal": fx, "member": k, "variant": variant, "preset": args.preset, "fx_target": cfg.fx,
-                   "ly_target": args.ly, "fx_ini": knit.fx_ini, "lx_over_l0": knit.lx_over_l0,
-                   "ly_over_l0": knit.ly_over_l0, "resolution": cfg.resolution, "stretch_s": stretch_s,
-                   "commit": code, "date": time.strftime("%Y-%m-%d")}
-            t1 = time.perf_counter()
-            try:
-                result = analyse(propagate(cut(knit, cfg.dynamics_settings())))
-            except (Interpenetration, SimulationBlowUp) as error:  # a failed run is a result too: kept
-                rows.append({**row, "error": str(error)})
-                save_rows(csv, rows, KEY)
-                print(f"{variant:10s} f_x {fx:5.2f} member {k}: failed: {error}", flush=True)
-                continue
-            s = result.summary()
-            row.update({name: s[name] for name in (
-                "v_lad_over_cb", "n_lad_over_ny", "fx_fin", "stop_reason", "reached_edge", "steps", "nodes",
-                "energy_start_J", "energy_end_J", "dissipated_friction_J", "dissipated_contact_dashpot_J",
-                "dissipated_axial_dashpot_J", "dissipated_material_J", "dissipated_air_J", "dissipated_global_drag_J",
-                "ledger_residual")})
-            row["ladder_s"] = time.perf_counter() - t1
-            row["time_ms"] = result.times_s[-1] * 1e3 if result.times_s else float("nan")
-            rows.append(row)
+                         preset=args.preset, stop_after_stitches=args.stop_after, **VARIANTS[variant][0])
+        if knit_key != base.stretch_settings():  # a new knit; the runs of one knit come together
+            t0 = time.perf_counter()
+            knit, knit_key = stretch(base.stretch_settings()), base.stretch_settings()
+            stretch_s = time.perf_counter() - t0
+        cfg = base.replace(**VARIANTS[variant][1])
+        row = {"fx_nominal": fx, "member": k, "variant": variant, "preset": args.preset, "fx_target": cfg.fx,
+               "ly_target": args.ly, "fx_ini": knit.fx_ini, "lx_over_l0": knit.lx_over_l0,
+               "ly_over_l0": knit.ly_over_l0, "resolution": cfg.resolution, "stretch_s": stretch_s,
+               "commit": code, "date": time.strftime("%Y-%m-%d")}
+        t1 = time.perf_counter()
+        try:
+            result = analyse(propagate(cut(knit, cfg.dynamics_settings())))
+        except (Interpenetration, SimulationBlowUp) as error:  # a failed run is a result too: kept
+            rows.append({**row, "error": str(error)})
             save_rows(csv, rows, KEY)
-            print(f"{variant:10s} f_x {fx:5.2f} member {k}: f_x^ini {knit.fx_ini:.3f} v {row['v_lad_over_cb']:.3f} "
-                  f"({row['ladder_s']:.0f} s, {row['steps']} steps, {s['stop_reason']})", flush=True)
-
+            print(f"{variant:10s} f_x {fx:5.2f} member {k}: failed: {error}", flush=True)
+            continue
+        s = result.summary()
+        row.update({name: s[name] for name in (
+            "v_lad_over_cb", "n_lad_over_ny", "fx_fin", "stop_reason", "reached_edge", "steps", "nodes",
+            "energy_start_J", "energy_end_J", "dissipated_friction_J", "dissipated_contact_dashpot_J",
+            "dissipated_axial_dashpot_J", "dissipated_material_J", "dissipated_air_J", "dissipated_global_drag_J",
+            "ledger_residual")})
+        row["ladder_s"] = time.perf_counter() - t1
+        row["time_ms"] = result.times_s[-1] * 1e3 if result.times_s else float("nan")
+        rows.append(row)
+        save_rows(csv, rows, KEY)
+        print(f"{variant:10s} f_x {fx:5.2f} member {k}: f_x^ini {knit.fx_ini:.3f} v {row['v_lad_over_cb']:.3f} "
+              f"({row['ladder_s']:.0f} s, {row['steps']} steps, {s['stop_reason']})", flush=True)
 
 if __name__ == "__main__":
     main()
