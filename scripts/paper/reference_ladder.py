@@ -9,6 +9,8 @@ never one run on two threads beside another).
 
     python scripts/paper/reference_ladder.py [--size 16] [--tensions 1.58 4 13.6] [--resolutions 24 48 96]
                                        [--members 3] [--out docs/reference]
+    ... --sagitta 11 --implicit-axial --loss-factor 0.03 --air    # under the physical dissipations
+                                                                   (docs/dissipation.md)
 
 Writes ``<out>/ladder<size>.csv`` after every run (resumable: finished runs are skipped).
 """
@@ -43,10 +45,14 @@ def main() -> None:
                    help="ensemble size the offsets are spread over (default: --members)")
     p.add_argument("--sagitta", type=float, default=0.0, help="the contact's sagitta correction, R in d (0: none)")
     p.add_argument("--implicit-axial", action="store_true", help="implicit axial springs in the laddering")
+    p.add_argument("--loss-factor", type=float, default=0.0, help="the yarn's material damping (0: none)")
+    p.add_argument("--air", action="store_true", help="air drag in the laddering")
     p.add_argument("--out", default="docs/reference")
     args = p.parse_args()
     variant = f"sagitta {args.sagitta:g}" + (" implicit" if args.implicit_axial else "") if args.sagitta or \
         args.implicit_axial else "plain"
+    if args.loss_factor or args.air:  # the physical dissipations: docs/dissipation.md
+        variant += (f" loss {args.loss_factor:g}" if args.loss_factor else "") + (" air" if args.air else "")
     csv, rows = resumed_rows(args.out, f"ladder{args.size}")
     done = {(r["fx_nominal"], r["resolution"], r["member"], r.get("variant") if isinstance(r.get("variant"), str)
              else "plain") for r in rows}
@@ -58,7 +64,8 @@ def main() -> None:
                 if (fx, res, k, variant) in done:
                     continue
                 cfg = CutConfig(n_x=args.size, n_y=args.size, fx=fx * (1 + offsets[k]), resolution=res,
-                                sagitta_radius=args.sagitta, implicit_axial=args.implicit_axial)
+                                sagitta_radius=args.sagitta, implicit_axial=args.implicit_axial,
+                                loss_factor=args.loss_factor, air_drag=args.air)
                 t0 = time.perf_counter()
                 knit = stretch(cfg.stretch_settings())
                 t1 = time.perf_counter()
@@ -76,6 +83,8 @@ def main() -> None:
                        "v_lad_over_cb": result.v_lad_over_cb, "n_lad_over_ny": result.n_lad_over_ny,
                        "fx_fin": result.fx_fin, "fx_last": result.fx_series[-1] if result.fx_series else float("nan"),
                        "stop_reason": result.stop_reason, "reached_edge": result.reached_edge,
+                       **{k: v for k, v in result.energy_record().items() if k.startswith("dissipated")
+                          or k == "ledger_residual"},
                        "steps": result.steps, "nodes": result.nodes,
                        "stretch_s": t1 - t0, "ladder_s": time.perf_counter() - t1,
                        "date": time.strftime("%Y-%m-%d")}
