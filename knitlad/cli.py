@@ -661,8 +661,8 @@ def plot(
     """
     from pathlib import Path
 
-    from knitlad.viz.plots import (FORMATS, column_midline_diagram, job_figure_names, spatio_temporal_from_file,
-                               summary_plots, tension_history_plot)
+    from knitlad.viz.plots import (FORMATS, column_midline_diagram, energy_ledger_plot, job_figure_names,
+                                   spatio_temporal_from_file, summary_plots, tension_history_plot)
 
     if fmt not in FORMATS:
         fail(f"--format: one of {', '.join(FORMATS)}, got {fmt!r}")
@@ -674,6 +674,7 @@ def plot(
         paths = [spatio_temporal_from_file(h5, Path(folder) / f"spatio_temporal.{fmt}"),
                  column_midline_diagram(h5, Path(folder) / f"midline_diagram.{fmt}"),
                  tension_history_plot(h5, Path(folder) / f"tension_history.{fmt}"),
+                 *_energy_plot(h5, Path(folder) / f"energy.{fmt}"),
                  *render_run(h5, Path(folder) / "render", progress=line)]
         line.close()
         typer.echo(f"wrote {len(paths)} figures in {folder}")
@@ -796,7 +797,18 @@ def _experiment_or_exit(run, progress, kept: str = "nothing written"):
 
 # what knitlad cut, render, movie and plot write in a run folder
 RUN_OUTPUTS = ("ladder.h5", "ladder.xdmf", "spatio_temporal.png", "midline_diagram.png", "tension_history.png",
-               "ladder.mp4", "ladder.gif", "summary.json", "render")
+               "energy.png", "ladder.mp4", "ladder.gif", "summary.json", "render")
+
+
+def _energy_plot(h5, path) -> list:
+    """The energy ledger's figure, if the run file holds a ledger (files before 0.6.0 do not): [path] or []."""
+    from knitlad.viz.plots import energy_ledger_plot
+
+    try:
+        return [energy_ledger_plot(h5, path)]
+    except KeyError as e:
+        typer.echo(f"knitlad: {e.args[0]}", err=True)
+        return []
 
 
 def earlier_run_outputs(out_dir) -> list:

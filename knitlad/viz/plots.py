@@ -153,6 +153,40 @@ def tension_history_plot(h5_path: str | Path, path: str | Path) -> Path:
     return _save(fig, Path(path))
 
 
+# the energy ledger's channels drawn, stacked, and their labels (knitlad.engine.dissipation.EnergyLedger)
+LEDGER_STACK = (("friction", "friction"), ("contact_dashpot", "contact dashpots (numerical)"),
+                ("axial_dashpot", "axial dashpots (numerical)"), ("material", "the yarn's viscoelasticity"),
+                ("air", "air"), ("global_drag", "global drag (the paper's engine)"), ("kinetic", "kinetic, now"))
+
+
+def energy_ledger_plot(h5_path: str | Path, path: str | Path) -> Path:
+    """Where the ladder's energy goes: the elastic energy the cut released (the stored energy at the cut less
+    the potential energy now), and stacked beneath it what took it, from the run file's ledger
+    (``/ledger``): friction, the dashpots, the material, the air, the drag, and the kinetic energy now. The
+    gap between the line and the stack is the ledger's residual, the integrator's error."""
+    import h5py
+
+    with h5py.File(h5_path, "r") as f:
+        if "ledger" not in f:
+            raise KeyError(f"{h5_path}: no energy ledger (a run file of knitlad before 0.6.0)")
+        g = f["ledger"]
+        t_ms = f["series/time"][()] * 1e3
+        series = {k: g[k][()] * 1e3 for k in g}  # mJ
+    released = series["start"] - (series["stored"] - series["kinetic"]) + series["work_in"]
+    layers = [(label, series[k]) for k, label in LEDGER_STACK if np.any(series[k])]
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.0, 3.6))
+    ax.stackplot(t_ms, *[v for _, v in layers], labels=[label for label, _ in layers], alpha=0.85)
+    ax.plot(t_ms, released, "k-", lw=1.2, label="elastic energy released (and work put in)")
+    last = series["residual"][-1] / series["turnover"][-1] if series["turnover"][-1] > 0 else 0.0
+    ax.set_xlabel("time since the cut [ms]")
+    ax.set_ylabel("energy [mJ]")
+    ax.set_title(f"where the ladder's energy goes (residual at the stop: {100 * last:.2f} %)", fontsize=9)
+    ax.legend(fontsize=7, loc="upper left")
+    fig.tight_layout()
+    return _save(fig, Path(path))
+
+
 PAPER_DER_VELOCITY = ((1.58, 0.176), (15.67, 1.05))  # 42 x 42, mu = 0.4, l_y/l0 = 0.25 (paper, Fig. 7)
 EXPERIMENTS_VELOCITY_SLOPE = 0.1  # the experiments' v_lad/c_b ~ 0.1 f_x^ini (paper, Fig. 5a and eq. 1)
 DAMAGE_CLASSES = (0.2, 1.0, 2.0)  # the paper's classes of n_lad/n_y (Fig. 3e): < 0.2, 0.2-1, 1-2, >= 2

@@ -10,6 +10,8 @@ straight yarn; l_y/l0 = 0.25 for the 42 x 42 crosses of Fig. 5a). Each point is 
     drag <g>      the authors' global drag -g m v [1/s] (not physics)
     d/l0 1/60     the public engine's yarn (its own stretched knits)
     k x0.5, k x2  the contact stiffness halved and doubled (their own stretched knits)
+    ly 0.302      the other l_y of the paper's 42 x 42 crosses (Fig. 5a)
+    twist         the yarns carry twist, so friction also turns them
 
 Paired ensembles: member k of a point is one knit (force-control targets 0.5 % apart,
 knitlad/studies/ensemble.py) cut under every variant that keeps its knit. A run stops once a front has run
@@ -50,6 +52,8 @@ VARIANTS = {
     "d/l0 1/60": ({"d_over_l0": 1 / 60}, {}),
     "k x0.5": ({"contact_force_f0": 10.0}, {}),
     "k x2": ({"contact_force_f0": 40.0}, {}),
+    "ly 0.302": ({"ly": 0.302}, {}),
+    "twist": ({}, {"twist": True}),
 }
 
 
@@ -84,7 +88,7 @@ def main() -> None:
     p.add_argument("--size", type=int, default=42)
     p.add_argument("--points", type=float, nargs="+", default=[15.67, 1.58], help="target f_x^ini of each point")
     p.add_argument("--members", type=int, nargs="+", default=[1, 3], help="knits per point (paired ensemble)")
-    p.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+    p.add_argument("--variants", nargs="+", default=list(VARIANTS)[:10], choices=list(VARIANTS))
     p.add_argument("--preset", default="default")
     p.add_argument("--ly", type=float, default=0.25)
     p.add_argument("--stop-after", type=int, default=12, help="stop once a front has run this many stitches")
@@ -99,15 +103,16 @@ def main() -> None:
     for fx, k, n, variant in runs(args.points, args.members, args.variants, args.shard, args.shards):
         if (fx, k, variant, args.preset) in done:
             continue
-        base = CutConfig(n_x=args.size, n_y=args.size, fx=fx * (1 + target_offsets(n)[k]), ly=args.ly,
-                         preset=args.preset, stop_after_stitches=args.stop_after, **VARIANTS[variant][0])
+        base = CutConfig(n_x=args.size, n_y=args.size, fx=fx * (1 + target_offsets(n)[k]),
+                         preset=args.preset, stop_after_stitches=args.stop_after,
+                         **{"ly": args.ly, **VARIANTS[variant][0]})
         if knit_key != base.stretch_settings():  # a new knit; the runs of one knit come together
             t0 = time.perf_counter()
             knit, knit_key = stretch(base.stretch_settings()), base.stretch_settings()
             stretch_s = time.perf_counter() - t0
         cfg = base.replace(**VARIANTS[variant][1])
         row = {"fx_nominal": fx, "member": k, "variant": variant, "preset": args.preset, "fx_target": cfg.fx,
-               "ly_target": args.ly, "fx_ini": knit.fx_ini, "lx_over_l0": knit.lx_over_l0,
+               "ly_target": cfg.ly, "fx_ini": knit.fx_ini, "lx_over_l0": knit.lx_over_l0,
                "ly_over_l0": knit.ly_over_l0, "resolution": cfg.resolution, "stretch_s": stretch_s,
                "commit": code, "date": time.strftime("%Y-%m-%d")}
         t1 = time.perf_counter()
