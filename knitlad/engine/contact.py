@@ -122,10 +122,11 @@ class ContactModel:
             raise ValueError(f"contact stiffness must be > 0 N/m, got {self.stiffness!r}")
         check_friction_coefficient(self.mu)
         for name in ("damping_ratio", "tangential_damping_ratio", "exclusion_diameters"):
-            if getattr(self, name) < 0:
-                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
-        if not self.tangential_stiffness_ratio > 0:
-            raise ValueError("tangential_stiffness_ratio must be > 0")
+            if not (getattr(self, name) >= 0 and math.isfinite(getattr(self, name))):
+                raise ValueError(f"{name} must be a finite number >= 0, got {getattr(self, name)!r}")
+        if not (self.tangential_stiffness_ratio > 0 and math.isfinite(self.tangential_stiffness_ratio)):
+            raise ValueError(f"tangential_stiffness_ratio must be a finite number > 0, got "
+                             f"{self.tangential_stiffness_ratio!r}")
         if self.counting not in COUNTING:
             raise ValueError(f"counting must be one of {', '.join(COUNTING)}, got {self.counting!r}")
         object.__setattr__(self, "counting", Counting(self.counting))

@@ -50,8 +50,10 @@ class _Contact:
             value = getattr(self, name)
             if not (value >= 0 and math.isfinite(value)):
                 raise ValueError(f"{name} must be >= 0, got {value!r}")
-        if np.shape(self.velocity_m_s) != (3,) or not np.all(np.isfinite(self.velocity_m_s)):
-            raise ValueError(f"velocity_m_s must be a finite 3-vector, got {self.velocity_m_s!r}")
+        for name in ("velocity_m_s", "point_m"):
+            value = getattr(self, name)
+            if np.shape(value) != (3,) or not np.all(np.isfinite(np.asarray(value, dtype=float))):
+                raise ValueError(f"{name} must be a finite 3-vector, got {value!r}")
 
 
 @renamed_field("friction", "mu", since="0.5.0")

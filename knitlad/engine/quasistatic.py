@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from knitlad.engine import units
+from knitlad.engine.timestep import step_count
 
 
 class QuasiStatics:
@@ -58,7 +59,8 @@ class QuasiStatics:
         by = np.broadcast_to(np.asarray(by_m, dtype=float), (idx.size, 3))
         if not np.all(np.isfinite(by)):
             raise ValueError("by_m contains NaN or infinity")
-        steps = max(1, math.ceil(float(np.max(np.linalg.norm(by, axis=1))) / speed_m_s / self.dt_s))
+        steps = max(1, step_count("by_m / speed_m_s", math.ceil(float(np.max(np.linalg.norm(by, axis=1))) / speed_m_s
+                                                             / self.dt_s)))
         before = self.drag / units.TIME
         self.set_drag(damping_per_s)
         try:
@@ -80,6 +82,7 @@ class QuasiStatics:
         """
         if not (force_tol_N > 0 and max_time_s > 0 and damping_per_s > 0):
             raise ValueError("force_tol_N, max_time_s and damping_per_s must be positive")
+        step_count("max_time_s", max_time_s / self.dt_s)  # infinity, or a settle that would not end
         every = check_every_s if check_every_s is not None else 1.0 / damping_per_s
         if not (every > 0 and math.isfinite(every)):
             raise ValueError(f"check_every_s must be positive, got {check_every_s!r}")

@@ -49,8 +49,14 @@ from knitlad.engine.kernels.integrate import (
 )
 from knitlad.engine.obstacles import Obstacle, ObstacleReadout, obstacle_state, obstacle_time_step
 from knitlad.engine.quasistatic import QuasiStatics
-from knitlad.engine.state import Rods, Workspace
-from knitlad.engine.timestep import DEFAULT_SAFETY, TimeStepLimits, UnstableTimeStep, critical_time_steps
+from knitlad.engine.state import Rods, Workspace, finite_vectors
+from knitlad.engine.timestep import (
+    DEFAULT_SAFETY,
+    TimeStepLimits,
+    UnstableTimeStep,
+    critical_time_steps,
+    step_count,
+)
 
 
 class SimulationBlowUp(RuntimeError):
@@ -252,7 +258,7 @@ class SupportControl:
         """Hold ``nodes`` (global indices, :meth:`nodes_of`) from the next step on, moving at ``velocity_m_s``
         (one 3-vector, or one per node); held nodes already held get the new velocity."""
         idx = self._nodes(nodes)
-        v = np.broadcast_to(np.asarray(velocity_m_s, dtype=float) / units.VELOCITY, (idx.size, 3))
+        v = finite_vectors("velocity_m_s", velocity_m_s, (idx.size, 3)) / units.VELOCITY
         held, v_prescribed = self.model.held.copy(), self.model.v_prescribed.copy()
         held[idx], v_prescribed[idx] = True, v
         self.replace_model(held=held, v_prescribed=v_prescribed)
@@ -278,9 +284,9 @@ class SupportControl:
             raise ValueError("move_held moves held nodes only: hold() them first")
         x = self.state.x
         if to_m is not None:
-            x[idx] = np.broadcast_to(np.asarray(to_m, dtype=float) / units.LENGTH, (idx.size, 3))
+            x[idx] = finite_vectors("to_m", to_m, (idx.size, 3)) / units.LENGTH
         else:
-            x[idx] += np.broadcast_to(np.asarray(by_m, dtype=float) / units.LENGTH, (idx.size, 3))
+            x[idx] += finite_vectors("by_m", by_m, (idx.size, 3)) / units.LENGTH
         self.contacts.status[STALE] = 1
 
     def set_external_forces(self, forces_N) -> None:
@@ -288,7 +294,7 @@ class SupportControl:
 
         The forces of the current state change by the difference (not recomputed: a force
         evaluation would also advance the friction history by a step)."""
-        f = np.broadcast_to(np.asarray(forces_N, dtype=float) / units.FORCE, self.model.f_ext.shape)
+        f = finite_vectors("forces_N", forces_N, self.model.f_ext.shape) / units.FORCE
         self.work.force[:] += f - self.model.f_ext
         rail_forces(self.model.rail_node, self.model.rail_axis, self.work.force)
         self.replace_model(f_ext=f)
@@ -402,6 +408,8 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
         self.dt = self.limits.time_step(dt_s, safety)
         self.set_drag(drag_per_s)
         self.set_air(air)
+        if not (isinstance(guard_every, (int, np.integer)) and guard_every >= 1):
+            raise ValueError(f"guard_every must be a whole number of steps >= 1, got {guard_every!r}")
         self.guard_every = int(guard_every)
         self.steps = 0
         self.time = 0.0  # internal ms
@@ -489,8 +497,10 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
         return self.time * units.TIME
 
     def step(self, n_steps: int = 1) -> None:
-        """Advance ``n_steps`` steps, checking for blow-up every ``guard_every``."""
-        left = int(n_steps)
+        """Advance ``n_steps`` steps, checking for blow-up every ``guard_every``. Refused before any step: a
+        count that is not a whole number >= 0 or over :data:`knitlad.engine.timestep.MAX_STEPS`, a state or a load that is not finite."""
+        left = step_count("n_steps", n_steps)
+        self.check_finite()
         allowed = numba.get_num_threads()
         while left > 0:
             chunk = min(left, self.guard_every)
@@ -521,8 +531,8 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
         observe_every_s: float | None = None,
     ) -> None:
         """Advance by ``duration_s``; call ``observe(self)`` every ``observe_every_s``."""
-        n_total = max(1, int(round(duration_s / self.dt_s)))
-        every = n_total if observe_every_s is None else max(1, int(round(observe_every_s / self.dt_s)))
+        n_total = max(1, step_count("duration_s", duration_s / self.dt_s))
+        every = n_total if observe_every_s is None else max(1, step_count("observe_every_s", observe_every_s / self.dt_s))
         done = 0
         while done < n_total:
             chunk = min(every, n_total - done)
@@ -530,6 +540,16 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
             done += chunk
             if observe is not None:
                 observe(self)
+
+    def check_finite(self) -> None:
+        """A ValueError naming what is not finite, among the positions, velocities, constant forces and
+        prescribed velocities: an infinity would reach the contact's grid (outside its cells), a NaN the step."""
+        m, s = self.model, self.state
+        for name, array in (("state.x (positions)", s.x), ("state.v (velocities)", s.v),
+                            ("external forces (f_ext)", m.f_ext), ("prescribed velocities of held nodes", m.v_prescribed)):
+            if not np.all(np.isfinite(array)):
+                node = int(np.flatnonzero(~np.isfinite(array).all(axis=-1))[0])
+                raise ValueError(f"{name}: NaN or infinity at node {node}; nothing was run")
 
     def _guard(self) -> None:
         node, kind = first_bad_node(self.state.x, self.state.v, self.max_speed)
@@ -549,6 +569,8 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
 
         Returns a dict with ``steps``, ``max_force_N``, ``converged``.
         """
+        max_steps = step_count("max_steps", max_steps)
+        self.check_finite()
         ftol = force_tol_N / units.FORCE
         ttol = (torque_tol_Nm if torque_tol_Nm is not None else force_tol_N * 1e-3) / (units.FORCE * units.LENGTH)
         with self.threads.one_call():

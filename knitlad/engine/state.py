@@ -9,6 +9,7 @@ ring and a yarn periodised with a shift all use the same kernels.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import NamedTuple, Sequence
 
@@ -20,6 +21,19 @@ from knitlad.engine.kernels.dissipation import N_LEDGER
 from knitlad.engine.kernels.elastic import edge_vectors, material_curvatures
 from knitlad.engine.kernels.frames import bishop_reference_directors, material_frames, update_reference_twist
 from knitlad.engine.units import Material
+
+
+def finite_vectors(name: str, value, shape: tuple) -> np.ndarray:
+    """``value`` as a float array broadcast to ``shape``; a ValueError naming ``name`` if it is not finite (an
+    infinity reaching the contact's grid would index outside it) or does not fit the shape."""
+    try:
+        array = np.broadcast_to(np.asarray(value, dtype=float), shape)
+    except (ValueError, TypeError):
+        raise ValueError(f"{name}: expected {'a 3-vector' if shape == (3,) else f'shape {shape}'} of numbers, "
+                         f"got {value!r}") from None
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name}: must be finite, got " + (repr(value) if array.size <= 3 else "NaN or infinity"))
+    return np.array(array)
 
 
 # The axis each array runs along (said once per field, read by cut_edge and the HDF5 writer):
@@ -299,8 +313,9 @@ class Scene:
     def hold(self, yarn: int, nodes: Sequence[int], velocity: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
         """Prescribe the motion of ``nodes``: x(t) = x(0) + t * velocity [m/s]."""
         y = self._yarn(yarn)
+        velocity = finite_vectors("velocity", velocity, (3,))
         for node in nodes:
-            y.held[self._node_index(y, node)] = np.asarray(velocity, dtype=float)
+            y.held[self._node_index(y, node)] = velocity
 
     def slide(self, yarn: int, nodes: Sequence[int], axis: Sequence[float]) -> None:
         """Let ``nodes`` move only along ``axis`` through their initial position (a frictionless rail).
@@ -348,7 +363,7 @@ class Scene:
     def apply_force(self, yarn: int, node: int, force: Sequence[float]) -> None:
         """A constant external force [N] on one node."""
         y = self._yarn(yarn)
-        y.forces[self._node_index(y, node)] = np.asarray(force, dtype=float)
+        y.forces[self._node_index(y, node)] = finite_vectors("force", force, (3,))
 
     def build(self, twist: bool | None = None, stretch_damping_ratio: float = 0.2) -> Rods:
         """Assemble the model and the initial state in internal units.
@@ -360,6 +375,8 @@ class Scene:
         """
         if not self._yarns:
             raise ValueError("the scene has no yarn")
+        if not (stretch_damping_ratio >= 0 and math.isfinite(stretch_damping_ratio)):
+            raise ValueError(f"stretch_damping_ratio must be a finite number >= 0, got {stretch_damping_ratio!r}")
         needs_frames = any(y.natural_curvature == "rest" for y in self._yarns)
         if twist is None:
             twist = needs_frames

@@ -46,6 +46,23 @@ def damped_limit_factor(zeta: float, predicted: bool = False) -> float:
     return lo / 2.0
 
 
+MAX_STEPS = 100_000_000  # the most steps one call runs (the command line's cap on a ladder)
+
+
+def step_count(name: str, value) -> int:
+    """``value`` steps as an int; a ValueError naming ``name`` if it is not a finite number >= 0 or is over
+    :data:`MAX_STEPS` (a call that would not end)."""
+    try:
+        steps = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: a number is needed, got {value!r}") from None
+    if not (steps >= 0 and math.isfinite(steps)):
+        raise ValueError(f"{name}: must be a finite number >= 0, got {value!r}")
+    if round(steps) > MAX_STEPS:
+        raise ValueError(f"{name}: {steps:.3g} steps, over the {MAX_STEPS:.0e} one call runs; nothing was run")
+    return int(round(steps))
+
+
 class UnstableTimeStep(ValueError):
     """A requested time step exceeds the explicit stability limit."""
 

@@ -68,7 +68,7 @@ from knitlad.engine.simulation import Simulation, small_scene_threads
 from knitlad.experiments.stitch_model import StitchRun, StitchSettings, zero_tension_lx
 from knitlad.engine.state import Rods, cut_edge, with_axial_stiffness, with_twist
 from knitlad.fabric.stretching import OutOfReach, force_control, relax_to_steady_tension, stretch_to
-from knitlad.engine.timestep import DEFAULT_SAFETY, critical_time_steps
+from knitlad.engine.timestep import DEFAULT_SAFETY, MAX_STEPS, critical_time_steps
 from knitlad.engine.units import Material
 
 # The dashpots of the mu = 0 stretch. FIRE ends at a minimum whatever they are, but they shape
@@ -622,7 +622,7 @@ def cut(knit: StretchedKnit, dynamics: DynamicsSettings, rods_ready: bool = Fals
     return Laddering(knit, dynamics, sim, edge, row, column, baseline, time.perf_counter() - t0)
 
 
-MAX_LADDER_STEPS = 1e8  # a 42 x 42 run at 96 nodes per stitch takes a few 1e6
+MAX_LADDER_STEPS = MAX_STEPS  # a 42 x 42 run at 96 nodes per stitch takes a few 1e6
 
 
 class InfeasibleRun(ValueError):

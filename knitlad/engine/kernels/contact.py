@@ -267,7 +267,8 @@ def cells_of_edges(mid, lo, inv_cell, dims, cells, linear):
     for k in prange(mid.shape[0]):
         for d in range(3):
             c = (mid[k, d] - lo[d]) * inv_cell
-            cells[k, d] = min(max(int(c), 0), dims[d] - 1) if c == c else 0
+            # clamped as a float first: the int of an infinity, or of a number past int64, is undefined
+            cells[k, d] = int(min(max(c, 0.0), dims[d] - 1.0)) if c == c else 0
         linear[k] = (cells[k, 2] * dims[1] + cells[k, 1]) * dims[0] + cells[k, 0]
 
 
@@ -403,7 +404,10 @@ def fast_edge_pairs(x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_
     n = 0
     for q in range(nf):  # a fast edge and its slow partners
         f = fast[q]
-        span = int((reach[f] - half_skin + allowance[f] + 0.5 * cell) / cell) + 1
+        # as a float first, at most the grid (an infinite reach, a flying end gone to infinity, must not wrap)
+        reach_cells = (reach[f] - half_skin + allowance[f] + 0.5 * cell) / cell
+        span = int(min(reach_cells, float(dims[0] + dims[1] + dims[2]))) + 1 if reach_cells == reach_cells \
+            else dims[0] + dims[1] + dims[2]
         x0 = max(cells[f, 0] - span, 0)
         x1 = min(cells[f, 0] + span, dims[0] - 1)
         for cz in range(max(cells[f, 2] - span, 0), min(cells[f, 2] + span, dims[2] - 1) + 1):
