@@ -23,6 +23,14 @@ def fake_runner(job, jobs_dir: str, threads: int = 1, token=None) -> dict:
     return summary_row(job, record)
 
 
+def progress_spoiling_runner(job, jobs_dir: str, threads: int = 1, token=None) -> dict:
+    """:func:`fake_runner`, having first left beside its job a progress file holding ``stretch nan``, as a
+    stretch whose tension went NaN wrote one."""
+    with open(os.path.join(jobs_dir, "other.progress"), "w") as f:
+        f.write("stretch nan\n")
+    return fake_runner(job, jobs_dir, threads, token)
+
+
 @contextlib.contextmanager
 def fast_ladder_scene():
     """In this process, the ladder scene's runner returns at once (a summary and a writer of a record)."""

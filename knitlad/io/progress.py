@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import os
+import stat
 import sys
 import threading
 import time
@@ -111,6 +112,8 @@ class ProgressFile:
     """A job's progress, written for the process that waits for it: ``(stage, fraction)`` as one line
     of ``path``, replaced atomically at most every ``every_s``; removed by :meth:`clear`."""
 
+    MAX_BYTES = 128  # a progress line is a stage and a number
+
     def __init__(self, path: str | Path, every_s: float = 1.0) -> None:
         self.path = Path(path)
         self.every_s = every_s
@@ -118,12 +121,13 @@ class ProgressFile:
 
     def __call__(self, stage: str, fraction: float) -> None:
         now = time.monotonic()
+        fraction = min(max(fraction, 0.0), 1.0) if math.isfinite(fraction) else 0.0  # a NaN tension reads as NaN
         if now - self._written_at < self.every_s and fraction < 1.0:
             return
         self._written_at = now
         tmp = self.path.with_name(self.path.name + ".tmp")
         try:
-            tmp.write_text(f"{stage} {min(max(fraction, 0.0), 1.0):.4f}\n")
+            tmp.write_text(f"{stage} {fraction:.4f}\n")
             os.replace(tmp, self.path)
         except OSError:
             pass  # progress is a courtesy: a full disk must not fail the job
@@ -133,12 +137,18 @@ class ProgressFile:
 
     @staticmethod
     def read(path: str | Path) -> tuple[str, float] | None:
-        """(stage, fraction) from a progress file, or None if it is gone or half-written."""
+        """(stage, fraction in [0, 1]) from a progress file, or None for anything else: gone, half-written, a
+        fraction that is not a number in [0, 1], or not a regular file (a folder, a FIFO that would block, a
+        link to /dev/zero that would never end); at most ``MAX_BYTES`` are read."""
         try:
-            stage, fraction = Path(path).read_text().split()
-            return stage, float(fraction)
-        except (OSError, ValueError):
+            if not stat.S_ISREG(os.stat(path).st_mode):
+                return None
+            with open(path, "rb") as f:
+                stage, fraction = f.read(ProgressFile.MAX_BYTES).decode("ascii").split()
+            value = float(fraction)
+        except (OSError, ValueError, UnicodeDecodeError):
             return None
+        return (stage, value) if 0.0 <= value <= 1.0 else None
 
 
 STAGE_SHARE = {"stretch": 0.1}  # of a laddering job's wall time (the rest: the ladder); others count whole

@@ -346,8 +346,7 @@ def _locked_sweep(jobs, out: Path, executor, workers, scheduler, rerun: tuple[bo
     force, retry_failed, rerun_stale = rerun
     jobs_dir = writable_folder(out / "jobs")
     with FolderLock(out) as lock:
-        for stale in jobs_dir.glob("*.tmp"):  # left by a job killed while writing (the lock says none runs)
-            stale.unlink(missing_ok=True)
+        _remove_files(jobs_dir.glob("*.tmp"))  # left by a job killed while writing (the lock says none runs)
         if force:  # every job again, from a fresh stretch: cached knits are not reused
             for knit in (out / "stretched").glob("*.h5"):
                 knit.unlink(missing_ok=True)
@@ -356,8 +355,7 @@ def _locked_sweep(jobs, out: Path, executor, workers, scheduler, rerun: tuple[bo
                 tmp.write_text(config_text)
         todo = _sharing_first(_plan(jobs, jobs_dir, force, retry_failed, outcome, rerun_stale))
         write_summary(out, list(outcome.rows.values()))
-        for left in jobs_dir.glob("*.progress"):  # of a job killed mid-run: no job runs now
-            left.unlink(missing_ok=True)
+        _remove_files(jobs_dir.glob("*.progress"))  # of a job killed mid-run: no job runs now
         bar = SweepProgress(len(jobs), outcome.skipped, jobs_dir=jobs_dir) if progress else None
         written = [time.monotonic()]
 
@@ -371,7 +369,10 @@ def _locked_sweep(jobs, out: Path, executor, workers, scheduler, rerun: tuple[bo
                 write_summary(out, list(outcome.rows.values()))
                 written[0] = time.monotonic()
             if bar:
-                bar.update(row["status"])
+                try:
+                    bar.update(row["status"])
+                except Exception:  # noqa: BLE001 - progress is a courtesy: it never touches a job's result
+                    pass
 
         try:
             if todo:
@@ -379,12 +380,18 @@ def _locked_sweep(jobs, out: Path, executor, workers, scheduler, rerun: tuple[bo
                 run(todo, jobs_dir, workers, scheduler, runner, finish, lock.token)
         finally:
             lock.release()  # from here on, a job still running elsewhere writes nothing
-            for stale in jobs_dir.glob("*.tmp"):
-                stale.unlink(missing_ok=True)
+            _remove_files(jobs_dir.glob("*.tmp"))
             _take_late_files(todo, jobs_dir, outcome)
             write_summary(out, list(outcome.rows.values()))
             if bar:
                 bar.close()
+
+
+def _remove_files(paths) -> None:
+    """Remove the files among ``paths``: a folder of that name (not knitlad's) is left alone, not a traceback."""
+    for path in paths:
+        if not path.is_dir():
+            path.unlink(missing_ok=True)
 
 
 def _take_late_files(todo: list[Job], jobs_dir: Path, outcome: SweepOutcome) -> None:
@@ -438,11 +445,13 @@ def _run_pool(todo: list[Job], jobs_dir: Path, workers: int | None, scheduler, r
                 for fut in done:
                     job = running.pop(fut)
                     try:
-                        finish(job, fut.result())
+                        row = fut.result()
                     except BrokenProcessPool:
                         lost.append(job)
+                        continue
                     except Exception as e:  # noqa: BLE001 - this job's task failed outside run_job
-                        finish(job, _failed_row(jobs_dir, job, _one_line(e)))
+                        row = _failed_row(jobs_dir, job, _one_line(e))
+                    finish(job, row)  # outside the try: what happens after a job ran never rewrites its file
                 if lost or not done:
                     lost += list(running.values())
                     running.clear()

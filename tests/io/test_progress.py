@@ -104,3 +104,55 @@ def test_a_laddering_job_reports_its_stages_and_leaves_no_progress_file(tmp_path
     assert stages[0] == "stretch" and "propagate" in stages
     assert all(0.0 <= f <= 1.0 for _, f in seen)
     assert not list((tmp_path / "jobs").glob("*.progress*"))
+
+
+def test_a_progress_file_that_is_not_a_stage_and_a_fraction_is_ignored_never_raised_on(tmp_path):
+    """A progress file holding ``stretch nan`` (a NaN tension in the stretch wrote exactly that), an infinite
+    fraction, a link to /dev/zero (read_text never ended), a folder, or a FIFO (open blocked forever) reads as
+    None, at once; a NaN fraction is written as 0."""
+    import math
+    import os
+
+    cases = {"nan": "stretch nan\n", "inf": "stretch inf\n", "big": "stretch 2.5\n", "junk": "x" * 10_000}
+    for name, text in cases.items():
+        (tmp_path / f"{name}.progress").write_text(text)
+        assert ProgressFile.read(tmp_path / f"{name}.progress") is None, name
+    (tmp_path / "zero.progress").symlink_to("/dev/zero")
+    (tmp_path / "dir.progress").mkdir()
+    os.mkfifo(tmp_path / "fifo.progress")
+    for name in ("zero", "dir", "fifo"):
+        assert ProgressFile.read(tmp_path / f"{name}.progress") is None, name
+    report = ProgressFile(tmp_path / "job.progress", every_s=0.0)
+    report("stretch", math.nan)
+    assert ProgressFile.read(tmp_path / "job.progress") == ("stretch", 0.0)
+
+
+def test_a_bad_progress_file_never_touches_a_finished_job(tmp_path):
+    """The sweep's progress line, redrawn as jobs finish, read a ``stretch nan`` progress file and raised inside
+    ``finish``; the pool took that for the job's failure and wrote a ``failed`` record over the finished job's
+    file, and the sweep died with three jobs left. Progress is a courtesy: every job ends ok."""
+    from knitlad.studies.runner import run_sweep
+    from knitlad.studies.sweep import load_sweep
+    from tests.studies.test_sweep import TINY, read_summary, write_config
+    from tests.sweep_helpers import progress_spoiling_runner
+
+    _, jobs = load_sweep(write_config(tmp_path / "c.yaml", {"fixed": {**TINY, "lx": 0.4},
+                                                             "sweep": {"axes": {"mu": [0.1, 0.3, 0.4, 0.5]}}}))
+    outcome = run_sweep(jobs, tmp_path / "out", workers=1, runner=progress_spoiling_runner, progress=True)
+    assert outcome.failed == 0 and list(read_summary(tmp_path / "out")["status"]) == ["ok"] * 4
+
+
+def test_folders_named_like_progress_or_temporary_files_do_not_stop_a_sweep(tmp_path):
+    """A folder ``jobs/x.progress`` or ``jobs/x.h5.tmp`` raised IsADirectoryError where the sweep clears the
+    files its killed jobs left; it is left alone now, and the jobs run."""
+    from knitlad.studies.runner import run_sweep
+    from knitlad.studies.sweep import load_sweep
+    from tests.studies.test_sweep import TINY, read_summary, write_config
+    from tests.sweep_helpers import fake_runner
+
+    _, jobs = load_sweep(write_config(tmp_path / "c.yaml", {"fixed": {**TINY, "lx": 0.4},
+                                                             "sweep": {"axes": {"mu": [0.1, 0.3]}}}))
+    for name in ("x.progress", "x.h5.tmp"):
+        (tmp_path / "out" / "jobs" / name).mkdir(parents=True)
+    outcome = run_sweep(jobs, tmp_path / "out", workers=1, runner=fake_runner, progress=True)
+    assert outcome.failed == 0 and list(read_summary(tmp_path / "out")["status"]) == ["ok"] * 2
