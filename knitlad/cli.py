@@ -253,6 +253,8 @@ def cut(
 
     from knitlad.experiments.protocol import run_ladder
 
+    from knitlad.io.folders import FolderError, FolderLock
+
     made = not (Path(out).exists() if out else False)
     cfg, out_dir = _knit_run(_config.CutConfig, options, stitches, 13.6, out, "cut")
     n_x, n_y = cfg.n_x, cfg.n_y
@@ -260,8 +262,14 @@ def cut(
     if earlier and not overwrite:
         fail(f"--out {out_dir}: holds an earlier run ({', '.join(p.name for p in earlier[:4])}"
              f"{', ...' if len(earlier) > 4 else ''}); --overwrite replaces it")
+    lock = FolderLock(out_dir)  # a second run into this folder would mix its files with this one's
+    try:
+        lock.acquire()
+    except FolderError as e:
+        fail(f"--out {e}")
 
     def nothing_written() -> None:
+        lock.release()
         if made and out_dir.is_dir() and not any(out_dir.iterdir()):
             out_dir.rmdir()
 
@@ -274,15 +282,18 @@ def cut(
         raise
     progress.close(finished=True)
     summary = result.summary()
-    _remove(earlier)  # the earlier run's renders and movies would not match this one
     try:
-        h5, png = _write_run_outputs(out_dir, result)
+        # written beside the earlier run first, then put in its place: on a full disk the earlier run stays whole
+        h5, png = _replace_run_outputs(out_dir, result, earlier)
     except OSError as e:  # a full disk or a file-size limit: keep the summary, say it in one line
-        kept = _keep_summary(out_dir, summary)
+        kept = _keep_summary(out_dir, summary) if not earlier else None
         typer.echo(json.dumps(summary, default=float))
-        typer.echo(f"knitlad: run finished but its files could not be written ({e}); the summary is "
-                   f"{'in ' + str(kept) if kept else 'printed above'}", err=True)
+        typer.echo(f"knitlad: run finished but its files could not be written ({e}); "
+                   + ("the earlier run in --out is left as it was; " if earlier else "")
+                   + f"the summary is {'in ' + str(kept) if kept else 'printed above'}", err=True)
         raise typer.Exit(1)
+    finally:
+        lock.release()
     if not result.fx_within_tolerance:
         typer.echo(
             f"knitlad: warning: f_x^ini = {result.fx_ini:.3f} is not within {100 * cfg.fx_tolerance:g} % of the "
@@ -821,6 +832,25 @@ def _remove(paths) -> None:
 
     for path in paths:
         shutil.rmtree(path) if path.is_dir() else path.unlink(missing_ok=True)
+
+
+def _replace_run_outputs(out_dir, result, earlier: list):
+    """Write the run into a staging folder in ``out_dir``, then remove the ``earlier`` run's files (its renders
+    and movies would not match this run) and move the new ones in: an OSError while writing leaves the earlier
+    run as it was and no staging folder."""
+    import shutil
+
+    stage = out_dir / f".new-{os.getpid()}"
+    shutil.rmtree(stage, ignore_errors=True)
+    stage.mkdir()
+    try:
+        h5, png = _write_run_outputs(stage, result)
+        _remove(earlier)
+        for new in (h5, h5.with_suffix(".xdmf"), png):
+            os.replace(new, out_dir / new.name)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    return out_dir / h5.name, out_dir / png.name
 
 
 def _write_run_outputs(out_dir, result):

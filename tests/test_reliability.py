@@ -58,7 +58,7 @@ def test_a_second_sweep_on_the_same_folder_is_refused_and_the_first_runs_every_j
     while time.time() < deadline and not (out / LOCK_NAME).exists():
         time.sleep(0.05)
     second = knitlad("sweep", str(cfg), "--out", str(out), "--workers", "1")
-    assert "in use by another knitlad sweep" in one_line_error(second)
+    assert "in use by another knitlad run" in one_line_error(second)
     stdout, stderr = first.communicate(timeout=300)
     assert first.returncode == 0, stderr
     assert "2 jobs run (0 failed), 0 already done" in stdout
@@ -73,7 +73,7 @@ def test_a_stale_lock_of_a_dead_process_is_taken_over(tmp_path):
                                                           "token": "old", "started": "then"}))
     lock = FolderLock(tmp_path / "out").acquire()
     assert lock.took_over["token"] == "old"
-    with pytest.raises(FolderError, match="in use by another knitlad sweep"):
+    with pytest.raises(FolderError, match="in use by another knitlad run"):
         FolderLock(tmp_path / "out").acquire()  # a live owner (this process) is respected
     lock.release()
     assert not (tmp_path / "out" / LOCK_NAME).exists()
@@ -550,3 +550,42 @@ def test_force_stretches_again(tmp_path):
     assert (cached / "0123456789abcdef.h5").exists()
     sweep(jobs, tmp_path / "out", workers=1, runner=fake_runner, progress=False, force=True)
     assert not list(cached.glob("*.h5"))
+
+
+# ------------------------------------------------------------------ knitlad cut's folder (round 3)
+CUT_TINY = ["cut", "--stitches", "6x8", "--lx", "0.40", "--preset", "fast", "--resolution", "16", "--max-time-ms",
+            "0.3"]
+
+
+def test_a_second_cut_into_a_folder_in_use_is_refused_in_one_line(tmp_path):
+    """Two `cut` runs into one folder 2 s apart both exited 0 and the first printed 'wrote ladder.h5' while the
+    folder held only the second's files. A run now owns its folder while it runs."""
+    out = tmp_path / "out"
+    out.mkdir()
+    with FolderLock(out):  # a live run holds it (this process)
+        p = knitlad(*CUT_TINY, "--out", str(out))
+    assert "in use by another knitlad run" in one_line_error(p) and not (out / "ladder.h5").exists()
+    p = knitlad(*CUT_TINY, "--out", str(out))  # free again: it runs, and leaves no lock behind
+    assert p.returncode == 0, p.stderr
+    assert (out / "ladder.h5").exists() and not (out / LOCK_NAME).exists()
+
+
+def test_overwrite_on_a_full_disk_keeps_the_earlier_run(tmp_path):
+    """`cut --overwrite` onto an earlier run, on a nearly full disk, deleted the earlier run first and then
+    could not write the new one: only summary.json was left. The new run is written beside it first now."""
+    import resource
+
+    out = tmp_path / "out"
+    assert knitlad(*CUT_TINY, "--out", str(out)).returncode == 0
+    (out / "render").mkdir()
+    before = {f.name: f.read_bytes() for f in out.iterdir() if f.is_file()}
+
+    def small_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (100_000, 100_000))
+
+    p = knitlad(*CUT_TINY, "--mu", "0.2", "--out", str(out), "--overwrite", preexec_fn=small_files)
+    assert p.returncode == 1 and "could not be written" in p.stderr and "earlier run" in p.stderr
+    assert {f.name: f.read_bytes() for f in out.iterdir() if f.is_file()} == before
+    assert (out / "render").is_dir() and not list(out.glob(".new-*"))
+    p = knitlad(*CUT_TINY, "--mu", "0.2", "--out", str(out), "--overwrite")  # room again: replaced, renders gone
+    assert p.returncode == 0 and not (out / "render").exists() and (out / "ladder.h5").read_bytes() != before["ladder.h5"]

@@ -81,7 +81,7 @@ class FolderLock:
             raise FolderError(self._busy(owner))
 
     def _busy(self, owner: dict) -> str:
-        return (f"{self.folder}: in use by another knitlad sweep (pid {owner.get('pid')} on {owner.get('host')}, "
+        return (f"{self.folder}: in use by another knitlad run (pid {owner.get('pid')} on {owner.get('host')}, "
                 f"since {owner.get('started')}); wait for it, or remove {self.path} if that process is gone")
 
     def acquire(self) -> "FolderLock":
