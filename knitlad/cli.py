@@ -329,21 +329,39 @@ def cycle(
     Without --fx or --lx, Delta x_min holds the knit at f_x = 0.68 (the experiments'). Writes cycle.csv
     (the force-displacement readings), cycle.png (Fig. 4a), cycle.h5 (readings, and the ladder of the cut).
     """
+    import json
+
     from knitlad.experiments.cycling import run_protocol_b
 
     cfg, out_dir = _knit_run(_config.CycleConfig, options, stitches, 0.68, out, "cycle")
     n_x, n_y = cfg.n_x, cfg.n_y
-    if (out_dir / "cycle.h5").exists():
-        fail(f"--out {out_dir}: holds an earlier cycle run (cycle.h5); choose another folder")
+    earlier = [name for name in ("cycle.h5", "cycle.csv", "cycle.png") if (out_dir / name).exists()]
+    if earlier:  # cycle.csv alone is an interrupted run's readings: kept too
+        fail(f"--out {out_dir}: holds an earlier cycle run ({', '.join(earlier)}); choose another folder")
     _say_if_compiling()
     progress = _StageProgress()
+    unwritten: list[str] = []
+
+    def keep_readings(readings) -> None:  # after each leg: a run stopped early keeps its curve, a full disk says so
+        try:
+            _write_cycle_table(out_dir / "cycle.csv", readings)
+        except OSError as e:
+            unwritten.append(str(e))
+
     result, ladder = _experiment_or_exit(
         lambda: run_protocol_b(cfg.settings(), cfg.cycle_settings(), cut_at_max=cfg.cut, progress=progress,
-                               after_leg=lambda readings: _write_cycle_table(out_dir / "cycle.csv", readings)), progress,
+                               after_leg=keep_readings), progress,
         kept=f"the readings so far are in {out_dir / 'cycle.csv'} (if a leg had ended)")
     progress.close(finished=True)
-    h5, csv, png = _write_cycle_outputs(out_dir, cfg, result, ladder)
     l0 = cfg.settings().material.stitch_length
+    try:
+        h5, csv, png = _write_cycle_outputs(out_dir, cfg, result, ladder)
+    except OSError as e:  # a full disk: the results said on stdout, the failure in one line
+        typer.echo(json.dumps({**result.summary(), **({f"cut_{k}": v for k, v in ladder.summary().items()}
+                                                       if ladder else {})}, default=float))
+        typer.echo(f"knitlad: run finished but its files could not be written ({e}); the summary is printed above",
+                   err=True)
+        raise typer.Exit(1)
     typer.echo(
         f"{n_x} x {n_y} jersey, protocol B: {cfg.cycles} cycles at mu = {cfg.mu}, bars at {cfg.bar_speed:g} m/s, "
         f"{cfg.resolution} nodes/stitch\n"

@@ -589,3 +589,38 @@ def test_overwrite_on_a_full_disk_keeps_the_earlier_run(tmp_path):
     assert (out / "render").is_dir() and not list(out.glob(".new-*"))
     p = knitlad(*CUT_TINY, "--mu", "0.2", "--out", str(out), "--overwrite")  # room again: replaced, renders gone
     assert p.returncode == 0 and not (out / "render").exists() and (out / "ladder.h5").read_bytes() != before["ladder.h5"]
+
+
+def test_a_cycle_whose_stretch_passes_its_lx_max_is_refused_after_the_stretch_in_one_line(tmp_path):
+    """`cycle --fx 20 --lx-max 0.25` exited 0 with a negative stroke (Delta x_max - Delta x_min = -8.6 mm,
+    f_x^ini -0.47); with --lx the same case was refused. Force control finds Delta x_min only by stretching:
+    the run is refused then, naming lx_max, before any cycle."""
+    p = knitlad("cycle", "--stitches", "6x8", "--preset", "fast", "--resolution", "16", "--fx", "20", "--lx-max", "0.3",
+                "--out", str(tmp_path / "out"))
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
+    line = p.stderr.strip().splitlines()[-1]  # after the stretch's progress lines
+    assert line.startswith("knitlad: error: lx_max: 0.3 is not above") and "the bars would move inwards" in line
+    assert not (tmp_path / "out" / "cycle.h5").exists()
+
+
+def test_a_cycle_keeps_an_earlier_runs_readings_and_says_a_full_disk_in_one_line(tmp_path):
+    """A second `cycle` into a folder holding only an interrupted run's cycle.csv replaced it; on a full disk
+    `cycle` ended in an OSError traceback, f_x^ini, delta l and the cut's result lost."""
+    import resource
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "cycle.csv").write_text("cycle,leg,t_s,box_lx_over_l0,fx\n0,0,0.0,0.3,0.68\n")
+    args = ["cycle", "--stitches", "6x8", "--preset", "fast", "--resolution", "16", "--lx-max", "0.36", "--cycles", "1",
+            "--hold-ms", "0.5", "--no-cut", "--fx-thr", "0.5"]
+    assert "cycle.csv" in one_line_error(knitlad(*args, "--out", str(out)))
+    assert (out / "cycle.csv").read_text().endswith("0.68\n")
+
+    def small_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (300, 300))
+
+    p = knitlad(*args, "--out", str(tmp_path / "full"), preexec_fn=small_files)
+    assert p.returncode == 1 and "Traceback" not in p.stderr, p.stderr
+    assert "could not be written" in p.stderr.strip().splitlines()[-1]
+    summary = json.loads(p.stdout.strip().splitlines()[-1])
+    assert summary["fx_ini"] > 0 and summary["delta_l_over_l0"] > 0

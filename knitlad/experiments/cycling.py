@@ -33,6 +33,7 @@ from knitlad.engine import units
 from knitlad.engine.contact import carry_friction_history
 from knitlad.experiments.protocol import (
     DynamicsSettings,
+    InfeasibleRun,
     LadderResult,
     Laddering,
     LadderSettings,
@@ -179,6 +180,10 @@ def run_cycles(knit: StretchedKnit, s: CycleSettings, dynamics: DynamicsSettings
     called at Delta x_max of the last cycle (to cut a copy: :func:`cut_cycled`); the last unloading is the
     uncut twin's, read for delta l. ``after_leg(readings)``: the readings so far after each leg and hold
     (to keep them as they come: a run of an hour stopped early keeps its curve)."""
+    if s.lx_max <= knit.box_lx:  # force control put Delta x_min beyond the asked Delta x_max: a negative stroke
+        raise InfeasibleRun(f"lx_max: {s.lx_max:g} is not above the box's l_x/l0 at Delta x_min, {knit.box_lx:.4f} "
+                            f"(where f_x = {knit.fx_ini:.3f}): the bars would move inwards; a larger lx_max or a "
+                            "smaller fx")
     t0 = time.perf_counter()
     loaded, lx_min = LoadedKnit(knit, s, dynamics), knit.box_lx
     loaded.readings.append((0, HOLD, 0.0, lx_min, loaded.tension()))
