@@ -91,6 +91,21 @@ def scales() -> None:
         typer.echo(f"{key:20s} {value:.6g}")
 
 
+@app.command()
+def columns(scene: str = typer.Argument("ladder", help="ladder, cycle, loop or stitch")) -> None:
+    """Print what each column of a sweep's summary.csv means, with its unit (a sweep writes the same table
+    beside it as summary_columns.csv)."""
+    from knitlad.studies.columns import column_dictionary
+    from knitlad.studies.registry import SCENES
+
+    if scene not in SCENES:
+        fail(f"scene: one of {', '.join(SCENES)}, got {scene!r}")
+    rows = column_dictionary(scene)
+    width = max(len(name) for name, _, _ in rows)
+    for name, unit, meaning in rows:
+        typer.echo(f"{name:{width}s}  [{unit}]  {meaning}")
+
+
 class _StageProgress:
     """A progress line per stage of a run on stderr (:class:`~knitlad.io.progress.ProgressLine`): the stretch's
     share of its target, then the ladder's reach or its time limit, whichever is further."""

@@ -818,6 +818,7 @@ class LadderResult:
                 "undone_at", "energy_series"}
         out = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in skip}
         out["v_fit_stitches"] = list(self.v_fit_stitches)
+        out["v_fit_first"], out["v_fit_last"] = (int(k) for k in self.v_fit_stitches)
         out.update(mu=d.mu, twist=d.twist, drag_per_s=d.drag_per_s, loss_factor=d.loss_factor, air_drag=d.air_drag,
                    natural_curvature=self.settings.stretch.natural_curvature, wall_s=float(sum(self.wall_s.values())))
         out.update(self.energy_record())

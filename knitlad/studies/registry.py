@@ -122,7 +122,7 @@ SCENES: dict[str, SweepScene] = {
         "fx_ini", "fx_fin", "fx_fin_crossed", "fx_fin_intact", "n_lad", "n_lad_over_ny", "v_lad_over_cb", "natural_curvature", "lx_over_l0", "ly_over_l0",
         "ladders_up", "ladders_down", "first_down_ms", "second_up_ms", "hindered",
         "box_lx_over_l0", "fx_within_tolerance", "peak_overlap_over_d", "reached_edge", "stop_reason",
-        "laddering_column", "v_fit_stitches", "energy_start_J", "energy_end_J", "dissipated_friction_J",
+        "laddering_column", "v_fit_stitches", "v_fit_first", "v_fit_last", "energy_start_J", "energy_end_J", "dissipated_friction_J",
         "dissipated_contact_dashpot_J", "dissipated_axial_dashpot_J", "dissipated_material_J", "dissipated_air_J",
         "dissipated_global_drag_J", "ledger_residual", "nodes", "steps", "relax_steps", "stretch_reused", "wall_s",
         "wall_stretch_s", "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment", stretch_of),

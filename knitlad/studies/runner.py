@@ -37,6 +37,7 @@ from knitlad.io.folders import FolderLock, lock_holds, writable_folder
 from knitlad.io.hdf5 import read_attrs, verify_datasets, write_record
 from knitlad.io.summary import write_summary
 from knitlad.io.progress import ProgressFile, ProgressLine, job_fraction
+from knitlad.studies.columns import write_column_dictionary
 from knitlad.io.provenance import code_identity
 from knitlad.studies.registry import SCENES
 from knitlad.studies.sweep import Job
@@ -355,6 +356,7 @@ def _locked_sweep(jobs, out: Path, executor, workers, scheduler, rerun: tuple[bo
                 tmp.write_text(config_text)
         todo = _sharing_first(_plan(jobs, jobs_dir, force, retry_failed, outcome, rerun_stale))
         write_summary(out, list(outcome.rows.values()))
+        write_column_dictionary(out, [job.scene for job in jobs])  # what each column of summary.csv means
         _remove_files(jobs_dir.glob("*.progress"))  # of a job killed mid-run: no job runs now
         bar = SweepProgress(len(jobs), outcome.skipped, jobs_dir=jobs_dir) if progress else None
         written = [time.monotonic()]
