@@ -384,7 +384,9 @@ def cycle(
         f"(box l_x/l0 {result.lx_min:.4f} -> {cfg.lx_max:.4f})\n"
         f"  at Delta x_max: f_x^ini = {result.fx_ini:.3f}, l_x/l0 = {result.lx_over_l0:.4f}, l_y/l0 = {result.ly_over_l0:.4f}"
         f"{'' if result.hold_converged else ' (the hold did not settle within --hold-ms)'}")
-    if cfg.fx_thr is not None:
+    if cfg.fx_thr is not None and result.nan_reasons():
+        typer.echo(f"  delta l: not read ({result.nan_reasons()['delta_l_over_l0']})")
+    elif cfg.fx_thr is not None:
         typer.echo(f"  delta l = {result.delta_l_over_l0 * l0 * 1e3:.3f} mm to f_x^thr = {cfg.fx_thr:g}: "
                    f"predicted n_lad/n_y = delta l/(l0 - l_x) = {result.predicted_damage:.3f}")
     if ladder is not None:
@@ -801,6 +803,9 @@ def _fin_caveat(result) -> str:
 
 def _velocity_caveat(result) -> str:
     first, last = result.v_fit_stitches
+    why = result.nan_reasons().get("v_lad_over_cb")
+    if why:
+        return f"(no velocity: {why})"
     span = f"front fit over stitches {first}-{last}"
     if last - first + 1 < MIN_FIT_STITCHES:
         return f"({span}: fewer than {MIN_FIT_STITCHES} stitches, a rough figure)"

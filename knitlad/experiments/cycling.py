@@ -151,12 +151,29 @@ class CycleResult:
         r = self.readings
         return r[(r[:, 0] == cycle) & (r[:, 1] == leg)][:, 3:5]
 
+    def nan_reasons(self) -> dict[str, str]:
+        """Why delta l (and the damage Eq. 1 predicts from it) is NaN, when it is."""
+        if not math.isnan(self.delta_l_over_l0):
+            return {}
+        thr = self.settings.fx_thr
+        if thr is None:
+            why = "no f_x^thr was given (fx_thr)"
+        else:
+            unloading = self.leg(self.settings.cycles, -1)
+            if unloading.size and unloading[0, 1] <= thr:
+                why = f"f_x at Delta x_max, {unloading[0, 1]:.3f}, is already at or below f_x^thr = {thr:g}"
+            else:
+                low = f"{unloading[:, 1].min():.3f}" if unloading.size else "nothing (no unloading was read)"
+                why = f"the unloading never fell to f_x^thr = {thr:g} (its lowest f_x: {low})"
+        return {"delta_l_over_l0": why, "predicted_damage": why}
+
     def summary(self) -> dict:
         return {"fx_ini": self.fx_ini, "lx_over_l0": self.lx_over_l0, "ly_over_l0": self.ly_over_l0,
                 "lx_max": self.settings.lx_max, "lx_min": self.lx_min, "fx_thr": self.settings.fx_thr,
                 "delta_l_over_l0": self.delta_l_over_l0, "predicted_damage": self.predicted_damage,
                 "cycles": self.settings.cycles, "bar_speed_m_s": self.settings.bar_speed_m_s,
-                "hold_converged": self.hold_converged, "wall_s": self.wall_s}
+                "hold_converged": self.hold_converged, "wall_s": self.wall_s,
+                "nan_reasons": "; ".join(f"{k}: {why}" for k, why in self.nan_reasons().items())}
 
 
 def shortening_to(unloading: np.ndarray, fx_thr: float, n_x: int) -> float:

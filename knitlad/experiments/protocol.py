@@ -808,6 +808,24 @@ class LadderResult:
         out["ledger_residual"] = last["residual"] / last["turnover"] if last["turnover"] > 0 else 0.0
         return out
 
+    def nan_reasons(self) -> dict[str, str]:
+        """Why each result that is NaN is NaN (every NaN of the summary has its reason here)."""
+        first, last = self.v_fit_stitches
+        ran = max(self.front_up) if self.front_up else 0
+        reasons = {
+            "v_lad_over_cb": f"the front ran {ran} stitch{'es' * (ran != 1)} above the cut, short of the fit's last, "
+                             f"{last} ({self.stop_reason})",
+            "fx_fin_crossed": "the ladder crossed no course",
+            "fx_fin_intact": "the ladder crossed every course",
+            "first_down_ms": "no ladder started downwards",
+            "second_up_ms": "no second ladder started upwards",
+            "fx_fin": "no tension was read after the cut",
+        }
+        summary_nan = {k for k in reasons if isinstance(getattr(self, k, None), float) and math.isnan(getattr(self, k))}
+        record = self.loop_record()
+        summary_nan |= {k for k in ("first_down_ms", "second_up_ms") if math.isnan(record[k])}
+        return {k: reasons[k] for k in reasons if k in summary_nan}
+
     def summary(self) -> dict:
         """The scalar results, and the settings a reader needs beside them (mu, twist, drag)."""
         d = self.settings.dynamics
@@ -824,6 +842,7 @@ class LadderResult:
         out.update(self.energy_record())
         out.update({f"wall_{k}_s": v for k, v in self.wall_s.items()})
         out.update(self.loop_record())
+        out["nan_reasons"] = "; ".join(f"{k}: {why}" for k, why in self.nan_reasons().items())
         return out
 
     def ladders(self) -> list[dict]:

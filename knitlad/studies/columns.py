@@ -61,6 +61,7 @@ LADDER = {
     "dissipated_global_drag_J": ("J", "energy the global drag took out (drag_per_s > 0)"),
     "ledger_residual": ("1", "the energy ledger's residual over the energy turned over: the integrator's error "
                              "(docs/dissipation.md)"),
+    "nan_reasons": ("-", "why each result that is NaN is NaN: 'column: reason; ...' (empty: none is)"),
     "nodes": ("1", "nodes of the knit"),
     "steps": ("1", "time steps of the laddering"),
     "relax_steps": ("1", "FIRE steps of the stretch and its relaxation"),
@@ -86,6 +87,8 @@ CYCLE = {
     "cut_second_up_ms": ("ms", "when the second upward ladder started (NaN: none did)"),
     "cut_hindered": ("-", "hindered laddering (one ladder up, two or more down)"),
     "hold_converged": ("-", "the last hold at Delta x_max settled within hold_ms"),
+    "nan_reasons": ("-", "why delta l and the predicted damage are NaN, if they are ('column: reason; ...')"),
+    "cut_nan_reasons": ("-", "why a result of the cut copy's ladder is NaN ('column: reason; ...')"),
 }
 
 LOOP = {

@@ -124,12 +124,13 @@ SCENES: dict[str, SweepScene] = {
         "box_lx_over_l0", "fx_within_tolerance", "peak_overlap_over_d", "reached_edge", "stop_reason",
         "laddering_column", "v_fit_stitches", "v_fit_first", "v_fit_last", "energy_start_J", "energy_end_J", "dissipated_friction_J",
         "dissipated_contact_dashpot_J", "dissipated_axial_dashpot_J", "dissipated_material_J", "dissipated_air_J",
-        "dissipated_global_drag_J", "ledger_residual", "nodes", "steps", "relax_steps", "stretch_reused", "wall_s",
+        "dissipated_global_drag_J", "ledger_residual", "nan_reasons", "nodes", "steps", "relax_steps", "stretch_reused", "wall_s",
         "wall_stretch_s", "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment", stretch_of),
     "cycle": SweepScene(CycleConfig, run_cycle_job, (
         "fx_ini", "lx_over_l0", "ly_over_l0", "lx_max", "fx_thr", "delta_l_over_l0", "predicted_damage",
         "cut_n_lad_over_ny", "cut_fx_fin", "cut_fx_fin_crossed", "cut_reached_edge", "cut_ladders_up",
-        "cut_ladders_down", "cut_second_up_ms", "cut_hindered", "hold_converged", "wall_s",
+        "cut_ladders_down", "cut_second_up_ms", "cut_hindered", "hold_converged", "nan_reasons", "cut_nan_reasons",
+        "wall_s",
         "job_wall_s"), "`knitlad cycle`: protocol B, the damage prediction's loading", stretch_of),
     "loop": SweepScene(LoopConfig, run_loop_job, (
         "tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before", "steps",

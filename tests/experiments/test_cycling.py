@@ -128,3 +128,22 @@ def test_the_final_tension_plot_draws_the_three_readings_of_the_arrest(tmp_path)
     table = pd.DataFrame({"fx_ini": [2.0, 6.0], "fx_fin": [1.8, 4.0], "fx_fin_crossed": [1.5, 2.5],
                           "fx_fin_intact": [1.9, 5.0]})
     assert final_tension_plot(table, tmp_path / "f.png").stat().st_size > 1000
+
+
+def test_an_unreached_threshold_says_why_delta_l_is_nan():
+    """`cycle` printed "delta l = nan" when the unloading never reached --fx-thr."""
+    import math
+
+    import numpy as np
+
+    from knitlad.experiments.cycling import CycleResult, CycleSettings
+
+    s = CycleSettings(lx_max=0.4, cycles=1, bar_speed_m_s=0.25, damping_per_s=2e4, readings_per_leg=2, hold_s=1e-3,
+                      hold_tol_f0=1e-3, fx_thr=0.5)
+    readings = np.array([[0, 0, 0.0, 0.35, 1.0], [1, 1, 0.1, 0.40, 9.0], [1, 0, 0.2, 0.40, 8.5],
+                         [1, -1, 0.3, 0.37, 4.0], [1, -1, 0.4, 0.35, 1.2]])
+    result = CycleResult(settings=s, n_x=6, lx_min=0.35, readings=readings, lx_over_l0=0.39)
+    assert math.isnan(result.predicted_damage)
+    assert "never fell to f_x^thr = 0.5 (its lowest f_x: 1.200)" in result.summary()["nan_reasons"]
+    assert CycleResult(settings=s, n_x=6, lx_min=0.35, readings=readings, delta_l_over_l0=0.1,
+                       lx_over_l0=0.39).nan_reasons() == {}

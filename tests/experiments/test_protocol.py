@@ -265,3 +265,21 @@ def test_a_ladder_relaxes_the_courses_it_crosses_and_leaves_the_others_taut():
     assert 0 < r.final_laddered.any(axis=1).sum() < 8
     assert r.fx_fin_crossed < 0.5 * r.fx_fin_intact
     assert min(r.fx_fin_crossed, r.fx_fin_intact) < r.fx_fin < max(r.fx_fin_crossed, r.fx_fin_intact)
+
+
+def test_every_nan_of_a_ladders_summary_has_its_reason_beside_it():
+    """README example 2 printed `0.8 nan 0.875 2.888`: the run hit max_time_s with the front at 1 stitch, and
+    nothing said so. Every NaN of the summary now has its reason in ``nan_reasons``."""
+    import math
+
+    from knitlad.experiments.config import CutConfig
+    from knitlad.experiments.protocol import run_ladder
+
+    cfg = CutConfig(n_x=6, n_y=8, lx=0.40, preset="fast", resolution=16, max_time_ms=0.05)
+    result = run_ladder(cfg.settings())
+    summary = result.summary()
+    nan = {k for k, v in summary.items() if isinstance(v, float) and math.isnan(v)}
+    assert "v_lad_over_cb" in nan
+    reasons = result.nan_reasons()
+    assert set(reasons) == nan and all(f"{k}: " in summary["nan_reasons"] for k in nan)
+    assert "the front ran" in reasons["v_lad_over_cb"] and "max_time_s reached" in reasons["v_lad_over_cb"]
