@@ -197,10 +197,13 @@ def test_the_read_out_says_when_f_x_fin_is_no_arrest_value_and_when_v_lad_is_rou
 
     from knitlad.cli import _fin_caveat, _velocity_caveat
 
-    edge = SimpleNamespace(stop_reason="ladder reached an edge course", v_fit_stitches=(1, 3))
-    arrest = SimpleNamespace(stop_reason="no cell changed for 2.0 ms", v_fit_stitches=(2, 10))
+    edge = SimpleNamespace(stop_reason="ladder reached an edge course", v_fit_stitches=(1, 3), nan_reasons=dict)
+    arrest = SimpleNamespace(stop_reason="no cell changed for 2.0 ms", v_fit_stitches=(2, 10), nan_reasons=dict)
+    short = SimpleNamespace(stop_reason="max_time_s reached", v_fit_stitches=(2, 10),
+                            nan_reasons=lambda: {"v_lad_over_cb": "the front ran 1 stitch above the cut, ..."})
     assert "no arrest" in _fin_caveat(edge) and "after the arrest" in _fin_caveat(arrest)
     assert "rough" in _velocity_caveat(edge) and "rough" not in _velocity_caveat(arrest)
+    assert _velocity_caveat(short) == "(no velocity: the front ran 1 stitch above the cut, ...)"
 
 
 def test_a_first_run_says_it_is_compiling(tmp_path):
