@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 import inspect
 import os
+import shutil
 import signal
 import sys
 import time
@@ -24,10 +25,14 @@ from rich.markup import escape as rich_escape
 from knitlad.experiments import config as _config
 from knitlad.experiments.config import cli_option, one_line
 
+# rich's option tables cut long flag names short on a narrow terminal (`--contact-damping-r…` at 80 columns):
+# there the help is click's plain text, which wraps the help under each name written out whole
+RICH_HELP = shutil.get_terminal_size(fallback=(120, 24)).columns >= 110
+
 app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
-    rich_markup_mode="rich",
+    rich_markup_mode="rich" if RICH_HELP else None,
     no_args_is_help=True,
     help="knitlad: discrete elastic rods with frictional contact, for the laddering of knitted fabric.",
 )
@@ -193,7 +198,9 @@ def config_options(model, exclude: tuple[str, ...] = ()):
             typ = _option_type(f.annotation)
             shown = f.default is not None and name not in by_preset
             # units and defaults are in [brackets], which rich reads as markup unless escaped
-            help_text = rich_escape(f.description + (f" [default: {f.default}]" if shown else ""))
+            shown = shown and not f.is_required()  # a required field has no default to show
+            text = f.description + (f" [default: {f.default}]" if shown else "") + (" [required]" if f.is_required() else "")
+            help_text = rich_escape(text) if RICH_HELP else text
             decls = [f"{flag}/--no-{flag[2:]}"] if typ is bool else [flag]
             derived.append(inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, annotation=typing.Optional[typ],
                                              default=typer.Option(None, *decls, help=help_text, show_default=False,

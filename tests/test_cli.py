@@ -247,3 +247,18 @@ def test_cut_help_groups_its_options_and_keeps_units_and_carries_no_dated_measur
     # `--preset accurate` runs at 0.7
     dt_help = p.stdout[p.stdout.index("--dt-safety"):p.stdout.index("--axial-stiffness-factor")]
     assert "the preset's" in dt_help and "[default:" not in dt_help
+
+
+@pytest.mark.parametrize("columns", ["80", "150"])
+def test_help_writes_every_flag_out_whole_and_no_undefined_default(columns):
+    """At 80 columns `cut --help` cut flag names short (`--contact-damping-r…`), so they could not be copied;
+    `cycle --help` showed `[default: PydanticUndefined]` for the required --lx-max."""
+    from knitlad.experiments.config import CutConfig, cli_option
+
+    env = {**os.environ, "COLUMNS": columns}
+    cut = subprocess.run([*KNITLAD, "cut", "--help"], capture_output=True, text=True, env=env)
+    cycle = subprocess.run([*KNITLAD, "cycle", "--help"], capture_output=True, text=True, env=env)
+    for name in CutConfig.model_fields:
+        if name not in ("n_x", "n_y"):
+            assert cli_option(CutConfig, name) in cut.stdout, name
+    assert "Undefined" not in cycle.stdout and "[required]" in cycle.stdout
