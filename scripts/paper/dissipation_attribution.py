@@ -14,7 +14,8 @@ straight yarn; l_y/l0 = 0.25 for the 42 x 42 crosses of Fig. 5a). Each point is 
     twist         the yarns carry twist, so friction also turns them
 
 Paired ensembles: member k of a point is one knit (force-control targets 0.5 % apart,
-knitlad/studies/ensemble.py) cut under every variant that keeps its knit. A run stops once a front has run
+knitlad/studies/ensemble.py) cut under every dissipation variant that keeps its knit; the model's
+sensitivities (``SENSITIVITY``) on the first knit only. A run stops once a front has run
 ``--stop-after`` stitches (the velocity is fitted from stitch 2 to 10). Runs are dealt out in turn between
 ``--shards`` processes (one per core, one Numba thread each), each stretching the knits of its runs (the
 stretch is deterministic: the same knit in each); rows go to ``<out>/attribution<size>.csv`` after every run
@@ -65,16 +66,21 @@ def commit() -> str:
         return "unknown"
 
 
+# the model's sensitivities (not dissipations): on the first knit of each point only
+SENSITIVITY = ("drag 1000", "d/l0 1/60", "k x0.5", "k x2", "ly 0.302", "twist")
+
+
 def runs(points: list[float], members: list[int], variants: list[str], shard: int, shards: int) -> list[tuple]:
     """This shard's runs, (point, member, members, variant), knit by knit: the runs of one knit (one stretch)
     are dealt out in turn between the shards (each stretches it: the stretch is deterministic, so both get the
-    same knit), so the shards end together."""
+    same knit), so the shards end together. The sensitivities run on member 0 only."""
     out, turn = [], 0
     for fx, n in zip(points, members):
         for k in range(n):
             by_stretch: dict[str, list[str]] = {}
             for v in variants:
-                by_stretch.setdefault(repr(sorted(VARIANTS[v][0].items())), []).append(v)
+                if k == 0 or v not in SENSITIVITY:
+                    by_stretch.setdefault(repr(sorted(VARIANTS[v][0].items())), []).append(v)
             for names in by_stretch.values():
                 for v in names:
                     if turn % shards == shard:
