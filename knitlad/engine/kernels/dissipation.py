@@ -50,6 +50,9 @@ LEDGER_NAMES = ("axial_dashpot", "contact_dashpot", "friction", "global_drag", "
 
 # below this |kb|, a hinge is straight: its bending branch has no direction to act along
 STRAIGHT_KB = 1e-12
+# an edge slower than this [m/s] feels no air: its drag, under 1e-6 N/m (Re < 0.1), is a millionth of the
+# yarn's tension gradients, and the drag law's power costs as much as the rest of a step would on all edges
+AIR_STILL = 0.01
 
 
 class DampingParams(NamedTuple):
@@ -122,20 +125,19 @@ def viscoelastic_forces(e, elen, v, edge_a, edge_b, rest_length, EA, hinge_e0, h
         stiffness = ratio * B_over_l[h]
         qx, qy, qz = branch_kb[h, 0], branch_kb[h, 1], branch_kb[h, 2]
         q2 = qx * qx + qy * qy + qz * qz
-        if bend <= STRAIGHT_KB:  # no line to act along: the branch only relaxes (towards kb = 0)
-            branch_kb[h, 0] = qx * decay
-            branch_kb[h, 1] = qy * decay
-            branch_kb[h, 2] = qz * decay
-            released += 0.5 * stiffness * q2 * (1.0 - decay * decay)
-            continue
-        ux, uy, uz = kbx / bend, kby / bend, kbz / bend
+        # a straight hinge has no line for its branch: u = 0 lets the branch go (released below), with no branch
+        inv_bend = 1.0 / max(bend, STRAIGHT_KB)
+        ux, uy, uz = kbx * inv_bend, kby * inv_bend, kbz * inv_bend
         p = qx * ux + qy * uy + qz * uz
         lag = bend - p
         _, _, _, gax, gay, gaz, gbx, gby, gbz = isotropic_bending_gradient(
-            ax, ay, az, bx, by, bz, elen[k0], elen[k1], stiffness * lag / bend)
+            ax, ay, az, bx, by, bz, elen[k0], elen[k1], stiffness * lag * inv_bend)
         add_hinge_forces(F, edge_a[k0], edge_b[k0], edge_b[k1], gax, gay, gaz, gbx, gby, gbz)
-        after = lag * decay - bend_rate(ax, ay, az, bx, by, bz, elen[k0], elen[k1], inv_D, ux, uy, uz, bend, v,
-                                        edge_a[k0], edge_b[k0], edge_b[k1]) * lead
+        p0, c0, n0 = edge_a[k0], edge_b[k0], edge_b[k1]
+        rate = bend_rate(ax, ay, az, bx, by, bz, elen[k0], elen[k1], inv_D, ux, uy, uz, bend,
+                         v[c0, 0] - v[p0, 0], v[c0, 1] - v[p0, 1], v[c0, 2] - v[p0, 2],
+                         v[n0, 0] - v[c0, 0], v[n0, 1] - v[c0, 1], v[n0, 2] - v[c0, 2])
+        after = lag * decay - rate * lead
         p = bend - after
         branch_kb[h, 0] = p * ux
         branch_kb[h, 1] = p * uy
@@ -146,12 +148,11 @@ def viscoelastic_forces(e, elen, v, edge_a, edge_b, rest_length, EA, hinge_e0, h
 
 
 @njit(inline="always", **NUMBA_OPTS)
-def bend_rate(ax, ay, az, bx, by, bz, la, lb, two_over_D, ux, uy, uz, bend, v, prev, centre, nxt):
-    """d|kb|/dt = u . d(kb)/dt at the hinge of edges a = x_c - x_p, b = x_n - x_c (u = kb/|kb|), with
-    kb = 2 a x b / D, D = |a||b| + a.b: d(kb)/dt = (2 (a' x b + a x b') - kb D')/D,
-    D' = (a.a') |b|/|a| + (b.b') |a|/|b| + a'.b + a.b'."""
-    dax, day, daz = v[centre, 0] - v[prev, 0], v[centre, 1] - v[prev, 1], v[centre, 2] - v[prev, 2]
-    dbx, dby, dbz = v[nxt, 0] - v[centre, 0], v[nxt, 1] - v[centre, 1], v[nxt, 2] - v[centre, 2]
+def bend_rate(ax, ay, az, bx, by, bz, la, lb, two_over_D, ux, uy, uz, bend, dax, day, daz, dbx, dby, dbz):
+    """d|kb|/dt = u . d(kb)/dt at the hinge of edges a = x_c - x_p, b = x_n - x_c (u = kb/|kb|), whose rates
+    are a' = v_c - v_p, b' = v_n - v_c, with kb = 2 a x b / D, D = |a||b| + a.b:
+    d(kb)/dt = (2 (a' x b + a x b') - kb D')/D, D' = (a.a') |b|/|a| + (b.b') |a|/|b| + a'.b + a.b'.
+    Scalars only: an inlined helper that takes an array puts reference counting into its caller's loop."""
     c1x, c1y, c1z = cross(dax, day, daz, bx, by, bz)
     c2x, c2y, c2z = cross(ax, ay, az, dbx, dby, dbz)
     d_dot = (dot(ax, ay, az, dax, day, daz) * lb / la + dot(bx, by, bz, dbx, dby, dbz) * la / lb
@@ -203,16 +204,19 @@ def cross_flow_drag_coefficient(reynolds):
 @njit(**NUMBA_OPTS)
 def air_drag_forces(e, elen, v, edge_a, edge_b, radius, density, viscosity, skin_friction, F, e0, e1, dt, loss):
     """Air drag on edges [e0, e1) (module docstring), half of each edge's on each of its nodes, added to F.
-    The edge moves at the mean of its nodes' velocities. Adds to ``loss[0]`` what it takes out over dt [uJ]."""
+    The edge moves at the mean of its nodes' velocities; one slower than :data:`AIR_STILL` is skipped. Adds to
+    ``loss[0]`` what it takes out over dt [uJ]."""
     power = 0.0
     for k in range(e0, e1):
         a = edge_a[k]
         b = edge_b[k]
-        inv = 1.0 / elen[k]
-        tx, ty, tz = e[k, 0] * inv, e[k, 1] * inv, e[k, 2] * inv
         vx = 0.5 * (v[a, 0] + v[b, 0])
         vy = 0.5 * (v[a, 1] + v[b, 1])
         vz = 0.5 * (v[a, 2] + v[b, 2])
+        if vx * vx + vy * vy + vz * vz < AIR_STILL * AIR_STILL:  # most of a stretched knit: skip its drag law
+            continue
+        inv = 1.0 / elen[k]
+        tx, ty, tz = e[k, 0] * inv, e[k, 1] * inv, e[k, 2] * inv
         vt = dot(vx, vy, vz, tx, ty, tz)
         nx, ny, nz = vx - vt * tx, vy - vt * ty, vz - vt * tz
         speed_n = math.sqrt(nx * nx + ny * ny + nz * nz)
