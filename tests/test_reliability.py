@@ -624,3 +624,24 @@ def test_a_cycle_keeps_an_earlier_runs_readings_and_says_a_full_disk_in_one_line
     assert "could not be written" in p.stderr.strip().splitlines()[-1]
     summary = json.loads(p.stdout.strip().splitlines()[-1])
     assert summary["fx_ini"] > 0 and summary["delta_l_over_l0"] > 0
+
+
+@pytest.mark.parametrize("what", ["dev_zero", "fifo", "folder", "huge"])
+def test_a_sweep_or_cluster_file_that_is_no_config_file_is_refused_at_once(tmp_path, what):
+    """`sweep /dev/zero` and `--cluster /dev/zero` read until memory ran out; a FIFO as the cluster file blocked
+    forever. Both are refused in one line, at once (exit 2)."""
+    path = tmp_path / "c.yaml"
+    if what == "dev_zero":
+        path = Path("/dev/zero")
+    elif what == "fifo":
+        os.mkfifo(path)
+    elif what == "folder":
+        path.mkdir()
+    else:
+        path.write_text("# " + "x" * (2 << 20))
+    good = config(tmp_path, {"fixed": {**TINY, "lx": 0.4}, "sweep": {"axes": {"mu": [0.1]}}}, "good.yaml")
+    for args in (["sweep", str(path), "--out", str(tmp_path / "o")],
+                 ["sweep", str(good), "--cluster", str(path), "--dry-run", "--out", str(tmp_path / "o2")]):
+        p = knitlad(*args, timeout=60)
+        line = one_line_error(p)
+        assert str(path) in line and ("not a config file" in line or "over the" in line), line

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import stat
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
@@ -25,3 +26,22 @@ def atomic_path(path: str | Path, suffix: str = "") -> Iterator[Path]:
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
+
+
+MAX_CONFIG_BYTES = 1 << 20  # a YAML config is a few hundred bytes; a megabyte is no config
+
+
+def read_config_text(path: str | Path, max_bytes: int = MAX_CONFIG_BYTES) -> str:
+    """The text of a config file, read only if it is a regular file of at most ``max_bytes``: a FIFO would
+    block the reader forever and /dev/zero feed it until memory runs out. ValueError (one line, the reason)
+    otherwise; OSError if it cannot be read; UnicodeDecodeError if it is not text."""
+    path = Path(path)
+    info = os.stat(path)
+    if not stat.S_ISREG(info.st_mode):
+        kind = "a folder" if stat.S_ISDIR(info.st_mode) else "a pipe" if stat.S_ISFIFO(info.st_mode) else \
+            "a device" if stat.S_ISCHR(info.st_mode) or stat.S_ISBLK(info.st_mode) else "not a regular file"
+        raise ValueError(f"{kind}, not a config file")
+    if info.st_size > max_bytes:
+        raise ValueError(f"{info.st_size} bytes, over the {max_bytes} a config file may hold")
+    with open(path, "rb") as f:
+        return f.read(max_bytes + 1).decode("utf-8")

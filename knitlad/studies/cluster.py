@@ -25,6 +25,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from knitlad.experiments.config import one_line
+from knitlad.io.atomic import read_config_text
 from knitlad.studies.sweep import SweepError, bounded_yaml
 
 KINDS = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster", "lsf": "LSFCluster",
@@ -76,8 +77,8 @@ def load_cluster(path: str | Path) -> ClusterConfig:
     """Read and validate a cluster file; every problem is a :class:`SweepError` of one line."""
     path = Path(path)
     try:
-        raw = bounded_yaml(path.read_text(encoding="utf-8"), str(path))
-    except (OSError, UnicodeDecodeError) as e:
+        raw = bounded_yaml(read_config_text(path), str(path))
+    except (OSError, UnicodeDecodeError, ValueError) as e:
         raise SweepError(f"--cluster {path}: cannot read ({getattr(e, 'strerror', None) or e})") from None
     except yaml.YAMLError as e:
         raise SweepError(f"--cluster {path}: not valid YAML ({getattr(e, 'problem', None) or e})") from None

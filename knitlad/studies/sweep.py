@@ -42,6 +42,7 @@ from pydantic import (
 )
 
 from knitlad.experiments.config import one_line
+from knitlad.io.atomic import read_config_text
 from knitlad.studies.registry import SCENES
 
 MAX_JOBS = 10_000  # a sweep of more jobs is refused unless asked for (--max-jobs)
@@ -238,11 +239,13 @@ def load_sweep(path: str | Path, max_jobs: int = MAX_JOBS) -> tuple[SweepConfig,
     """Read, validate and expand a sweep file; every problem raises SweepError('key: reason')."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_config_text(path)
     except UnicodeDecodeError:
         raise SweepError(f"{path}: not a text file (a YAML sweep config is text)") from None
     except OSError as e:
         raise SweepError(f"{path}: cannot read ({e.strerror or e})") from None
+    except ValueError as e:
+        raise SweepError(f"{path}: {e}") from None
     try:
         raw = bounded_yaml(text, str(path))
     except yaml.YAMLError as e:
