@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import inspect
+import math
 import os
 import shutil
 import signal
@@ -951,6 +952,9 @@ def _run_file(run: str):
     return path
 
 
+MIN_WIDTH, MAX_WIDTH = 64, 8192  # pixels: a million wide asked VTK for terabytes (std::bad_alloc, an abort)
+
+
 @app.command()
 def render(
     run: str = typer.Argument(..., help="A run folder written by knitlad cut (or its ladder.h5), or the trajectory "
@@ -967,8 +971,10 @@ def render(
     views = tuple(view or ("front", "oblique"))
     if not set(views) <= {"front", "oblique"}:
         fail(f"--view: front or oblique, got {', '.join(views)}")
-    if width < 64:
-        fail(f"--width: at least 64, got {width}")
+    if not MIN_WIDTH <= width <= MAX_WIDTH:
+        fail(f"--width: {MIN_WIDTH} to {MAX_WIDTH} pixels, got {width}")
+    if at_ms and not all(math.isfinite(t) for t in at_ms):
+        fail(f"--at-ms: finite instants after the cut are needed, got {', '.join(map(str, at_ms))}")
     line = _CountProgress("render", "images")
     try:
         paths = render_run(h5, h5.parent / "render", [t * 1e-3 for t in at_ms] if at_ms else None, views,
@@ -995,8 +1001,10 @@ def movie(
     from knitlad.viz.render import movie as make_movie
 
     h5 = _run_file(run)
-    if fps < 1 or width < 64:
-        fail("--fps must be >= 1 and --width >= 64")
+    if fps < 1:
+        fail(f"--fps: at least 1, got {fps}")
+    if not MIN_WIDTH <= width <= MAX_WIDTH:
+        fail(f"--width: {MIN_WIDTH} to {MAX_WIDTH} pixels, got {width}")
     line = _CountProgress("movie", "frames")
     try:
         path = make_movie(h5, h5.with_suffix(".gif" if gif else ".mp4"), fps=fps, size=(width, width * 3 // 4),

@@ -56,6 +56,7 @@ class Run:
             run = Run(Path(path), f["frames/positions"], f["frames/time"][()], np.zeros((n, 0, 0), dtype=bool),
                       f["topology/edges"][()], f["topology/node_course"][()], -1, np.zeros((0, 0, 2)),
                       float(f.attrs["scale_d_m"]), 0.0, 0.0, knit=False)
+            run.check(f)
             return run, f
         if "frames" not in f or "laddered" not in f["frames"]:
             f.close()
@@ -67,7 +68,28 @@ class Run:
                   f["topology/edges"][()], f["topology/node_course"][()], n_y // 2, f["cells/centres"][()],
                   float(f.attrs["scale_d_m"]), float(f.attrs["box_lx_over_l0"]) * l0,
                   float(f.attrs["ly_over_l0"]) * l0)
+        run.check(f)
         return run, f
+
+    def check(self, f) -> None:
+        """ValueError (the file closed) if the arrays do not fit each other: an edge of a node the frames do not
+        hold, or flattened, made VTK read outside its arrays (a segfault, or images from whatever memory held)."""
+        problem = None
+        positions, edges = self.positions, self.edges
+        if positions.ndim != 3 or positions.shape[2] != 3 or positions.shape[0] == 0:
+            problem = f"frames/positions has shape {positions.shape}, not (frames, nodes, 3)"
+        elif edges.ndim != 2 or edges.shape[1] != 2 or not np.issubdtype(edges.dtype, np.integer):
+            problem = f"topology/edges has shape {edges.shape} ({edges.dtype}), not (edges, 2) integers"
+        elif edges.size and (edges.min() < 0 or edges.max() >= positions.shape[1]):
+            problem = (f"topology/edges names nodes {edges.min()} to {edges.max()}, the frames hold "
+                       f"{positions.shape[1]} nodes")
+        elif len(self.times_s) != positions.shape[0] or len(self.node_course) != positions.shape[1]:
+            problem = "frames/time or topology/node_course do not match the frames"
+        elif self.knit and self.laddered.shape[0] != positions.shape[0]:
+            problem = "frames/laddered does not match the frames"
+        if problem:
+            f.close()
+            raise ValueError(f"{self.path}: a damaged run file: {problem}")
 
     def frame_at(self, t: float) -> int:
         return int(np.argmin(np.abs(self.times_s - t)))

@@ -296,3 +296,40 @@ def test_the_contact_pairs_of_one_s_own_scene_open_in_paraview_as_points_with_th
     assert vtk_to_numpy(data.GetArray("sliding")).tolist() == pairs.sliding.astype(int).tolist()
     yarns = blocks.GetBlock(names.index("yarns"))
     assert yarns.GetNumberOfPoints() == 63
+
+
+@pytest.mark.parametrize("damage", ["edges out of range", "edges flattened", "fewer positions"])
+def test_a_damaged_run_file_is_refused_in_one_line_not_drawn_from_stray_memory(run_folder, tmp_path, damage):
+    """Edges out of range or flattened segfaulted `render` and `movie`; fewer positions than the edges name gave
+    images from out-of-bounds reads, exit 0."""
+    import shutil
+
+    import h5py
+    import numpy as np
+
+    folder = tmp_path / "run"
+    shutil.copytree(run_folder, folder, ignore=shutil.ignore_patterns("render", "*.mp4", "*.gif"))
+    with h5py.File(folder / "ladder.h5", "r+") as f:
+        if damage == "fewer positions":
+            kept = f["frames/positions"][:, :-10]
+            del f["frames/positions"]
+            f["frames/positions"] = kept
+        else:
+            edges = f["topology/edges"][()]
+            del f["topology/edges"]
+            f["topology/edges"] = edges + 10 ** 6 if damage == "edges out of range" else edges.ravel()
+    for command in ("render", "movie"):
+        p = subprocess.run([sys.executable, "-m", "knitlad.cli", command, str(folder)], capture_output=True, text=True,
+                           cwd=ROOT)
+        assert p.returncode == 2, (command, p.returncode, p.stderr)
+        assert "a damaged run file" in p.stderr.strip().splitlines()[-1] and "Traceback" not in p.stderr
+    assert not list((folder / "render").glob("*.png")) if (folder / "render").exists() else True
+
+
+@pytest.mark.parametrize("args, says", [(["--width", "1000000"], "--width: 64 to 8192"),
+                                        (["--at-ms", "nan"], "--at-ms: finite")])
+def test_render_refuses_a_width_no_memory_holds_and_a_nan_instant(run_folder, args, says):
+    """`--width 1000000` aborted with std::bad_alloc; `--at-ms nan` drew an image and exited 0."""
+    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(run_folder), *args], capture_output=True,
+                       text=True, cwd=ROOT)
+    assert p.returncode == 2 and says in p.stderr and "Traceback" not in p.stderr, p.stderr
