@@ -854,7 +854,7 @@ def _experiment_or_exit(run, progress, kept: str = "nothing written"):
 
 # what knitlad cut, render, movie and plot write in a run folder
 RUN_OUTPUTS = ("ladder.h5", "ladder.xdmf", "spatio_temporal.png", "midline_diagram.png", "tension_history.png",
-               "energy.png", "ladder.mp4", "ladder.gif", "summary.json", "render")
+               "energy.png", "ladder.mp4", "ladder.gif", "summary.json", "run.log", "render")
 
 
 def _energy_plot(h5, path) -> list:
@@ -891,12 +891,26 @@ def _replace_run_outputs(out_dir, result, earlier: list):
     stage.mkdir()
     try:
         h5, png = _write_run_outputs(stage, result)
+        log = _write_run_log(stage / "run.log", result.summary())
         _remove(earlier)
-        for new in (h5, h5.with_suffix(".xdmf"), png):
+        for new in (h5, h5.with_suffix(".xdmf"), png, log):
             os.replace(new, out_dir / new.name)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
     return out_dir / h5.name, out_dir / png.name
+
+
+def _write_run_log(path, summary: dict):
+    """run.log: the command line, where, when and with what it ran, and its summary, as plain text."""
+    import json
+
+    from knitlad.io.provenance import run_provenance
+
+    lines = ["command: " + " ".join(["knitlad", *sys.argv[1:]]), f"cwd: {os.getcwd()}"]
+    lines += [f"{key}: {value}" for key, value in run_provenance().items()]
+    lines.append("summary: " + json.dumps(summary, default=float))
+    path.write_text("\n".join(lines) + "\n")
+    return path
 
 
 def _write_run_outputs(out_dir, result):
@@ -963,11 +977,14 @@ def render(
                                       "after the cut, then four evenly spaced instants of the ladder."),
     view: list[str] = typer.Option(None, "--view", help="front (the x-y plane) and/or oblique (repeat); default both."),
     width: int = typer.Option(1200, "--width", help="Image width \\[pixels]; height 3/4 of it."),
+    out: str = typer.Option(None, "--out", help="Folder of the images; default: render/ beside a run's ladder.h5, "
+                            "<file>_render/ beside any other file (each job of a sweep its own)."),
 ) -> None:
     """Images of the fabric: yarns as tubes of their diameter coloured by course, the cut course black, undone cells red."""
     from knitlad.viz.render import render_run
 
     h5 = _run_file(run)
+    out_dir = Path(out) if out else h5.parent / ("render" if h5.name == "ladder.h5" else f"{h5.stem}_render")
     views = tuple(view or ("front", "oblique"))
     if not set(views) <= {"front", "oblique"}:
         fail(f"--view: front or oblique, got {', '.join(views)}")
@@ -977,7 +994,7 @@ def render(
         fail(f"--at-ms: finite instants after the cut are needed, got {', '.join(map(str, at_ms))}")
     line = _CountProgress("render", "images")
     try:
-        paths = render_run(h5, h5.parent / "render", [t * 1e-3 for t in at_ms] if at_ms else None, views,
+        paths = render_run(h5, out_dir, [t * 1e-3 for t in at_ms] if at_ms else None, views,
                            (width, width * 3 // 4), progress=line)
     except ValueError as e:
         fail(str(e))
@@ -986,7 +1003,7 @@ def render(
         typer.echo(f"knitlad: render stopped: {e}", err=True)
         raise typer.Exit(1)
     line.close()
-    typer.echo(f"wrote {len(paths)} images in {h5.parent / 'render'}")
+    typer.echo(f"wrote {len(paths)} images in {out_dir}")
 
 
 @app.command()

@@ -54,7 +54,7 @@ import numpy as np
 from knitlad import __version__
 from knitlad.io.atomic import atomic_path
 from knitlad.io.kinds import TRAJECTORY_KIND, is_trajectory
-from knitlad.io.provenance import code_identity
+from knitlad.io.provenance import code_identity, run_provenance
 from knitlad.engine.dissipation import EnergyLedger
 from knitlad.engine.units import Scales
 
@@ -162,6 +162,8 @@ def attributes_checksum(f: h5py.File) -> str:
 def _write_run_attrs(f: h5py.File, settings, material) -> None:
     f.attrs["knitlad_version"] = __version__
     f.attrs["knitlad_code"] = code_identity()
+    for key, value in run_provenance().items():  # when, where, and with what the file was made
+        f.attrs[f"provenance_{key}"] = value
     f.attrs["settings_json"] = json.dumps(jsonable(settings), default=str)
     for key, value in Scales(material).as_attributes().items():
         f.attrs[f"scale_{key}"] = value

@@ -35,3 +35,20 @@ def code_identity() -> str:
     """``version`` or ``version+commit``: what an output records as the code that made it."""
     commit = code_commit()
     return f"{__version__}+{commit}" if commit else __version__
+
+
+def run_provenance() -> dict[str, str]:
+    """Where and when a file was made, and by which interpreter and libraries: ``created_utc``, ``host``,
+    ``platform``, ``python``, ``numpy``, ``numba``, ``h5py`` (every output file of a run records them)."""
+    import platform
+    import socket
+    import sys
+    import time
+
+    import h5py
+    import numba
+    import numpy
+
+    return {"created_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "host": socket.gethostname(),
+            "platform": platform.platform(), "python": sys.version.split()[0], "numpy": numpy.__version__,
+            "numba": numba.__version__, "h5py": h5py.__version__, "code": code_identity()}

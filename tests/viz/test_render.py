@@ -245,7 +245,7 @@ def test_a_scene_of_one_s_own_renders_and_films_from_its_trajectory_file(tmp_pat
     p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(path), "--view", "front", "--width", "160"],
                        capture_output=True, text=True, cwd=ROOT)
     assert p.returncode == 0, p.stderr
-    pictures = sorted((tmp_path / "render").glob("render_front_*.png"))
+    pictures = sorted((tmp_path / "mine_render").glob("render_front_*.png"))  # beside the file, its own folder
     # five evenly spaced instants from the first frame to the last, each frame drawn once
     assert 3 <= len(pictures) <= 5
     assert [f"{t * 1e6:08.1f}us" in q.name for t, q in zip(recorder.times[::len(recorder.times) - 1],
@@ -333,3 +333,34 @@ def test_render_refuses_a_width_no_memory_holds_and_a_nan_instant(run_folder, ar
     p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(run_folder), *args], capture_output=True,
                        text=True, cwd=ROOT)
     assert p.returncode == 2 and says in p.stderr and "Traceback" not in p.stderr, p.stderr
+
+
+def test_two_job_files_of_one_folder_render_into_folders_of_their_own(run_folder, tmp_path):
+    """Rendering two job files of one sweep wrote both into jobs/render/, the second's frames over the first's;
+    `render` had no --out."""
+    import shutil
+
+    jobs = tmp_path / "jobs"
+    jobs.mkdir()
+    for name in ("a.h5", "b.h5"):
+        shutil.copy(run_folder / "ladder.h5", jobs / name)
+        p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(jobs / name), "--view", "front",
+                            "--width", "320"], capture_output=True, text=True, cwd=ROOT)
+        assert p.returncode == 0, p.stderr
+    assert list((jobs / "a_render").glob("*.png")) and list((jobs / "b_render").glob("*.png"))
+    assert not (jobs / "render").exists()
+    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(jobs / "a.h5"), "--view", "front", "--width",
+                        "320", "--out", str(tmp_path / "mine")], capture_output=True, text=True, cwd=ROOT)
+    assert p.returncode == 0 and list((tmp_path / "mine").glob("*.png"))
+
+
+def test_a_run_records_when_where_and_with_what_it_ran(run_folder):
+    """The HDF5 had no timestamp, host, or numpy/numba/python versions, and there was no plain run.log with the
+    command line."""
+    import h5py
+
+    with h5py.File(run_folder / "ladder.h5") as f:
+        for key in ("created_utc", "host", "python", "numpy", "numba", "h5py", "code"):
+            assert f.attrs[f"provenance_{key}"], key
+    log = (run_folder / "run.log").read_text()
+    assert log.startswith("command: knitlad cut --stitches 6x8") and "numba: " in log and "summary: {" in log
