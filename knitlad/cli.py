@@ -228,11 +228,11 @@ def validated(model, options: dict, names: dict | None = None):
     try:
         return model(**options)
     except ValidationError as e:
-        field, _, reason = one_line(e).partition(": ")
-        if field == "config":
-            fail(reason)
-        option = (names or {}).get(field) or (cli_option(model, field) if field in model.model_fields else field)
-        fail(f"{option}: {reason}")
+        def option(field: str) -> str:
+            return (names or {}).get(field) or (cli_option(model, field) if field in model.model_fields else field)
+
+        text = one_line(e, where=option)
+        fail(text.removeprefix("config: "))
 
 
 def _knit_run(model, options: dict, stitches: str, default_fx: float, out: str | None, name: str):

@@ -415,14 +415,24 @@ def parse_stitches(text: str) -> tuple[int, int]:
     return n_x, int(m.group(2)) if m.group(2) else n_x
 
 
-def one_line(error: ValidationError, prefix: tuple = ()) -> str:
-    """The first validation error as 'field: reason' (the field's path joined by dots, after ``prefix``)."""
-    e = error.errors()[0]
-    # pydantic names the member of a union it tried ("list[any]", "Range"): not part of the user's path
-    loc = [str(p) for p in prefix + tuple(e.get("loc", ())) if not (isinstance(p, str) and p in ("list[any]", "Range"))]
-    # never str(error): it formats the whole input, which an alias-expanded document makes huge
-    msg = (e["msg"] if "msg" in e else "invalid value").removeprefix("Value error, ")
-    return f"{'.'.join(loc) or 'config'}: {msg}"
+MAX_ERRORS = 5  # the validation errors one line says (then "and N more")
+
+
+def one_line(error: ValidationError, prefix: tuple = (), where=None) -> str:
+    """The validation errors as 'field: reason; field: reason' (each field's path joined by dots, after
+    ``prefix``; ``where(field)``, if given, names a top-level field as the user wrote it: its option, its YAML
+    key), the first MAX_ERRORS of them: a config with three mistakes says three."""
+    said = []
+    for e in error.errors()[:MAX_ERRORS]:
+        # pydantic names the member of a union it tried ("list[any]", "Range"): not part of the user's path
+        loc = [str(p) for p in prefix + tuple(e.get("loc", ())) if not (isinstance(p, str) and p in ("list[any]", "Range"))]
+        if where is not None and loc:
+            loc[0] = where(loc[0])
+        # never str(error): it formats the whole input, which an alias-expanded document makes huge
+        msg = (e["msg"] if "msg" in e else "invalid value").removeprefix("Value error, ")
+        said.append(f"{'.'.join(loc) or 'config'}: {msg}")
+    more = error.error_count() - len(said)
+    return "; ".join(dict.fromkeys(said)) + (f"; and {more} more" if more > 0 else "")
 
 
 def cli_option(model: type[BaseModel], field: str) -> str:

@@ -24,6 +24,7 @@ so it is always consistent with what is on disk, whatever interrupted the sweep.
 
 from __future__ import annotations
 
+import difflib
 import hashlib
 import itertools
 import json
@@ -261,6 +262,12 @@ def load_sweep(path: str | Path, max_jobs: int = MAX_JOBS) -> tuple[SweepConfig,
     return cfg, expand(cfg, max_jobs)
 
 
+def _did_you_mean(key: str, fields) -> str:
+    """'; did you mean x?' for the field nearest ``key`` in spelling, or nothing."""
+    close = difflib.get_close_matches(key, sorted(fields), n=1, cutoff=0.6)
+    return f"; did you mean {close[0]}?" if close else ""
+
+
 def expand(cfg: SweepConfig, max_jobs: int = MAX_JOBS) -> list[Job]:
     """All jobs of a sweep, each validated by its scene's config (errors name the YAML key).
 
@@ -277,13 +284,12 @@ def expand(cfg: SweepConfig, max_jobs: int = MAX_JOBS) -> list[Job]:
     if "preset" in cfg.sweep.axes and preset_sets and all(k in cfg.fixed or k in cfg.sweep.axes for k in preset_sets):
         raise SweepError(f"sweep.axes.preset: has no effect where {', '.join(preset_sets)} are given (the preset "
                          "only sets them)")
-    for key in cfg.fixed:
-        if key not in fields:
-            raise SweepError(f"fixed.{key}: not a field of scene {cfg.scene!r} (fields: {', '.join(sorted(fields))})")
     axes = cfg.sweep.values()
+    unknown = [f"{where}.{key}: not a field of scene {cfg.scene!r}{_did_you_mean(key, fields)}"
+               for where, keys in (("fixed", cfg.fixed), ("sweep.axes", axes)) for key in keys if key not in fields]
+    if unknown:  # every mistyped key at once, each with the field it resembles
+        raise SweepError("; ".join(unknown) + f" (every field: knitlad cut --help, or knitlad columns {cfg.scene})")
     for key in axes:
-        if key not in fields:
-            raise SweepError(f"sweep.axes.{key}: not a field of scene {cfg.scene!r} (fields: {', '.join(sorted(fields))})")
         if key in cfg.fixed:
             raise SweepError(f"sweep.axes.{key}: also given in fixed; give it in one place")
     names = list(axes)
@@ -303,22 +309,18 @@ def expand(cfg: SweepConfig, max_jobs: int = MAX_JOBS) -> list[Job]:
         try:
             resolved = model.model_validate(params)
         except ValidationError as e:
-            err = e.errors()[0]
-            field = err["loc"][0] if err.get("loc") else None
-            reason = one_line(e).partition(": ")[2]
-            if field is None:  # a rule across fields names the field it is about first, if any
-                named, _, rest = reason.partition(": ")
-                if named in fields and rest:
-                    field, reason = named, rest
-            if field in axes:
-                where = f"sweep.axes.{field}[{idx[names.index(field)]}]"
-            elif field in cfg.fixed:
-                where = f"fixed.{field}"
-            elif field in extras:
-                where = f"output.{field}"
-            else:
-                where = "fixed"  # a rule across fields (e.g. neither fx nor lx given)
-            raise SweepError(f"{where}: {reason}") from None
+            def key(field: str, idx=idx) -> str:  # where the user wrote the field
+                if field in axes:
+                    return f"sweep.axes.{field}[{idx[names.index(field)]}]"
+                if field in cfg.fixed:
+                    return f"fixed.{field}"
+                return f"output.{field}" if field in extras else "fixed"
+
+            text = one_line(e, where=key)
+            if text.startswith("config: "):  # a rule across fields names the field it is about first, if any
+                named, _, rest = text.removeprefix("config: ").partition(": ")
+                text = f"{key(named)}: {rest}" if named in fields and rest else "fixed: " + text.removeprefix("config: ")
+            raise SweepError(text) from None
         job = Job(scene=cfg.scene, params=resolved.model_dump(), output=cfg.output)
         if job.id in seen:
             raise SweepError("sweep.axes: two jobs are identical (a value repeats)")

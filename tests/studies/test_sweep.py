@@ -352,3 +352,22 @@ def test_every_example_and_reference_sweep_config_validates():
     for path in paths:
         _, jobs = load_sweep(path)
         assert jobs, path
+
+
+def test_a_mistyped_key_says_which_field_it_resembles_and_every_mistake_is_said(tmp_path):
+    """A mistyped YAML key listed all 35 fields instead of "did you mean max_time_ms?", and only the first
+    error of a config was reported."""
+    from knitlad.studies.sweep import SweepError, load_sweep
+
+    bad = write_config(tmp_path / "a.yaml", {"fixed": {**TINY, "lx": 0.4, "max_time_m": 3},
+                                               "sweep": {"axes": {"muu": [0.1]}}})
+    with pytest.raises(SweepError) as e:
+        load_sweep(bad)
+    message = str(e.value)
+    assert "fixed.max_time_m: not a field of scene 'ladder'; did you mean max_time_ms?" in message
+    assert "sweep.axes.muu: not a field of scene 'ladder'; did you mean mu?" in message
+    assert "max_time_us" not in message and "\n" not in message
+    two = write_config(tmp_path / "b.yaml", {"fixed": {**TINY, "lx": 0.4, "ly": 5, "mu": -1},
+                                               "sweep": {"axes": {"arrest_ms": [1.0]}}})
+    with pytest.raises(SweepError, match=r"^fixed.ly: .*; fixed.mu: "):
+        load_sweep(two)
