@@ -368,6 +368,6 @@ def test_a_mistyped_key_says_which_field_it_resembles_and_every_mistake_is_said(
     assert "sweep.axes.muu: not a field of scene 'ladder'; did you mean mu?" in message
     assert "max_time_us" not in message and "\n" not in message
     two = write_config(tmp_path / "b.yaml", {"fixed": {**TINY, "lx": 0.4, "ly": 5, "mu": -1},
-                                               "sweep": {"axes": {"arrest_ms": [1.0]}}})
+                                               "sweep": {"axes": {"observe_every_us": [20.0]}}})
     with pytest.raises(SweepError, match=r"^fixed.ly: .*; fixed.mu: "):
         load_sweep(two)
