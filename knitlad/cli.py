@@ -310,7 +310,7 @@ def cut(
         h5, png = _replace_run_outputs(out_dir, result, earlier)
     except OSError as e:  # a full disk or a file-size limit: keep the summary, say it in one line
         kept = _keep_summary(out_dir, summary) if not earlier else None
-        typer.echo(json.dumps(summary, default=float))
+        typer.echo(_json(summary))
         typer.echo(f"knitlad: run finished but its files could not be written ({e}); "
                    + ("the earlier run in --out is left as it was; " if earlier else "")
                    + f"the summary is {'in ' + str(kept) if kept else 'printed above'}", err=True)
@@ -324,7 +324,7 @@ def cut(
             err=True,
         )
     if json_out:
-        typer.echo(json.dumps(summary, default=float))
+        typer.echo(_json(summary))
         return
     typer.echo(
         f"{n_x} x {n_y} jersey, mu = {cfg.mu}, {cfg.resolution} nodes/stitch ({result.nodes} nodes)\n"
@@ -380,8 +380,8 @@ def cycle(
     try:
         h5, csv, png = _write_cycle_outputs(out_dir, cfg, result, ladder)
     except OSError as e:  # a full disk: the results said on stdout, the failure in one line
-        typer.echo(json.dumps({**result.summary(), **({f"cut_{k}": v for k, v in ladder.summary().items()}
-                                                       if ladder else {})}, default=float))
+        typer.echo(_json({**result.summary(), **({f"cut_{k}": v for k, v in ladder.summary().items()}
+                                                 if ladder else {})}))
         typer.echo(f"knitlad: run finished but its files could not be written ({e}); the summary is printed above",
                    err=True)
         raise typer.Exit(1)
@@ -448,7 +448,7 @@ def loop(
         raise typer.Exit(1)
     summary = result.summary()
     if json_out:
-        typer.echo(json.dumps(summary, default=float))
+        typer.echo(_json(summary))
         return
     if result.released:
         typer.echo(f"single loop ({cfg.geometry}), f_x = {cfg.fx}, mu = {cfg.mu}: released after tau = {result.tau_s * 1e6:.1f} us, "
@@ -477,7 +477,7 @@ def stitch(
         typer.echo(f"knitlad: run failed: {e}", err=True)
         raise typer.Exit(1)
     if json_out:
-        typer.echo(json.dumps(result.summary(), default=float))
+        typer.echo(_json(result.summary()))
         return
     m = settings.material
     typer.echo(f"periodised stitch at l_x/l0 = {cfg.lx}, l_y/l0 = {cfg.ly} (d/l0 = {m.diameter / m.stitch_length:.4g}, "
@@ -900,6 +900,23 @@ def _replace_run_outputs(out_dir, result, earlier: list):
     return out_dir / h5.name, out_dir / png.name
 
 
+def _json(summary: dict) -> str:
+    """``summary`` as valid JSON: a NaN or an infinity (which json writes as NaN, Infinity: not JSON) is null,
+    its reason in the summary's ``nan_reasons`` where it has one."""
+    import json
+
+    def plain(value):
+        if isinstance(value, float) and not math.isfinite(value):
+            return None
+        if isinstance(value, (list, tuple)):
+            return [plain(v) for v in value]
+        if hasattr(value, "item") and not isinstance(value, (list, dict, str)):  # numpy scalars
+            return plain(value.item())
+        return value
+
+    return json.dumps({k: plain(v) for k, v in summary.items()}, allow_nan=False, default=float)
+
+
 def _write_run_log(path, summary: dict):
     """run.log: the command line, where, when and with what it ran, and its summary, as plain text."""
     import json
@@ -908,7 +925,7 @@ def _write_run_log(path, summary: dict):
 
     lines = ["command: " + " ".join(["knitlad", *sys.argv[1:]]), f"cwd: {os.getcwd()}"]
     lines += [f"{key}: {value}" for key, value in run_provenance().items()]
-    lines.append("summary: " + json.dumps(summary, default=float))
+    lines.append("summary: " + _json(summary))
     path.write_text("\n".join(lines) + "\n")
     return path
 
@@ -943,7 +960,7 @@ def _keep_summary(out_dir, summary: dict):
 
     try:
         with atomic_path(out_dir / "summary.json") as tmp:
-            tmp.write_text(json.dumps(summary, default=float))
+            tmp.write_text(_json(summary))
         return out_dir / "summary.json"
     except OSError:
         return None

@@ -645,3 +645,16 @@ def test_a_sweep_or_cluster_file_that_is_no_config_file_is_refused_at_once(tmp_p
         p = knitlad(*args, timeout=60)
         line = one_line_error(p)
         assert str(path) in line and ("not a config file" in line or "over the" in line), line
+
+
+def test_a_cut_of_a_compressed_knit_is_refused_after_the_stretch_and_json_is_valid_json(tmp_path):
+    """`cut --lx 0.2001` exited 0 with f_x^ini -2.03 (the knit in compression), and `loop --json` wrote
+    `Infinity`, which is not JSON."""
+    p = knitlad("cut", "--stitches", "4", "--lx", "0.2001", "--preset", "fast", "--max-time-ms", "0.1", "--out",
+                str(tmp_path / "c"))
+    assert p.returncode == 2 and "Traceback" not in p.stderr
+    assert "not in tension" in p.stderr.strip().splitlines()[-1]
+    p = knitlad("loop", "--max-time-ms", "1e-12", "--json")
+    assert p.returncode == 0
+    summary = json.loads(p.stdout.strip().splitlines()[-1], parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
+    assert summary["tau_s"] is None and summary["released"] is False

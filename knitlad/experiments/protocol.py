@@ -931,8 +931,18 @@ def require_memory(needed: int, what: str) -> None:
                            "available: fewer stitches, a coarser resolution, or fewer frames (frame_every_us)")
 
 
+def require_tension(knit: StretchedKnit) -> None:
+    """InfeasibleRun if ``knit`` is not in tension: nothing pulls a freed loop out of a compressed knit, so its
+    "ladder" is no result (``cut`` itself still cuts one, for studies of the dynamics)."""
+    if not knit.fx_ini > 0:
+        raise InfeasibleRun(f"the stretched knit is not in tension (f_x^ini = {knit.fx_ini:.3f} at l_x/l0 = "
+                            f"{knit.lx_over_l0:.4f}, l_y/l0 = {knit.ly_over_l0:.4f}): below the width where f_x = 0 "
+                            "(knitlad diagram) the fabric is compressed; a wider lx or a positive fx")
+
+
 def run_ladder(settings: LadderSettings, progress: Callable[[str, float], None] | None = None) -> LadderResult:
-    """The four stages in a row."""
+    """The four stages in a row (refused after the stretch if the knit is not in tension: ``require_tension``)."""
     knit = stretch(settings.stretch, progress)
+    require_tension(knit)
     trace = propagate(cut(knit, settings.dynamics), progress=progress)
     return analyse(trace)

@@ -47,7 +47,7 @@ def run_ladder_job(cfg: CutConfig, output, folder: Path | None = None, progress=
 
     from knitlad.io.hdf5 import write_ladder_result
     from knitlad.io.knit_cache import cached_stretch
-    from knitlad.experiments.protocol import analyse, cut, propagate, require_memory, stretch
+    from knitlad.experiments.protocol import analyse, cut, propagate, require_memory, require_tension, stretch
 
     require_memory(cfg.memory_estimate_bytes(), f"a {cfg.n_x} x {cfg.n_y} knit at {cfg.resolution} nodes per stitch")
     t0 = time.perf_counter()
@@ -57,6 +57,7 @@ def run_ladder_job(cfg: CutConfig, output, folder: Path | None = None, progress=
         knit, reused = cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch, progress)
     if reused:  # the stretch cost this job only the reading
         knit = dataclasses.replace(knit, wall_s=time.perf_counter() - t0)
+    require_tension(knit)  # a compressed knit's "ladder" is no result: the job fails, saying why
     result = analyse(propagate(cut(knit, cfg.dynamics_settings()), progress=progress))
     if not output.frames:
         result.frames, result.frame_times_s = [], []
