@@ -315,6 +315,11 @@ def cut(
                    + ("the earlier run in --out is left as it was; " if earlier else "")
                    + f"the summary is {'in ' + str(kept) if kept else 'printed above'}", err=True)
         raise typer.Exit(1)
+    except KeyboardInterrupt as e:  # Ctrl-C or SIGTERM while writing: nothing half-written is left
+        how, code = ("terminated", 143) if isinstance(e, Terminated) else ("interrupted", 130)
+        typer.echo(f"knitlad: {how} while writing the run; " + ("the earlier run in --out is left as it was"
+                                                              if earlier else "nothing written"), err=True)
+        raise typer.Exit(code)
     finally:
         lock.release()
     if not result.fx_within_tolerance:
@@ -725,13 +730,18 @@ def plot(
 
         h5 = _run_file(folder)
         line = _CountProgress("render", "images")
-        paths = [spatio_temporal_from_file(h5, Path(folder) / f"spatio_temporal.{fmt}"),
-                 column_midline_diagram(h5, Path(folder) / f"midline_diagram.{fmt}"),
-                 tension_history_plot(h5, Path(folder) / f"tension_history.{fmt}"),
-                 *_energy_plot(h5, Path(folder) / f"energy.{fmt}"),
-                 *render_run(h5, Path(folder) / "render", progress=line)]
+        paths, missing = [], []
+        for name, draw in (("spatio_temporal", spatio_temporal_from_file), ("midline_diagram", column_midline_diagram),
+                           ("tension_history", tension_history_plot), ("energy", energy_ledger_plot)):
+            try:
+                paths.append(draw(h5, Path(folder) / f"{name}.{fmt}"))
+            except (KeyError, ValueError) as e:  # a file without that record (an older knitlad's): said, not a traceback
+                missing.append(f"no {name}.{fmt}: {h5} lacks {str(e).strip(chr(39))}")
+        paths += render_run(h5, Path(folder) / "render", progress=line)
         line.close()
         typer.echo(f"wrote {len(paths)} figures in {folder}")
+        for why in missing:
+            typer.echo(f"knitlad: {why}", err=True)
         return
 
     df, problems = _sweep_table(folder)
@@ -857,17 +867,6 @@ RUN_OUTPUTS = ("ladder.h5", "ladder.xdmf", "spatio_temporal.png", "midline_diagr
                "energy.png", "ladder.mp4", "ladder.gif", "summary.json", "run.log", "render")
 
 
-def _energy_plot(h5, path) -> list:
-    """The energy ledger's figure, if the run file holds a ledger (files before 0.6.0 do not): [path] or []."""
-    from knitlad.viz.plots import energy_ledger_plot
-
-    try:
-        return [energy_ledger_plot(h5, path)]
-    except KeyError as e:
-        typer.echo(f"knitlad: {e.args[0]}", err=True)
-        return []
-
-
 def earlier_run_outputs(out_dir) -> list:
     """The files and folders of an earlier run in ``out_dir``."""
     return [out_dir / name for name in RUN_OUTPUTS if (out_dir / name).exists()]
@@ -889,6 +888,7 @@ def _replace_run_outputs(out_dir, result, earlier: list):
     stage = out_dir / f".new-{os.getpid()}"
     shutil.rmtree(stage, ignore_errors=True)
     stage.mkdir()
+    previous = signal.signal(signal.SIGTERM, _on_sigterm)  # a kill while writing: the staging folder goes too
     try:
         h5, png = _write_run_outputs(stage, result)
         log = _write_run_log(stage / "run.log", result.summary())
@@ -897,6 +897,7 @@ def _replace_run_outputs(out_dir, result, earlier: list):
             os.replace(new, out_dir / new.name)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
+        signal.signal(signal.SIGTERM, previous)
     return out_dir / h5.name, out_dir / png.name
 
 
@@ -1040,6 +1041,8 @@ def movie(
     if not MIN_WIDTH <= width <= MAX_WIDTH:
         fail(f"--width: {MIN_WIDTH} to {MAX_WIDTH} pixels, got {width}")
     line = _CountProgress("movie", "frames")
+    previous = sys.unraisablehook
+    sys.unraisablehook = lambda info: None  # the GIF writer's clean-up after a failed write complains twice
     try:
         path = make_movie(h5, h5.with_suffix(".gif" if gif else ".mp4"), fps=fps, size=(width, width * 3 // 4),
                           progress=line)
@@ -1049,6 +1052,11 @@ def movie(
         line.close()
         typer.echo(f"knitlad: movie not written: {e}", err=True)
         raise typer.Exit(1)
+    finally:
+        import gc
+
+        gc.collect()  # the failed writer is finalised now, under the quiet hook
+        sys.unraisablehook = previous
     line.close()
     typer.echo(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB)")
 

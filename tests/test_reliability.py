@@ -658,3 +658,25 @@ def test_a_cut_of_a_compressed_knit_is_refused_after_the_stretch_and_json_is_val
     assert p.returncode == 0
     summary = json.loads(p.stdout.strip().splitlines()[-1], parse_constant=lambda c: pytest.fail(f"{c} in JSON"))
     assert summary["tau_s"] is None and summary["released"] is False
+
+
+def test_an_output_folder_that_is_a_link_to_nowhere_is_named_as_such(tmp_path):
+    """A symbolic-link loop as --out was reported as "File exists"."""
+    loop = tmp_path / "loop"
+    loop.symlink_to(tmp_path / "loop")
+    line = one_line_error(knitlad(*CUT_TINY, "--out", str(loop / "run")))
+    assert "is a symbolic link that leads nowhere" in line
+
+
+def test_a_kill_while_the_run_is_written_leaves_no_half_written_file(tmp_path, monkeypatch):
+    """A SIGTERM while ladder.h5 was written left a 1.6 MB .tmp beside the run."""
+    from knitlad import cli
+
+    def killed(out_dir, result):
+        (out_dir / "ladder.h5").write_bytes(b"half")
+        raise cli.Terminated()
+
+    monkeypatch.setattr(cli, "_write_run_outputs", killed)
+    with pytest.raises(cli.Terminated):
+        cli._replace_run_outputs(tmp_path, None, [])
+    assert list(tmp_path.iterdir()) == []

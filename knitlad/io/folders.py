@@ -32,6 +32,9 @@ def writable_folder(path: str | Path) -> Path:
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise FolderError(f"{path}: exists and is not a folder")
+    for part in (path, *path.parents):  # mkdir says "File exists" of a link to nowhere: say what it is
+        if part.is_symlink() and not part.exists():
+            raise FolderError(f"{path}: {part} is a symbolic link that leads nowhere (a loop, or its target gone)")
     try:
         path.mkdir(parents=True, exist_ok=True)
         probe = path / f".probe.{os.getpid()}"

@@ -126,6 +126,9 @@ def tension_history_plot(h5_path: str | Path, path: str | Path) -> Path:
     import h5py
 
     with h5py.File(h5_path, "r") as f:
+        for needed in ("stretch", "series/time", "series/fx"):
+            if needed not in f:
+                raise KeyError(f"/{needed}")
         steps, box, fx_stretch = (f[f"stretch/{k}"][()] for k in ("relax_steps", "box_lx_over_l0", "fx"))
         t_ms, fx = f["series/time"][()] * 1e3, f["series/fx"][()]
     plt = _pyplot()
@@ -168,7 +171,7 @@ def energy_ledger_plot(h5_path: str | Path, path: str | Path) -> Path:
 
     with h5py.File(h5_path, "r") as f:
         if "ledger" not in f:
-            raise KeyError(f"{h5_path}: no energy ledger (a run file of knitlad before 0.6.0)")
+            raise KeyError("/ledger (a run file of knitlad before 0.6.0)")
         g = f["ledger"]
         t_ms = f["series/time"][()] * 1e3
         series = {k: g[k][()] * 1e3 for k in g}  # mJ

@@ -364,3 +364,31 @@ def test_a_run_records_when_where_and_with_what_it_ran(run_folder):
             assert f.attrs[f"provenance_{key}"], key
     log = (run_folder / "run.log").read_text()
     assert log.startswith("command: knitlad cut --stitches 6x8") and "numba: " in log and "summary: {" in log
+
+
+def test_plot_of_a_run_file_without_its_stretch_says_so_and_draws_the_rest(run_folder, tmp_path):
+    """`knitlad plot` on a run whose ladder.h5 lacked /stretch ended in a KeyError traceback."""
+    import shutil
+
+    import h5py
+
+    folder = tmp_path / "run"
+    shutil.copytree(run_folder, folder, ignore=shutil.ignore_patterns("render", "*.mp4", "*.gif", "*.png"))
+    with h5py.File(folder / "ladder.h5", "r+") as f:
+        del f["stretch"]
+    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "plot", str(folder)], capture_output=True, text=True,
+                       cwd=ROOT)
+    assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr
+    assert "no tension_history.png" in p.stderr and "stretch" in p.stderr
+    assert (folder / "spatio_temporal.png").exists() and (folder / "energy.png").exists()
+
+
+def test_a_gif_on_a_full_disk_is_one_line_not_two_ignored_tracebacks(run_folder, tmp_path):
+    import shutil
+
+    folder = tmp_path / "run"
+    shutil.copytree(run_folder, folder, ignore=shutil.ignore_patterns("render", "*.mp4", "*.gif"))
+    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "movie", str(folder), "--gif", "--width", "320"],
+                       capture_output=True, text=True, cwd=ROOT, preexec_fn=_file_size_limit(20_000))
+    assert p.returncode == 1 and "Exception ignored" not in p.stderr and "Traceback" not in p.stderr, p.stderr
+    assert "movie not written" in p.stderr.strip().splitlines()[-1] and not list(folder.glob("*.gif*"))
