@@ -262,3 +262,10 @@ def test_help_writes_every_flag_out_whole_and_no_undefined_default(columns):
         if name not in ("n_x", "n_y"):
             assert cli_option(CutConfig, name) in cut.stdout, name
     assert "Undefined" not in cycle.stdout and "[required]" in cycle.stdout
+
+
+def test_a_stitch_that_does_not_converge_fails_instead_of_printing_its_tensions_as_results():
+    """`stitch --d-over-l0 1e-9` printed f_x 2.7e6 with `converged: false` and exited 0."""
+    p = subprocess.run([*KNITLAD, "stitch", "--d-over-l0", "1e-9", "--preset", "fast", "--resolution", "12",
+                        "--lx", "0.35"], capture_output=True, text=True)
+    assert p.returncode == 1 and "did not converge" in p.stderr.strip().splitlines()[-1], p.stderr
