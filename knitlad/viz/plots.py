@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from knitlad.io.atomic import atomic_path
 
@@ -258,15 +259,29 @@ def summary_plots(df, out_dir: str | Path, fmt: str = "png") -> list[Path]:
     groups = ok.groupby(keys if keys != [None] else (lambda _: ""), sort=True)
     x = symbol("fx_ini")
     for stem, (column, figure) in SUMMARY_PLOTS.items():
-        fig, ax = plt.subplots(figsize=(4.5, 3.4))
+        ended = run_ends(ok, velocity=column == "v_lad_over_cb")
+        fig, ax = plt.subplots(figsize=(4.8, 3.6))
         for key, g in groups:
             g = g.sort_values("fx_ini")
             key = key if isinstance(key, tuple) else (key,)
             legend = ", ".join(f"{symbol(k)} = {v}" for k, v in zip(keys, key) if k is not None) or "knitlad"
-            ax.plot(g["fx_ini"], g[column], "o-", ms=4, label=legend)
+            line, = ax.plot(g["fx_ini"], g[column], "-", lw=0.8, label=legend)
+            for how, marker, fill in RUN_END_MARKERS:  # how each run ended, drawn apart
+                sub = g[ended.loc[g.index] == how]
+                if len(sub):
+                    err = None
+                    if column == "v_lad_over_cb":
+                        preset = sub["preset"] if "preset" in sub else pd.Series("default", index=sub.index)
+                        err = sub[column].abs() * preset.map(PRESET_VLAD_ERROR).fillna(0.2)
+                    ax.errorbar(sub["fx_ini"], sub[column], yerr=err, fmt=marker, ms=5, color=line.get_color(),
+                                mfc=line.get_color() if fill else "none", capsize=2, lw=0.8)
+        for how, marker, fill in RUN_END_MARKERS:  # the markers' legend, in black
+            if (ended == how).any():
+                ax.plot([], [], marker, color="k", mfc="k" if fill else "none", label=RUN_END_LABELS[how])
         if column == "v_lad_over_cb":
-            px, py = zip(*PAPER_DER_VELOCITY)
-            ax.plot(px, py, "k+", ms=8, label=r"paper, DER 42 $\times$ 42")
+            if {"n_x", "n_y"} <= set(ok) and (ok["n_x"] == 42).all() and (ok["n_y"] == 42).all():
+                px, py = zip(*PAPER_DER_VELOCITY)  # only beside knits of the same size
+                ax.plot(px, py, "k+", ms=8, label=r"paper, DER 42 $\times$ 42")
             f = np.array([0.0, float(np.nanmax(ok["fx_ini"]))])
             ax.plot(f, EXPERIMENTS_VELOCITY_SLOPE * f, "k--", lw=0.8, label=f"experiments, 0.1 {x}")
         if column == "n_lad_over_ny":
@@ -277,8 +292,33 @@ def summary_plots(df, out_dir: str | Path, fmt: str = "png") -> list[Path]:
             lim = float(np.nanmax(ok["fx_ini"])) if len(ok) else 1.0
             ax.plot([0, lim], [0, lim], "k:", lw=0.8, label=f"{symbol('fx_fin')} = {x}")
         label = symbol(column)
-        paths.append(_labelled(fig, ax, x, label, f"{label} against {x} (paper {figure})", out / f"{stem}.{fmt}"))
+        title = f"{label} against {x} (paper {figure})"
+        if column == "fx_fin":  # an arrest tension only where the ladder arrested
+            title = f"{symbol('fx')} at the stop (after an arrest: paper {figure})"
+        elif column == "v_lad_over_cb":
+            title += "\nbars: the preset's stated error (docs/accuracy.md)"
+        paths.append(_labelled(fig, ax, x, label, title, out / f"{stem}.{fmt}"))
     return paths
+
+
+# each preset's largest stated v_lad error against the converged reference (knitlad.fabric.presets.PRESET_HELP)
+PRESET_VLAD_ERROR = {"fast": 0.14, "default": 0.18, "accurate": 0.08}
+RUN_END_MARKERS = (("arrested", "o", True), ("edge", "s", False), ("time", "x", True), ("short", "^", False))
+RUN_END_LABELS = {"arrested": "arrested", "edge": "reached an edge (damage: a lower bound)",
+                  "time": "stopped at max_time_ms", "short": "velocity from under 5 stitches (rough)"}
+
+
+def run_ends(df, velocity: bool = False):
+    """How each run of a sweep table ended: arrested, edge (reached an edge course), time (max_time_ms), and
+    with ``velocity`` short (a velocity fitted over fewer than 5 stitches, whatever the end)."""
+
+    reason = df.get("stop_reason", pd.Series("", index=df.index)).astype(str)
+    out = pd.Series("time", index=df.index)
+    out[reason.str.startswith("no cell changed")] = "arrested"
+    out[df.get("reached_edge", pd.Series(False, index=df.index)).astype(bool) | reason.str.contains("edge")] = "edge"
+    if velocity and {"v_fit_first", "v_fit_last"} <= set(df):
+        out[(df["v_fit_last"] - df["v_fit_first"] + 1) < 5] = "short"
+    return out
 
 
 def job_figure_names(df) -> dict[str, str]:
