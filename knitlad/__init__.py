@@ -10,7 +10,7 @@ import importlib
 from knitlad.engine.contact import ContactModel, ContactPairs, ContactStats
 from knitlad.engine.dissipation import AirDrag, EnergyLedger, MaterialDamping
 from knitlad.engine.obstacles import Cylinder, Plane
-from knitlad.engine.simulation import Simulation, SimulationBlowUp, UnstableTimeStep
+from knitlad.engine.simulation import MovingSupportWarning, Simulation, SimulationBlowUp, UnstableTimeStep
 from knitlad.engine.state import RodModel, Rods, RodState, Scene
 from knitlad.engine import units  # the internal unit system (knitlad.units.LENGTH, ...), as before the folders
 from knitlad.engine.units import NYLON, Material, Scales
@@ -47,6 +47,7 @@ __all__ = [
     "EnergyLedger",
     "Material",
     "MaterialDamping",
+    "MovingSupportWarning",
     "NYLON",
     "Plane",
     "RodModel",

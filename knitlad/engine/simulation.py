@@ -59,6 +59,10 @@ from knitlad.engine.timestep import (
 )
 
 
+class MovingSupportWarning(UserWarning):
+    """A reaction force read while held nodes move under a drag: biased (``Simulation.reaction_bias_N``)."""
+
+
 class SimulationBlowUp(RuntimeError):
     """The state became non-finite or a node outran the axial wave speed."""
 
@@ -381,6 +385,10 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
                  guard_every: int = 500, contact: ContactModel | None = None, framed_twist: bool = False,
                  implicit_axial: bool = False, predicted_dashpots: bool = False, obstacles: Sequence[Obstacle] = (),
                  material_damping: MaterialDamping | None = None, air: AirDrag | None = None) -> None:
+        """Build the model's stepping for ``rods`` (the parameters: the class docstring): the stability limits and
+        the step, the contact buffers and the obstacles' state, the forces of the initial state, the energy
+        ledger's start. Nothing is stepped. Refuses a step above the stability limit (UnstableTimeStep), a
+        natural curvature without material frames, and settings out of range (ValueError, naming them)."""
         if not 0.0 < safety <= 1.0:
             raise ValueError(f"safety must lie in (0, 1], got {safety}")
         if rods.twist and not rods.framed and np.any(rods.model.kappa_bar):
@@ -605,11 +613,28 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
         """Force [N] the supports exert on each held node (zero on free nodes).
 
         A held node moves at constant prescribed velocity, so the support
-        balances every other force on it: R = -F_rest.
+        balances every other force on it: R = -F_rest. Read while held nodes move under a global drag
+        (``ramp_held``), the reading carries the drag on everything they drag along, alpha M V
+        (:meth:`reaction_bias_N`): a :class:`MovingSupportWarning` says so, with its size; read after ``settle``.
         """
         r = -self.work.force * units.FORCE
         r[~self.model.held] = 0.0
+        bias = self.reaction_bias_N()
+        if np.any(bias):
+            total = float(np.linalg.norm(r.sum(axis=0)))
+            warnings.warn(f"reaction read while the supports move under a drag of {self.drag / units.TIME:g} /s: "
+                          f"biased by about {np.linalg.norm(bias):.3g} N (of {total:.3g} N in all); read it after "
+                          "settle()", MovingSupportWarning, stacklevel=2)
         return r
+
+    def reaction_bias_N(self) -> np.ndarray:
+        """(3,) the bias [N] of the supports' total reaction read now: the global drag on the free nodes,
+        alpha sum m v, which the supports pay while they move (zero when no held node moves or no drag acts)."""
+        m = self.model
+        if self.drag == 0.0 or not np.any(m.v_prescribed[m.held]):
+            return np.zeros(3)
+        free = ~m.held
+        return self.drag * (m.mass[free, None] * self.state.v[free]).sum(axis=0) * units.FORCE
 
     def energies_J(self) -> dict[str, float]:
         """Kinetic, stretching, bending, twisting, contact (stored), external-potential and total energy [J]."""
