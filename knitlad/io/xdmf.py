@@ -94,8 +94,11 @@ def write_xdmf(h5: str | Path) -> Path:
         steps.append(
             f'<Grid Name="t{k}" GridType="Uniform"><Time Value="{t:.9g}"/>'
             f'<Topology TopologyType="Polyline" NodesPerElement="2" NumberOfElements="{len(edges)}">'
-            f'<DataItem Dimensions="{len(edges)} 2" NumberType="Int" Precision="8" Format="HDF">{name}:/topology/edges'
-            f'</DataItem></Topology>'
+            # the whole edge list as a slab of itself: VTK's reader caches a grid whose topology is a plain
+            # DataItem by the text of its geometry's, which a slab has not ("ERR| Cannot find DataItem element
+            # in geometry xml" at every read); a slab topology turns that cache off, as every frame moves anyway
+            f'{_hyperslab(f"{name}:/topology/edges", (0, 0), (len(edges), 2), (len(edges), 2), (len(edges), 2), "Int", 8)}'
+            f'</Topology>'
             f'<Geometry GeometryType="XYZ">{item("/frames/positions", 3)}</Geometry>'
             f'<Attribute Name="course" Center="Node" AttributeType="Scalar"><DataItem Dimensions="{n}" '
             f'NumberType="Int" Precision="8" Format="HDF">{name}:/topology/node_course</DataItem></Attribute>'

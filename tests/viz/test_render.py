@@ -392,3 +392,14 @@ def test_a_gif_on_a_full_disk_is_one_line_not_two_ignored_tracebacks(run_folder,
                        capture_output=True, text=True, cwd=ROOT, preexec_fn=_file_size_limit(20_000))
     assert p.returncode == 1 and "Exception ignored" not in p.stderr and "Traceback" not in p.stderr, p.stderr
     assert "movie not written" in p.stderr.strip().splitlines()[-1] and not list(folder.glob("*.gif*"))
+
+
+def test_the_paraview_file_reads_without_an_error_in_the_log(run_folder):
+    """Every XDMF read logged `ERR| vtkXdmfReader: Cannot find DataItem element in geometry xml`."""
+    code = ("from vtkmodules.vtkIOXdmf2 import vtkXdmfReader\n"
+            f"r = vtkXdmfReader(); r.SetFileName({str(run_folder / 'ladder.xdmf')!r}); r.Update()\n"
+            "o = r.GetOutputDataObject(0); print(o.GetNumberOfCells(), o.GetNumberOfPoints())\n")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert p.returncode == 0 and "ERR" not in p.stderr, p.stderr
+    cells, points = map(int, p.stdout.split())
+    assert cells > 0 and points > cells
