@@ -534,7 +534,8 @@ def diagram(
     df = pd.DataFrame(rows)
     with atomic_path(out_dir / "fx0_curve.csv") as tmp:
         df.to_csv(tmp, index=False)
-    png = zero_tension_curve_plot(df, d_over_l0, out_dir / "fx0_curve.png")
+    # the yarn's own d/l0 (1/70, the paper's rounded value, means its Nylon: 0.01437), as `stitch` prints it
+    png = zero_tension_curve_plot(df, material.diameter / material.stitch_length, out_dir / "fx0_curve.png")
     typer.echo(f"wrote {out_dir / 'fx0_curve.csv'} and {png}")
 
 

@@ -294,11 +294,17 @@ def _contact_pairs(g: h5py.Group, frames: list) -> None:
     checksummed_dataset(g, "sliding", np.concatenate([p.sliding.astype(np.uint8) for p in frames]))
 
 
+CONTACT_CODES = "0 free, 1 touching another yarn, 2 sliding on it (at the Coulomb limit)"
+
+
 def _mark_units(f: h5py.File) -> None:
-    """Each dataset of a run file gets its unit (RUN_UNITS) as the attribute "unit"."""
+    """Each dataset of a run file gets its unit (RUN_UNITS) as the attribute "unit"; the contact states their
+    codes' meaning as the attribute "meaning"."""
     for name, unit in RUN_UNITS.items():
         if name in f:
             f[name].attrs["unit"] = unit
+    if "frames/contact" in f:
+        f["frames/contact"].attrs["meaning"] = CONTACT_CODES
 
 
 def write_cycle_result(path: str | Path, cycle, ladder, config: dict, compression: str | None = "gzip",

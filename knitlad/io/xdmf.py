@@ -82,7 +82,7 @@ def write_xdmf(h5: str | Path) -> Path:
     def contact(k: int) -> str:
         if not has_contact:
             return ""
-        return (f'<Attribute Name="contact" Center="Node" AttributeType="Scalar">'
+        return (f'<Attribute Name="contact (0 free, 1 touching, 2 sliding)" Center="Node" AttributeType="Scalar">'
                 f'{_hyperslab(f"{name}:/frames/contact", (k, 0), (1, n), (n_frames, n), (n,), "UChar", 1)}</Attribute>')
 
     for k, t in enumerate(times):

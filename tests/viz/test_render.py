@@ -93,9 +93,10 @@ def test_paraview_opens_the_trajectory_with_its_fields(run_folder):
     grid = reader.GetOutputDataObject(0)
     assert grid.GetNumberOfPoints() == n_nodes and grid.GetNumberOfCells() == n_edges
     data = grid.GetPointData()
+    contact_name = "contact (0 free, 1 touching, 2 sliding)"  # the codes said where ParaView lists the array
     assert {data.GetArrayName(i) for i in range(data.GetNumberOfArrays())} >= {"course", "velocity", "axial_strain",
-                                                                               "curvature", "contact"}
-    contact = vtk_to_numpy(data.GetArray("contact"))
+                                                                               "curvature", contact_name}
+    contact = vtk_to_numpy(data.GetArray(contact_name))
     assert set(np.unique(contact)) <= {0, 1, 2} and (contact > 0).mean() > 0.2  # a knit: most nodes touch
     assert np.allclose(vtk_to_numpy(data.GetArray("velocity")), velocity)
     assert np.allclose(vtk_to_numpy(grid.GetPoints().GetData()), positions)
@@ -402,4 +403,8 @@ def test_the_paraview_file_reads_without_an_error_in_the_log(run_folder):
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert p.returncode == 0 and "ERR" not in p.stderr, p.stderr
     cells, points = map(int, p.stdout.split())
+    import h5py
+
+    with h5py.File(run_folder / "ladder.h5") as f:  # the contact codes said beside the data too
+        assert f["frames/contact"].attrs["meaning"].startswith("0 free, 1 touching")
     assert cells > 0 and points > cells
