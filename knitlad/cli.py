@@ -555,12 +555,14 @@ def _check_sweep_options(executor: str, scheduler: str | None, workers: int | No
         fail(f"--max-jobs: must be >= 1, got {max_jobs}")
 
 
-def _sweep_backend(executor: str, scheduler: str | None, cluster: str | None):
+def _sweep_backend(executor: str, scheduler: str | None, cluster: str | None, executor_given: bool = False):
     """(executor, scheduler): with --cluster, Dask on the batch cluster its file describes (a ClusterConfig)."""
     if cluster is None:
         return executor, scheduler
     if scheduler:
         fail("--cluster: not with --scheduler (the cluster brings its own)")
+    if executor != "dask" and executor_given:
+        fail(f"--cluster: runs the jobs on Dask, not with --executor {executor}")
     from knitlad.studies.cluster import load_cluster
     from knitlad.studies.sweep import SweepError
 
@@ -588,7 +590,7 @@ def _list_jobs(cfg, jobs, scheduler) -> None:
 def sweep(
     config: str = typer.Argument(..., help="Sweep config (YAML); see configs/ and knitlad.studies.sweep."),
     out: str = typer.Option(None, "--out", help="Output folder; default runs/<config name>."),
-    executor: str = typer.Option("pool", "--executor", help="pool (processes on this machine) or dask."),
+    executor: str = typer.Option(None, "--executor", help="pool (processes on this machine, the default) or dask."),
     scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler address (default: a local cluster)."),
     cluster: str = typer.Option(None, "--cluster", help="A batch cluster to start for the sweep (YAML: kind, jobs, "
                                 "options of dask-jobqueue; configs/cluster/); implies --executor dask."),
@@ -612,7 +614,7 @@ def sweep(
 
     from knitlad.studies.sweep import SweepError, load_sweep
 
-    executor, scheduler = _sweep_backend(executor, scheduler, cluster)
+    executor, scheduler = _sweep_backend(executor or "pool", scheduler, cluster, executor_given=executor is not None)
     _check_sweep_options(executor, scheduler, workers, max_jobs)
     try:
         cfg, jobs = load_sweep(config, max_jobs=max_jobs)

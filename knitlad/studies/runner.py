@@ -40,7 +40,7 @@ from knitlad.io.progress import ProgressFile, ProgressLine, job_fraction
 from knitlad.studies.columns import write_column_dictionary
 from knitlad.io.provenance import code_identity
 from knitlad.studies.registry import SCENES
-from knitlad.studies.sweep import Job
+from knitlad.studies.sweep import Job, SweepError
 
 
 def job_path(jobs_dir: str | Path, job: Job) -> Path:
@@ -541,6 +541,9 @@ def connect(scheduler: str):
     return outcome["client"]
 
 
+LOCAL_WORKER_START_S = 120.0
+
+
 def _run_dask(todo: list[Job], jobs_dir: Path, workers: int | None, scheduler: str | None, runner: Runner, finish,
               token: str) -> None:
     """The same jobs on a Dask cluster at ``scheduler``, a batch cluster it describes (a
@@ -555,6 +558,14 @@ def _run_dask(todo: list[Job], jobs_dir: Path, workers: int | None, scheduler: s
     if isinstance(scheduler, ClusterConfig):  # a batch cluster started for this sweep (knitlad.studies.cluster)
         cluster = scheduler.start()
         client = Client(cluster)
+        if scheduler.kind == "local":  # its workers start here at once, or never: say so rather than wait
+            try:
+                client.wait_for_workers(1, timeout=LOCAL_WORKER_START_S)
+            except Exception:  # noqa: BLE001 - distributed's TimeoutError, by version
+                client.close()
+                cluster.close()
+                raise SweepError(f"--cluster: no local worker started within {LOCAL_WORKER_START_S:g} s (its log is "
+                                 "the cluster's; check the options, e.g. python and memory)") from None
     elif scheduler:
         client = connect(scheduler)
     else:

@@ -193,7 +193,7 @@ def test_the_slurm_example_prints_its_batch_script_and_bad_cluster_files_are_one
     bad = tmp_path / "bad.yaml"
     for text, says in (("kind: slurmm\njobs: 2\n", "kind"), ("kind: slurm\njobs: 0\n", "jobs"),
                        ("kind: slurm\njobs: 2\nqueue: x\n", "queue"),
-                       ("kind: slurm\njobs: 2\noptions: {no_such_option: 1}\n", "cannot start a slurm cluster")):
+                       ("kind: slurm\njobs: 2\noptions: {no_such_option: 1}\n", "not a slurm worker's settings")):
         bad.write_text(text)
         p = knitlad("sweep", "configs/smoke.yaml", "--cluster", str(bad), "--dry-run")
         assert p.returncode == 2 and says in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
