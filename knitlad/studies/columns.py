@@ -17,6 +17,8 @@ from typing import Literal, get_args, get_origin
 FRAME = {
     "job_id": ("-", "the job's id: a hash of its resolved config (the same inputs, the same id)"),
     "scene": ("-", "what the job ran: ladder (knitlad cut), cycle (protocol B), loop, stitch"),
+    "fx_nominal": ("1", "an ensemble's point: the target f_x^ini its members' fx are spread around (sweep.ensemble)"),
+    "ensemble_member": ("index", "which knit of its point's ensemble (targets 0.5 % apart)"),
     "status": ("-", "pending (not run yet), ok, or failed"),
     "error": ("-", "why a failed job failed, in one line (empty otherwise)"),
     "knitlad_code": ("-", "the knitlad version and source hash that made the job's file"),
@@ -136,7 +138,7 @@ def column_dictionary(scene: str) -> list[tuple[str, str, str]]:
         kinds = (field.annotation, *get_args(field.annotation))
         words = any(k in (bool, str) or get_origin(k) is Literal for k in kinds)  # a flag or a choice: no unit
         rows.append((name, "-" if words else unit_of(field.description), f"input: {field.description}"))
-    rows += [(name, *FRAME[name]) for name in ("status", "error", "knitlad_code")]
+    rows += [(name, *FRAME[name]) for name in ("fx_nominal", "ensemble_member", "status", "error", "knitlad_code")]
     results = RESULTS[scene]
     for key in s.summary_keys:
         if key in s.config.model_fields:  # an input the result echoes (natural_curvature): one column

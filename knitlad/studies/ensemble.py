@@ -25,9 +25,12 @@ def ensemble_arguments(p: argparse.ArgumentParser, tensions: list[float], member
     p.add_argument("--out", default=out)
 
 
-def target_offsets(members: int) -> np.ndarray:
-    """Relative offsets of the members' targets: 0.5 % apart, centred on the nominal tension."""
-    return 0.005 * (np.arange(members) - (members - 1) / 2)
+ENSEMBLE_SPREAD = 0.005  # the members' targets are this far apart, relatively
+
+
+def target_offsets(members: int, spread: float = ENSEMBLE_SPREAD) -> np.ndarray:
+    """Relative offsets of the members' targets: ``spread`` (0.5 %) apart, centred on the nominal tension."""
+    return spread * (np.arange(members) - (members - 1) / 2)
 
 
 def resumed_rows(out: str | Path, name: str) -> tuple[Path, list[dict]]:

@@ -108,6 +108,8 @@ def run_job(job: Job, jobs_dir: str, threads: int | None = 1, token: str | None 
 def summary_row(job: Job, attrs: dict | None) -> dict:
     """One table row: the job's inputs, then its status and results."""
     row = {"job_id": job.id, "scene": job.scene, **job.params}
+    if job.fx_nominal is not None:  # a member of an ensemble: its point's target, and which knit
+        row.update(fx_nominal=job.fx_nominal, ensemble_member=job.ensemble_member)
     if attrs is None:
         return {**row, "status": "pending", "error": ""}
     row["status"] = attrs.get("status", "ok")

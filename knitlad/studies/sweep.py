@@ -12,6 +12,7 @@ A sweep config (``knitlad sweep config.yaml --out DIR``)::
       axes:
         fx: [4, 8, 13.6]                          # a list ...
         ly: {start: 0.25, stop: 0.30, num: 2}     # ... or a range (end included)
+      ensemble: 3            # knits per point: force-control targets 0.5 % apart (paired ensembles)
     output:
       frame_every_us: 100
       compression: gzip
@@ -20,6 +21,13 @@ Each job is the fully resolved scene config; its id is a hash of that config, so
 the same inputs always give the same id, and a finished job is found again by
 its file ``DIR/jobs/<id>.h5``. The summary table is rebuilt from those files,
 so it is always consistent with what is on disk, whatever interrupted the sweep.
+
+An ensemble (``ensemble: N``, force control) runs each point on N knits stretched to targets a fraction of a
+per cent apart (:func:`knitlad.studies.ensemble.target_offsets`): one run's velocity at low tension is one
+sample of a stick-slip sequence, scattering by about 20 %. Jobs of one point that differ only in the
+dynamics (mu, the dissipations, ...) share each member's stretched knit, so the comparison is paired. The
+summary gives each job's ``ensemble_member`` and ``fx_nominal``; ``knitlad plot`` draws means with their
+standard errors.
 """
 
 from __future__ import annotations
@@ -44,6 +52,7 @@ from pydantic import (
 
 from knitlad.experiments.config import one_line
 from knitlad.io.atomic import read_config_text
+from knitlad.studies.ensemble import ENSEMBLE_SPREAD, target_offsets
 from knitlad.studies.registry import SCENES
 
 MAX_JOBS = 10_000  # a sweep of more jobs is refused unless asked for (--max-jobs)
@@ -89,6 +98,10 @@ class Sweep(BaseModel):
     model_config = ConfigDict(extra="forbid")
     expand: Literal["grid", "zip"] = Field("grid", description="grid: all combinations; zip: i-th values together")
     axes: dict[str, list[Any] | Range] = Field(description="swept fields of the scene config, each a list or a range")
+    ensemble: int = Field(1, ge=1, le=50, strict=True, description=(
+        "knits per point, stretched to force-control targets 0.5 % apart around its fx (paired ensembles) [-]"))
+    ensemble_spread: float = Field(ENSEMBLE_SPREAD, gt=0, le=0.05, description=(
+        "relative spacing of the ensemble's targets [-]"))
 
     @field_validator("axes", mode="before")
     @classmethod
@@ -151,6 +164,8 @@ class Job(BaseModel):
     scene: str
     params: dict[str, Any]
     output: Output
+    ensemble_member: int = 0  # which knit of its point's ensemble (0 without one)
+    fx_nominal: float | None = None  # the point's target f_x^ini, of which params' fx is a member's
 
     @property
     def id(self) -> str:
@@ -275,7 +290,7 @@ def expand(cfg: SweepConfig, max_jobs: int = MAX_JOBS) -> list[Job]:
     model = SCENES[cfg.scene].config
     fields = set(model.model_fields)
     counts = cfg.sweep.counts()
-    n_jobs = math.prod(counts.values()) if cfg.sweep.expand == "grid" else max(counts.values())
+    n_jobs = (math.prod(counts.values()) if cfg.sweep.expand == "grid" else max(counts.values())) * cfg.sweep.ensemble
     if n_jobs > max_jobs:
         sizes = " x ".join(f"{c:.3g}" if c >= 1e6 else str(c) for c in counts.values())
         raise SweepError(f"sweep.axes: {n_jobs:.3g} jobs ({sizes}), more than {max_jobs}; use fewer values or "
@@ -321,9 +336,24 @@ def expand(cfg: SweepConfig, max_jobs: int = MAX_JOBS) -> list[Job]:
                 named, _, rest = text.removeprefix("config: ").partition(": ")
                 text = f"{key(named)}: {rest}" if named in fields and rest else "fixed: " + text.removeprefix("config: ")
             raise SweepError(text) from None
-        job = Job(scene=cfg.scene, params=resolved.model_dump(), output=cfg.output)
-        if job.id in seen:
-            raise SweepError("sweep.axes: two jobs are identical (a value repeats)")
-        seen.add(job.id)
-        jobs.append(job)
+        members = ensemble_targets(cfg, resolved)
+        for k, fx in enumerate(members):
+            params_k = resolved.model_dump() if fx is None else {**resolved.model_dump(), "fx": fx}
+            job = Job(scene=cfg.scene, params=params_k, output=cfg.output, ensemble_member=k,
+                      fx_nominal=None if fx is None else resolved.fx)
+            if job.id in seen:
+                raise SweepError("sweep.axes: two jobs are identical (a value repeats)")
+            seen.add(job.id)
+            jobs.append(job)
     return jobs
+
+
+def ensemble_targets(cfg: SweepConfig, resolved) -> list:
+    """The fx of each member of a point's ensemble ([None]: no ensemble); refused without force control."""
+    n = cfg.sweep.ensemble
+    if n == 1:
+        return [None]
+    if getattr(resolved, "fx", None) is None:
+        raise SweepError("sweep.ensemble: needs force control (fx): its members are knits stretched to targets "
+                         f"{100 * cfg.sweep.ensemble_spread:g} % apart")
+    return [resolved.fx * (1.0 + o) for o in target_offsets(n, cfg.sweep.ensemble_spread)]

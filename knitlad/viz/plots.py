@@ -265,6 +265,13 @@ def summary_plots(df, out_dir: str | Path, fmt: str = "png") -> list[Path]:
             g = g.sort_values("fx_ini")
             key = key if isinstance(key, tuple) else (key,)
             legend = ", ".join(f"{symbol(k)} = {v}" for k, v in zip(keys, key) if k is not None) or "knitlad"
+            if "fx_nominal" in g and g["fx_nominal"].notna().all():  # an ensemble: each point's mean and its s.e.
+                stats = g.groupby("fx_nominal").agg(x=("fx_ini", "mean"), y=(column, "mean"), se=(column, "sem"),
+                                                    n=(column, "count"))
+                line = ax.errorbar(stats["x"], stats["y"], yerr=stats["se"].fillna(0.0), fmt="D-", ms=5, lw=0.8,
+                                   capsize=3, label=f"{legend}: mean of {int(stats['n'].max())} knits +- s.e.")[0]
+                ax.plot(g["fx_ini"], g[column], ".", ms=3, color=line.get_color(), alpha=0.5)
+                continue
             line, = ax.plot(g["fx_ini"], g[column], "-", lw=0.8, label=legend)
             for how, marker, fill in RUN_END_MARKERS:  # how each run ended, drawn apart
                 sub = g[ended.loc[g.index] == how]

@@ -13,7 +13,8 @@ def test_every_column_a_summary_can_have_is_in_the_dictionary_with_a_unit_and_a_
     rows = column_dictionary(scene)
     names = [name for name, _, _ in rows]
     assert len(names) == len(set(names)), [n for n in names if names.count(n) > 1]
-    expected = {"job_id", "scene", "status", "error", "knitlad_code", *SCENES[scene].config.model_fields,
+    expected = {"job_id", "scene", "status", "error", "knitlad_code", "fx_nominal", "ensemble_member",
+                *SCENES[scene].config.model_fields,
                 *SCENES[scene].summary_keys}
     assert set(names) == expected
     for name, unit, meaning in rows:
