@@ -991,6 +991,13 @@ def _run_file(run: str):
     return path
 
 
+def _check_colour(colour: str) -> None:
+    from knitlad.viz.render import COLOURINGS
+
+    if colour not in COLOURINGS:
+        fail(f"--colour: one of {', '.join(COLOURINGS)}, got {colour!r}")
+
+
 MIN_WIDTH, MAX_WIDTH = 64, 8192  # pixels: a million wide asked VTK for terabytes (std::bad_alloc, an abort)
 
 
@@ -1004,6 +1011,8 @@ def render(
     width: int = typer.Option(1200, "--width", help="Image width \\[pixels]; height 3/4 of it."),
     out: str = typer.Option(None, "--out", help="Folder of the images; default: render/ beside a run's ladder.h5, "
                             "<file>_render/ beside any other file (each job of a sweep its own)."),
+    colour: str = typer.Option("course", "--colour", help="What the yarn's colour shows: course, speed, contact "
+                               "(free, touching, sliding) or strain (axial: the tension)."),
 ) -> None:
     """Images of the fabric: yarns as tubes of their diameter coloured by course, the cut course black, undone cells red."""
     from knitlad.viz.render import render_run
@@ -1015,12 +1024,13 @@ def render(
         fail(f"--view: front or oblique, got {', '.join(views)}")
     if not MIN_WIDTH <= width <= MAX_WIDTH:
         fail(f"--width: {MIN_WIDTH} to {MAX_WIDTH} pixels, got {width}")
+    _check_colour(colour)
     if at_ms and not all(math.isfinite(t) for t in at_ms):
         fail(f"--at-ms: finite instants after the cut are needed, got {', '.join(map(str, at_ms))}")
     line = _CountProgress("render", "images")
     try:
         paths = render_run(h5, out_dir, [t * 1e-3 for t in at_ms] if at_ms else None, views,
-                           (width, width * 3 // 4), progress=line)
+                           (width, width * 3 // 4), progress=line, colouring=colour)
     except ValueError as e:
         fail(str(e))
     except OSError as e:  # a full disk: what was written whole stays, the rest is said
@@ -1038,6 +1048,8 @@ def movie(
     gif: bool = typer.Option(False, "--gif", help="An animated GIF instead of an MP4."),
     fps: int = typer.Option(12, "--fps", help="Frames per second of the movie."),
     width: int = typer.Option(960, "--width", help="Frame width \\[pixels]; height 3/4 of it."),
+    colour: str = typer.Option("course", "--colour", help="What the yarn's colour shows: course, speed, contact "
+                               "or strain."),
 ) -> None:
     """A movie of the laddering: every stored frame, front view, with a time stamp and the undone cells."""
     from knitlad.viz.render import movie as make_movie
@@ -1045,6 +1057,7 @@ def movie(
     h5 = _run_file(run)
     if fps < 1:
         fail(f"--fps: at least 1, got {fps}")
+    _check_colour(colour)
     if not MIN_WIDTH <= width <= MAX_WIDTH:
         fail(f"--width: {MIN_WIDTH} to {MAX_WIDTH} pixels, got {width}")
     line = _CountProgress("movie", "frames")
@@ -1052,7 +1065,7 @@ def movie(
     sys.unraisablehook = lambda info: None  # the GIF writer's clean-up after a failed write complains twice
     try:
         path = make_movie(h5, h5.with_suffix(".gif" if gif else ".mp4"), fps=fps, size=(width, width * 3 // 4),
-                          progress=line)
+                          progress=line, colouring=colour)
     except ValueError as e:
         fail(str(e))
     except OSError as e:  # a full disk: the movie is not renamed into place

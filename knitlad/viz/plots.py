@@ -47,8 +47,11 @@ def _save(fig, path: Path) -> Path:
     return path
 
 
-def draw_spatio_temporal(times_s, front_up, front_down, column_history, cut_row: int, title: str, path) -> Path:
+def draw_spatio_temporal(times_s, front_up, front_down, column_history, cut_row: int, title: str, path,
+                         column: int | None = None) -> Path:
     """Laddered cells of the laddering column (grey) against time, with the two fronts."""
+    from matplotlib.patches import Patch
+
     plt = _pyplot()
     path = Path(path)
     t_ms = np.asarray(times_s) * 1e3
@@ -59,11 +62,15 @@ def draw_spatio_temporal(times_s, front_up, front_down, column_history, cut_row:
                   extent=(t_ms[0], t_ms[-1], -0.5, cells.shape[0] - 0.5) if t_ms.size > 1 else None)
     ax.plot(t_ms, cut_row + np.asarray(front_up), color="tab:red", lw=1.2, label="front (up)")
     ax.plot(t_ms, cut_row - np.asarray(front_down), color="tab:blue", lw=1.2, label="front (down)")
-    ax.axhline(cut_row, color="k", lw=0.5, ls=":")
+    ax.axhline(cut_row, color="k", lw=0.5, ls=":", label="the cut course")
+    where = f"column {column}" if column is not None else "the laddering column"
+    handles, labels = ax.get_legend_handles_labels()
+    handles.append(Patch(facecolor="0.45", edgecolor="none"))
+    labels.append(f"cell undone ({where})")
     ax.set_xlabel("time since the cut [ms]")
-    ax.set_ylabel("course (stitch) index")
+    ax.set_ylabel(f"course (stitch) index, {where}")
     ax.set_title(title, fontsize=9)
-    ax.legend(fontsize=7, loc="upper left")
+    ax.legend(handles, labels, fontsize=7, loc="upper left")
     fig.tight_layout()
     return _save(fig, path)
 
@@ -76,7 +83,8 @@ def _title(fx_ini: float, v: float) -> str:
 def spatio_temporal_diagram(result, path: str | Path) -> Path:
     """The diagram of a :class:`knitlad.experiments.protocol.LadderResult`."""
     return draw_spatio_temporal(result.times_s, result.front_up, result.front_down, result.column_history,
-                                result.settings.stretch.n_y // 2, _title(result.fx_ini, result.v_lad_over_cb), path)
+                                result.settings.stretch.n_y // 2, _title(result.fx_ini, result.v_lad_over_cb), path,
+                                column=result.laddering_column)
 
 
 def spatio_temporal_from_file(h5_path: str | Path, path: str | Path) -> Path:
@@ -89,9 +97,10 @@ def spatio_temporal_from_file(h5_path: str | Path, path: str | Path) -> Path:
     with h5py.File(h5_path, "r") as f:
         s = f["series"]
         hist = s["laddering_column_cells"][()] if "laddering_column_cells" in s else []
+        column = int(f.attrs["laddering_column"]) if "laddering_column" in f.attrs else None
         return draw_spatio_temporal(s["time"][()], s["front_up"][()], s["front_down"][()], hist,
                                     settings["n_y"] // 2, _title(float(f.attrs["fx_ini"]), float(f.attrs["v_lad_over_cb"])),
-                                    path)
+                                    path, column=column)
 
 
 def column_midline_diagram(h5_path: str | Path, path: str | Path) -> Path:
@@ -133,28 +142,34 @@ def tension_history_plot(h5_path: str | Path, path: str | Path) -> Path:
         steps, box, fx_stretch = (f[f"stretch/{k}"][()] for k in ("relax_steps", "box_lx_over_l0", "fx"))
         t_ms, fx = f["series/time"][()] * 1e3, f["series/fx"][()]
     plt = _pyplot()
+    if not (steps.size and steps.max() > steps.min()):  # one periodised stitch, tiled: no history of the knit's
+        fig, right = plt.subplots(figsize=(5.5, 3.2))
+        right.set_ylabel(symbol("fx"))
+        right.text(0.98, 0.96, f"stretched at $\\mu$ = 0 as one periodised stitch, tiled\n(no history of the knit's "
+                   f"own), box {symbol('lx')} = {box[-1] if box.size else np.nan:.3f}", transform=right.transAxes,
+                   ha="right", va="top", fontsize=7)
+        _laddering_tension(right, t_ms, fx, fx_stretch)
+        fig.tight_layout()
+        return _save(fig, Path(path))
     fig, (left, right) = plt.subplots(1, 2, figsize=(7.5, 3.2), sharey=True,
                                       gridspec_kw={"width_ratios": [1, 1.3]})
     left.set_ylabel(symbol("fx"))
-    if steps.size and steps.max() > steps.min():  # a stretch of the whole knit: its relaxed readings
-        left.plot(steps / 1e3, fx_stretch, "k.-", ms=2, lw=0.6)
-        left.set_xlabel(r"stretch at $\mu$ = 0: FIRE steps [$10^3$]")
-        if box.max() > box.min():
-            twin = left.twiny()
-            twin.set_xlim(box.min(), box.max())
-            twin.set_xlabel(f"box {symbol('lx')}", fontsize=8)
-    else:  # stretched as one periodised stitch and tiled: no history of the knit's own to draw
-        left.plot([0.0], [fx_stretch[-1] if fx_stretch.size else np.nan], "ko", ms=4)
-        left.set_xticks([])
-        left.set_xlabel("stretch at $\\mu$ = 0")
-        left.text(0.5, 0.06, f"one periodised stitch stretched\nand tiled: no FIRE history\n{symbol('lx')} = "
-                  f"{box[-1] if box.size else np.nan:.3f}", transform=left.transAxes, ha="center", fontsize=8)
-    right.plot(t_ms, fx, "tab:red", lw=1.0)
-    right.set_xlabel("time since the cut [ms]")
-    right.axhline(fx_stretch[-1] if fx_stretch.size else np.nan, color="k", ls=":", lw=0.7, label=symbol("fx_ini"))
-    right.legend(fontsize=7)
+    left.plot(steps / 1e3, fx_stretch, "k.-", ms=2, lw=0.6)  # a stretch of the whole knit: its relaxed readings
+    left.set_xlabel(r"stretch at $\mu$ = 0: FIRE steps [$10^3$]")
+    if box.max() > box.min():
+        twin = left.twiny()
+        twin.set_xlim(box.min(), box.max())
+        twin.set_xlabel(f"box {symbol('lx')}", fontsize=8)
+    _laddering_tension(right, t_ms, fx, fx_stretch)
     fig.tight_layout()
     return _save(fig, Path(path))
+
+
+def _laddering_tension(ax, t_ms, fx, fx_stretch) -> None:
+    ax.plot(t_ms, fx, "tab:red", lw=1.0, label=f"{symbol('fx')} after the cut")
+    ax.set_xlabel("time since the cut [ms]")
+    ax.axhline(fx_stretch[-1] if fx_stretch.size else np.nan, color="k", ls=":", lw=0.7, label=symbol("fx_ini"))
+    ax.legend(fontsize=7, loc="lower left")
 
 
 # the energy ledger's channels drawn, stacked, and their labels (knitlad.engine.dissipation.EnergyLedger)

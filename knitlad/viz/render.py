@@ -45,6 +45,15 @@ class Run:
     l_x: float
     l_y: float
     knit: bool = True  # a laddering run (cells, courses, a cut), else a scene of one's own
+    l0: float = 0.0  # the stitch length [m] (the scale bar)
+
+    def field(self, name: str, frame: int) -> np.ndarray:
+        """Frame ``frame`` of the per-node dataset ``name`` of the open file (frames/velocities, frames/contact,
+        fields/axial_strain); ValueError if the file has none."""
+        f = self.positions.file
+        if name not in f:
+            raise ValueError(f"{self.path}: no {name} to colour by (a file of an older knitlad, or without frames)")
+        return f[name][frame]
 
     @staticmethod
     def open(path: str | Path) -> tuple["Run", h5py.File]:
@@ -67,7 +76,7 @@ class Run:
         run = Run(Path(path), f["frames/positions"], f["frames/time"][()], f["frames/laddered"][()],
                   f["topology/edges"][()], f["topology/node_course"][()], n_y // 2, f["cells/centres"][()],
                   float(f.attrs["scale_d_m"]), float(f.attrs["box_lx_over_l0"]) * l0,
-                  float(f.attrs["ly_over_l0"]) * l0)
+                  float(f.attrs["ly_over_l0"]) * l0, l0=l0)
         run.check(f)
         return run, f
 
@@ -122,8 +131,43 @@ def _vtk():
     return vtkPoints, vtkCellArray, vtkPolyData, numpy_to_vtk, numpy_to_vtkIdTypeArray
 
 
-def _fabric_actor(run: Run, x: np.ndarray, window: np.ndarray | None):
-    """Tubes of the yarn's diameter along every edge (edges outside ``window`` [x0, x1, y0, y1] left out)."""
+COLOURINGS = ("course", "speed", "contact", "strain")  # what the tubes' colour shows (render --colour)
+CONTACT_COLOURS = np.array([[0.75, 0.75, 0.75], [0.20, 0.45, 0.75], [0.85, 0.15, 0.15]])  # free, touching, sliding
+
+
+def node_colours(run: Run, frame: int, colouring: str) -> tuple[np.ndarray, str]:
+    """(n, 3) colours in [0, 1] of the nodes at ``frame``, and the key that says what they mean: the course
+    (four colours in turn, the held edge courses grey, the cut course black), the speed or the axial strain
+    (viridis, from the lowest to the highest of the frame), or the contact state."""
+    course = run.node_course
+    if colouring == "course":
+        colours = COURSE_COLOURS[np.mod(course, len(COURSE_COLOURS))]
+        key = "colour: the course (four in turn)"
+        if run.knit:
+            colours[(course < 0) | (course >= run.cell_centres.shape[0])] = 0.6  # the held edge courses: grey
+            colours[course == run.cut_course] = CUT_COLOUR
+            key += ", grey the held edge courses, black the cut course"
+        return colours, key
+    if colouring == "contact":
+        state = np.asarray(run.field("frames/contact", frame), dtype=int)
+        return CONTACT_COLOURS[np.clip(state, 0, 2)], "colour: grey free, blue touching another yarn, red sliding on it"
+    import matplotlib
+
+    if colouring == "speed":
+        value = np.linalg.norm(run.field("frames/velocities", frame), axis=1)
+        what, unit = "speed", "m/s"
+    else:
+        value = np.asarray(run.field("fields/axial_strain", frame), dtype=float)
+        what, unit = "axial strain (tension / EA)", ""
+    lo, hi = float(np.nanmin(value)), float(np.nanmax(value))
+    scaled = (value - lo) / (hi - lo) if hi > lo else np.zeros_like(value)
+    colours = matplotlib.colormaps["viridis"](scaled)[:, :3]
+    return colours, f"colour: {what}, dark {lo:.3g} to yellow {hi:.3g} {unit}".rstrip()
+
+
+def _fabric_actor(run: Run, x: np.ndarray, window: np.ndarray | None, colours: np.ndarray):
+    """Tubes of the yarn's diameter along every edge (edges outside ``window`` [x0, x1, y0, y1] left out),
+    coloured node by node (``colours``: :func:`node_colours`)."""
     from vtkmodules.vtkFiltersCore import vtkTubeFilter
     from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
 
@@ -141,11 +185,6 @@ def _fabric_actor(run: Run, x: np.ndarray, window: np.ndarray | None):
     poly = vtkPolyData()
     poly.SetPoints(points)
     poly.SetLines(lines)
-    course = run.node_course
-    colours = COURSE_COLOURS[np.mod(course, len(COURSE_COLOURS))]
-    if run.knit:
-        colours[(course < 0) | (course >= run.cell_centres.shape[0])] = 0.6  # the held edge courses: grey
-        colours[course == run.cut_course] = CUT_COLOUR
     rgb = numpy_to_vtk((255 * colours).astype(np.uint8), deep=True)
     rgb.SetName("colour")
     poly.GetPointData().SetScalars(rgb)
@@ -190,32 +229,77 @@ def _cell_actor(run: Run, laddered: np.ndarray, depth: float):
     return actor
 
 
-def _picture(run: Run, frame: int, path: Path, view: str, size=(1200, 900), window=None, label: str = "") -> Path:
-    from vtkmodules.vtkRenderingCore import vtkRenderer, vtkRenderWindow, vtkTextActor, vtkWindowToImageFilter
+def _text(renderer, text: str, x: int, y: int, size: int, top: bool = False) -> None:
+    from vtkmodules.vtkRenderingCore import vtkTextActor
+
+    actor = vtkTextActor()
+    actor.SetInput(text)
+    actor.GetTextProperty().SetFontSize(size)
+    actor.GetTextProperty().SetColor(0.0, 0.0, 0.0)
+    if top:
+        actor.GetTextProperty().SetVerticalJustificationToTop()
+        actor.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
+        actor.SetPosition(0.01, 0.99)
+    else:
+        actor.SetPosition(x, y)
+    renderer.AddViewProp(actor)
+
+
+def _scale_bar(renderer, x: np.ndarray, length: float, label: str) -> None:
+    """A black bar of ``length`` [m] above the fabric's upper right corner, with its length written above it
+    (above: the time stamp sits in the lower left corner)."""
+    from vtkmodules.vtkFiltersSources import vtkLineSource
+    from vtkmodules.vtkRenderingCore import vtkActor, vtkBillboardTextActor3D, vtkPolyDataMapper
+
+    x1, y1, z = float(np.nanmax(x[:, 0])), float(np.nanmax(x[:, 1])), float(np.nanmax(x[:, 2]))
+    y = y1 + 0.03 * (y1 - float(np.nanmin(x[:, 1])))
+    line = vtkLineSource()
+    line.SetPoint1(x1 - length, y, z)
+    line.SetPoint2(x1, y, z)
+    mapper = vtkPolyDataMapper()
+    mapper.SetInputConnection(line.GetOutputPort())
+    bar = vtkActor()
+    bar.SetMapper(mapper)
+    bar.GetProperty().SetColor(0, 0, 0)
+    bar.GetProperty().SetLineWidth(4)
+    renderer.AddActor(bar)
+    text = vtkBillboardTextActor3D()
+    text.SetInput(label)
+    text.SetPosition(x1 - length, y, z)
+    text.GetTextProperty().SetFontSize(18)
+    text.GetTextProperty().SetColor(0, 0, 0)
+    text.GetTextProperty().SetVerticalJustificationToBottom()
+    renderer.AddViewProp(text)
+
+
+def _picture(run: Run, frame: int, path: Path, view: str, size=(1200, 900), window=None, label: str = "",
+             colouring: str = "course") -> Path:
+    from vtkmodules.vtkRenderingCore import vtkRenderer, vtkRenderWindow, vtkWindowToImageFilter
     from vtkmodules.vtkIOImage import vtkPNGWriter
 
     _vtk()  # the OpenGL and FreeType overrides must be registered before any renderer is made
     x = np.asarray(run.positions[frame], dtype=np.float64)
     renderer = vtkRenderer()
     renderer.SetBackground(1.0, 1.0, 1.0)
-    renderer.AddActor(_fabric_actor(run, x, window))
+    colours, key = node_colours(run, frame, colouring)
+    renderer.AddActor(_fabric_actor(run, x, window, colours))
     cells = _cell_actor(run, run.laddered[frame], float(x[:, 2].min()) - 2 * run.diameter)
     if cells is not None:
         renderer.AddActor(cells)
+        key += "; red squares: cells undone, drawn where they were at the cut"
+    _text(renderer, key, 0, 0, max(11, size[0] // 90), top=True)
     if label:
-        text = vtkTextActor()
-        text.SetInput(label)
-        text.GetTextProperty().SetFontSize(22)
-        text.GetTextProperty().SetColor(0.0, 0.0, 0.0)
-        text.SetPosition(12, 12)
-        renderer.AddViewProp(text)
+        _text(renderer, label, 12, 12, 22)
+    if view == "front":  # lengths read off a parallel projection: a bar of one stitch length, or of 1 mm
+        l0 = run.l0 if run.knit else 1e-3
+        _scale_bar(renderer, x, l0, f"l0 = {l0 * 1e3:.2f} mm" if run.knit else "1 mm")
     camera = renderer.GetActiveCamera()
     if view == "front":
         camera.ParallelProjectionOn()
         camera.SetViewUp(0, 1, 0)
-    else:
-        camera.Elevation(-35)
-        camera.Azimuth(25)
+    else:  # from below and the side: the fabric's relief, the loops standing out of its plane
+        camera.Elevation(-60)
+        camera.Azimuth(40)
         camera.SetViewUp(0, 1, 0.3)
     renderer.ResetCamera()
     if view == "front":
@@ -265,9 +349,9 @@ def default_instants(run: Run) -> list[float]:
 
 def render_run(h5: str | Path, out_dir: str | Path, times_s: list[float] | None = None,
                views: tuple[str, ...] = ("front", "oblique"), size=(1200, 900),
-               progress: Callable[[int, int], None] | None = None) -> list[Path]:
-    """PNGs of the fabric at ``times_s`` [s since the cut] (default :func:`default_instants`).
-    ``progress(done, total)`` is called after each image."""
+               progress: Callable[[int, int], None] | None = None, colouring: str = "course") -> list[Path]:
+    """PNGs of the fabric at ``times_s`` [s since the cut] (default :func:`default_instants`), coloured by
+    ``colouring`` (:data:`COLOURINGS`). ``progress(done, total)`` is called after each image."""
     run, f = Run.open(h5)
     out = Path(out_dir)
     paths = []
@@ -278,7 +362,7 @@ def render_run(h5: str | Path, out_dir: str | Path, times_s: list[float] | None 
             label = run.label(k)
             for view in views:
                 paths.append(_picture(run, k, out / f"render_{view}_{run.times_s[k] * 1e6:08.1f}us.png", view,
-                                      size, label=label))
+                                      size, label=label, colouring=colouring))
                 if progress:
                     progress(len(paths), len(frames) * len(views))
     finally:
@@ -287,9 +371,9 @@ def render_run(h5: str | Path, out_dir: str | Path, times_s: list[float] | None 
 
 
 def movie(h5: str | Path, path: str | Path, fps: int = 12, size=(960, 720),
-          progress: Callable[[int, int], None] | None = None) -> Path:
-    """Every frame of the run, front view with a time stamp, as MP4 (or GIF if ``path`` ends so).
-    ``progress(done, total)`` is called after each frame."""
+          progress: Callable[[int, int], None] | None = None, colouring: str = "course") -> Path:
+    """Every frame of the run, front view with a time stamp, as MP4 (or GIF if ``path`` ends so), coloured by
+    ``colouring``. ``progress(done, total)`` is called after each frame."""
     import tempfile
 
     import imageio.v2 as imageio
@@ -301,7 +385,8 @@ def movie(h5: str | Path, path: str | Path, fps: int = 12, size=(960, 720),
             kwargs = dict(fps=fps, macro_block_size=8) if path.suffix == ".mp4" else dict(duration=1 / fps)
             with imageio.get_writer(out, **kwargs) as writer:
                 for k in range(len(run.times_s)):
-                    frame = _picture(run, k, Path(tmp) / f"{k:05d}.png", "front", size, label=run.label(k, since=""))
+                    frame = _picture(run, k, Path(tmp) / f"{k:05d}.png", "front", size, label=run.label(k, since=""),
+                                     colouring=colouring)
                     writer.append_data(imageio.imread(frame))
                     if progress:
                         progress(k + 1, len(run.times_s))

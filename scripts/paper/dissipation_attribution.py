@@ -23,6 +23,7 @@ stretch is deterministic: the same knit in each); rows go to ``<out>/attribution
 
     python scripts/paper/dissipation_attribution.py --shard 0 --shards 2 &
     python scripts/paper/dissipation_attribution.py --shard 1 --shards 2 &
+    python scripts/paper/dissipation_attribution.py --table      # the table of docs/dissipation.md
 """
 
 from __future__ import annotations
@@ -89,6 +90,39 @@ def runs(points: list[float], members: list[int], variants: list[str], shard: in
     return out
 
 
+PAPER = {15.67: 1.05, 1.58: 0.176}  # the paper's DER v_lad/c_b at its two points
+
+
+def table(csv) -> str:
+    """The attribution table (markdown): per variant and point, the mean v_lad/c_b over the knits (+- its
+    standard error where there are several), the paired change against "none" on the same knits, and the
+    ratio to the paper's DER value."""
+    import pandas as pd
+
+    df = pd.read_csv(csv)
+    df = df[df["v_lad_over_cb"].notna()]
+    lines = ["| variant | preset | " + " | ".join(f"f_x^ini {fx}: v_lad/c_b (knits) | paired change | / paper "
+                                                for fx in PAPER) + " |",
+             "|---|---|" + "---|---|---|" * len(PAPER)]
+    for (variant, preset), g in df.groupby(["variant", "preset"], sort=False):
+        cells = []
+        for fx, paper in PAPER.items():
+            h = g[g["fx_nominal"] == fx]
+            if not len(h):
+                cells += ["", "", ""]
+                continue
+            v = h["v_lad_over_cb"]
+            se = f" +- {v.std(ddof=1) / len(v) ** 0.5:.3f}" if len(v) > 1 else ""
+            base = df[(df["variant"] == "none") & (df["preset"] == preset) & (df["fx_nominal"] == fx)]
+            pairs = h.merge(base, on="member", suffixes=("", "_none"))
+            change = (pairs["v_lad_over_cb"] / pairs["v_lad_over_cb_none"] - 1.0) * 100
+            ch = (f"{change.mean():+.0f} %" + (f" +- {change.std(ddof=1) / len(change) ** 0.5:.0f}" if len(change) > 1
+                                               else "")) if variant != "none" and len(change) else ""
+            cells += [f"{v.mean():.3f}{se} ({len(v)})", ch, f"{v.mean() / paper:.2f}"]
+        lines.append(f"| {variant} | {preset} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--size", type=int, default=42)
@@ -101,8 +135,12 @@ def main() -> None:
     p.add_argument("--shard", type=int, default=0)
     p.add_argument("--shards", type=int, default=1)
     p.add_argument("--out", default="docs/reference")
+    p.add_argument("--table", action="store_true", help="print the table of the runs done, and stop")
     args = p.parse_args()
     csv, rows = resumed_rows(args.out, f"attribution{args.size}")
+    if args.table:
+        print(table(csv))
+        return
     done = {(r["fx_nominal"], r["member"], r["variant"], r["preset"]) for r in rows}
     code = commit()
     knit, knit_key, stretch_s = None, None, 0.0

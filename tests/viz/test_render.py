@@ -328,7 +328,8 @@ def test_a_damaged_run_file_is_refused_in_one_line_not_drawn_from_stray_memory(r
 
 
 @pytest.mark.parametrize("args, says", [(["--width", "1000000"], "--width: 64 to 8192"),
-                                        (["--at-ms", "nan"], "--at-ms: finite")])
+                                        (["--at-ms", "nan"], "--at-ms: finite"),
+                                        (["--colour", "rainbow"], "--colour: one of course, speed")])
 def test_render_refuses_a_width_no_memory_holds_and_a_nan_instant(run_folder, args, says):
     """`--width 1000000` aborted with std::bad_alloc; `--at-ms nan` drew an image and exited 0."""
     p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(run_folder), *args], capture_output=True,
@@ -408,3 +409,57 @@ def test_the_paraview_file_reads_without_an_error_in_the_log(run_folder):
     with h5py.File(run_folder / "ladder.h5") as f:  # the contact codes said beside the data too
         assert f["frames/contact"].attrs["meaning"].startswith("0 free, 1 touching")
     assert cells > 0 and points > cells
+
+
+@pytest.mark.parametrize("colouring", ["speed", "contact", "strain"])
+def test_a_render_colours_the_yarn_by_what_was_asked_and_says_so(run_folder, tmp_path, colouring):
+    """The colour key is written on the image and the colours follow the stored field, frame by frame."""
+    import imageio.v2 as imageio
+
+    from knitlad.viz.render import Run, node_colours, render_run
+
+    run, f = Run.open(run_folder / "ladder.h5")
+    try:
+        last = len(run.times_s) - 1
+        colours, key = node_colours(run, last, colouring)
+        assert colours.shape == (run.positions.shape[1], 3) and np.all((0 <= colours) & (colours <= 1))
+        assert key.startswith("colour: ")
+        if colouring == "speed":  # the fastest node is drawn yellow, the slowest dark
+            speed = np.linalg.norm(f["frames/velocities"][last], axis=1)
+            assert colours[np.argmax(speed)].sum() > colours[np.argmin(speed)].sum() + 0.5
+        if colouring == "contact":  # as many colours as contact states in the frame
+            states = set(np.clip(f["frames/contact"][last], 0, 2).tolist())
+            assert len({tuple(c) for c in colours}) == len(states)
+    finally:
+        f.close()
+    paths = render_run(run_folder / "ladder.h5", tmp_path, [0.2e-3], ("front",), (320, 240), colouring=colouring)
+    image = imageio.imread(paths[0])[..., :3].astype(int)
+    assert ((image < 235).any(axis=2)).mean() > 0.02
+
+
+def test_a_front_render_carries_a_scale_bar_of_one_stitch_length(run_folder, tmp_path):
+    """The bar over the fabric is as long, in pixels, as l0 is in the parallel projection, measured against
+    the fabric's drawn width."""
+    import imageio.v2 as imageio
+
+    from knitlad.viz.render import Run, render_run
+
+    path = render_run(run_folder / "ladder.h5", tmp_path, [0.0], ("front",), (640, 480))[0]
+    run, f = Run.open(run_folder / "ladder.h5")
+    x = f["frames/positions"][0]
+    f.close()
+    image = imageio.imread(path)[..., :3].astype(int)
+    drawn = (image < 235).any(axis=2)
+    middle = np.flatnonzero(drawn[160:320].any(axis=0))  # the fabric's columns, clear of the texts
+    metres_per_pixel = (x[:, 0].max() - x[:, 0].min()) / (middle.max() - middle.min() + 1)
+
+    def longest_run(row):
+        best = n = 0
+        for b in row:
+            n = n + 1 if b else 0
+            best = max(best, n)
+        return best
+
+    black = image.max(axis=2) < 40
+    bar = max(longest_run(row) for row in black[: 480 // 6])
+    assert bar * metres_per_pixel == pytest.approx(run.l0, rel=0.05)
