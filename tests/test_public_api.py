@@ -150,3 +150,36 @@ def _two_node_rods():
     scene = kl.Scene()
     scene.add_yarn(np.array([[0.0, 0.0, 0.0], [1e-3, 0.0, 0.0], [2e-3, 0.0, 0.0]]))
     return scene.build()
+
+
+def _validators(cls) -> set[str]:
+    """A pydantic config's validators: public by name, but pydantic's, not the user's to call."""
+    decorators = getattr(cls, "__pydantic_decorators__", None)
+    if decorators is None:
+        return set()
+    return set(decorators.model_validators) | set(decorators.field_validators)
+
+
+def test_every_public_method_is_in_the_api_guide():
+    """docs/api.md names each public function and method (a field or property may be named in a row)."""
+    text = (ROOT / "docs" / "api.md").read_text()
+    missing = []
+    for line in public_surface():
+        m = re.match(r"knitlad\.(\w+)(?:\.(\w+))?(\(.*\))?$", line)
+        owner, member, parameters = m.groups()
+        if member and (parameters is None or member in _validators(getattr(knitlad, owner))):
+            continue
+        if not re.search(rf"\b{re.escape(member or owner)}\b", text):
+            missing.append(line)
+    assert not missing, "not in docs/api.md: " + ", ".join(missing)
+
+
+def test_the_api_guide_s_examples_run(capsys):
+    """Each python block of docs/api.md runs as written, on its own."""
+    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "api.md").read_text(), flags=re.S)
+    assert len(blocks) >= 4
+    for k, block in enumerate(blocks):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", knitlad.MovingSupportWarning)
+            exec(compile(block, f"docs/api.md, example {k + 1}", "exec"), {})
+    assert "14.8 mN" in capsys.readouterr().out
