@@ -14,7 +14,7 @@ from typing import Protocol
 import numpy as np
 
 from knitlad.fabric.measure import ladder_front
-from knitlad.engine.units import VELOCITY
+from knitlad.engine.units import LENGTH, VELOCITY
 
 MAX_OVERLAP_OVER_D = 0.5  # deeper than this, a yarn may pass through another: the run stops with an error
 
@@ -269,8 +269,8 @@ class TrajectoryRecorder:
     """An observer of one's own scene: call it with the simulation (or pass it as ``Simulation.run``'s
     ``observe``) and it keeps positions [m], velocities [m/s], each node's contact state (0 free,
     1 touching, 2 sliding), the touching pairs (``Simulation.contact_pairs``: points [m], normal and
-    friction forces [N], sliding) and the time [s], as float32 frames; ``knitlad.write_trajectory``
-    writes them."""
+    friction forces [N], sliding) and the time [s], as float32 frames, and with obstacles their shapes and
+    where each is at every frame [m]; ``knitlad.write_trajectory`` writes them."""
 
     def __init__(self) -> None:
         self.positions: list[np.ndarray] = []
@@ -281,6 +281,8 @@ class TrajectoryRecorder:
         self.edges: np.ndarray | None = None
         self.yarn_start: np.ndarray | None = None
         self.node_yarn: np.ndarray | None = None
+        self.obstacle_shapes: dict[str, np.ndarray] | None = None  # kind (0 plane, 1 cylinder), direction, radius_m
+        self.obstacle_points: list[np.ndarray] = []  # (k, 3) per frame [m]
 
     def __call__(self, sim) -> None:
         m = sim.model
@@ -292,4 +294,10 @@ class TrajectoryRecorder:
         self.contact.append(node_contact_state(sim) if sim.has_contact else np.zeros(m.n_nodes, dtype=np.uint8))
         if sim.has_contact:
             self.pairs.append(sim.contact_pairs())
+        if sim.obstacles is not None:
+            if self.obstacle_shapes is None:
+                o = sim.obstacles
+                self.obstacle_shapes = {"kind": o.kind.astype(np.uint8), "direction": o.axis.copy(),
+                                        "radius": o.radius * LENGTH}
+            self.obstacle_points.append(sim.obstacle_positions_m())
         self.times.append(sim.time_s)

@@ -30,6 +30,10 @@ A trajectory of one's own scene (:func:`write_trajectory`) has ``/frames`` (no `
     /contacts/offsets   (n_frames + 1,): frame k's pairs are rows offsets[k]:offsets[k + 1]
     /contacts/points, normal_force, friction_force   (n_pairs, 3) float32 [m], [N], [N] (on the first edge)
     /contacts/sliding   (n_pairs,) uint8: 1 at the Coulomb limit
+and, with obstacles (``Plane``, ``Cylinder``), their shapes and where each was at every frame:
+    /obstacles/kind     (k,) uint8: 0 a plane, 1 a cylinder
+    /obstacles/direction, radius   (k, 3) the plane's normal or the cylinder's axis; (k,) [m] (0 for a plane)
+    /obstacles/points   (n_frames, k, 3) [m] a point of each obstacle (its reference point, moved)
 
 A stretched knit (:class:`knitlad.experiments.protocol.StretchedKnit`, ``stretched.h5``): its scalars
 and settings as attributes, ``/model/*`` and ``/state/*`` (the arrays of
@@ -242,6 +246,7 @@ RUN_UNITS = {
     "stretch/fx": "f0", "final/laddered": "1", "final/undone_at": "s", "cells/centres": "m", "topology/yarn_start": "1",
     "topology/edges": "1", "topology/node_course": "1", "contacts/offsets": "1", "contacts/points": "m",
     "contacts/normal_force": "N", "contacts/friction_force": "N", "contacts/sliding": "1",
+    "obstacles/kind": "1", "obstacles/direction": "1", "obstacles/radius": "m", "obstacles/points": "m",
     "cycle/readings": "cycle, leg (1 loading, 0 hold, -1 unloading), s, l0 (the box's l_x), f0 (f_x)",
     # the energy ledger at each observation (knitlad.engine.dissipation.EnergyLedger)
     **{f"ledger/{name}": "J" for name in (*EnergyLedger.STORED, *EnergyLedger.DISSIPATED, "support_work",
@@ -276,6 +281,12 @@ def write_trajectory(path: str | Path, recorder, material=None, compression: str
         checksummed_dataset(g, "node_course", recorder.node_yarn)
         if recorder.pairs:
             _contact_pairs(f.create_group("contacts"), recorder.pairs)
+        if getattr(recorder, "obstacle_shapes", None) is not None:
+            g = f.create_group("obstacles")
+            for name, value in recorder.obstacle_shapes.items():
+                checksummed_dataset(g, name, value)
+            checksummed_dataset(g, "points", np.stack(recorder.obstacle_points))
+            g["kind"].attrs["meaning"] = OBSTACLE_CODES
         _mark_units(f)
     if xdmf:
         from knitlad.io.xdmf import write_xdmf
@@ -295,6 +306,7 @@ def _contact_pairs(g: h5py.Group, frames: list) -> None:
 
 
 CONTACT_CODES = "0 free, 1 touching another yarn, 2 sliding on it (at the Coulomb limit)"
+OBSTACLE_CODES = "0 a plane (direction: its normal, the yarn's side), 1 a cylinder (direction: its axis)"
 
 
 def _mark_units(f: h5py.File) -> None:

@@ -46,6 +46,7 @@ class Run:
     l_y: float
     knit: bool = True  # a laddering run (cells, courses, a cut), else a scene of one's own
     l0: float = 0.0  # the stitch length [m] (the scale bar)
+    obstacles: dict | None = None  # a scene of one's own: kind, direction, radius [m], points (frames, k, 3) [m]
 
     def field(self, name: str, frame: int) -> np.ndarray:
         """Frame ``frame`` of the per-node dataset ``name`` of the open file (frames/velocities, frames/contact,
@@ -65,6 +66,10 @@ class Run:
             run = Run(Path(path), f["frames/positions"], f["frames/time"][()], np.zeros((n, 0, 0), dtype=bool),
                       f["topology/edges"][()], f["topology/node_course"][()], -1, np.zeros((0, 0, 2)),
                       float(f.attrs["scale_d_m"]), 0.0, 0.0, knit=False)
+            if "obstacles" in f:
+                g = f["obstacles"]
+                run.obstacles = {"kind": g["kind"][()], "direction": g["direction"][()], "radius": g["radius"][()],
+                                 "points": g["points"]}
             run.check(f)
             return run, f
         if "frames" not in f or "laddered" not in f["frames"]:
@@ -96,6 +101,9 @@ class Run:
             problem = "frames/time or topology/node_course do not match the frames"
         elif self.knit and self.laddered.shape[0] != positions.shape[0]:
             problem = "frames/laddered does not match the frames"
+        elif self.obstacles is not None and (self.obstacles["points"].shape[:2] != (positions.shape[0],
+                                                                                   len(self.obstacles["kind"]))):
+            problem = "obstacles/points does not match the frames and obstacles"
         if problem:
             f.close()
             raise ValueError(f"{self.path}: a damaged run file: {problem}")
@@ -142,7 +150,7 @@ def node_colours(run: Run, frame: int, colouring: str) -> tuple[np.ndarray, str]
     course = run.node_course
     if colouring == "course":
         colours = COURSE_COLOURS[np.mod(course, len(COURSE_COLOURS))]
-        key = "colour: the course (four in turn)"
+        key = "colour: the course (four in turn)" if run.knit else "colour: the yarn (four colours in turn)"
         if run.knit:
             colours[(course < 0) | (course >= run.cell_centres.shape[0])] = 0.6  # the held edge courses: grey
             colours[course == run.cut_course] = CUT_COLOUR
@@ -229,6 +237,62 @@ def _cell_actor(run: Run, laddered: np.ndarray, depth: float):
     return actor
 
 
+OBSTACLE_COLOUR = (0.55, 0.6, 0.65)
+
+
+def _obstacle_actors(run: Run, frame: int, x: np.ndarray) -> list:
+    """The obstacles of a scene of one's own at ``frame``, translucent grey: a plane as a square about the yarns'
+    centre, 1.4 x their extent; a cylinder of its radius, as long as the yarns' extent along its axis and more."""
+    from vtkmodules.vtkFiltersSources import vtkCylinderSource, vtkPlaneSource
+    from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
+    from vtkmodules.vtkCommonTransforms import vtkTransform
+
+    o = run.obstacles
+    centre = np.nanmean(x, axis=0)
+    extent = float(np.nanmax(np.ptp(x, axis=0))) + 4 * run.diameter
+    actors = []
+    for k, kind in enumerate(o["kind"]):
+        point, direction = np.asarray(o["points"][frame, k], dtype=float), np.asarray(o["direction"][k], dtype=float)
+        along = centre - point
+        if kind == 0:  # the plane's point nearest the yarns' centre
+            source = vtkPlaneSource()
+            middle = centre - np.dot(along, direction) * direction
+            u = np.cross(direction, [1.0, 0.0, 0.0] if abs(direction[0]) < 0.9 else [0.0, 1.0, 0.0])
+            u /= np.linalg.norm(u)
+            w = np.cross(direction, u)
+            half = 0.7 * extent
+            source.SetOrigin(*(middle - half * u - half * w))
+            source.SetPoint1(*(middle + half * u - half * w))
+            source.SetPoint2(*(middle - half * u + half * w))
+            mapper = vtkPolyDataMapper()
+            mapper.SetInputConnection(source.GetOutputPort())
+        else:  # VTK's cylinder stands along y through the origin: turned onto the axis and moved
+            length = float(np.ptp(x @ direction)) + 2 * float(o["radius"][k]) + 4 * run.diameter
+            source = vtkCylinderSource()
+            source.SetRadius(float(o["radius"][k]))
+            source.SetHeight(length)
+            source.SetResolution(48)
+            middle = point + np.dot(along, direction) * direction
+            turn = np.cross([0.0, 1.0, 0.0], direction)
+            angle = np.degrees(np.arctan2(np.linalg.norm(turn), direction[1]))
+            transform = vtkTransform()
+            transform.Translate(*middle)
+            if np.linalg.norm(turn) > 1e-12:
+                transform.RotateWXYZ(angle, *turn)
+            elif direction[1] < 0:
+                transform.RotateWXYZ(180.0, 1.0, 0.0, 0.0)
+            mapper = vtkPolyDataMapper()
+            mapper.SetInputConnection(source.GetOutputPort())
+        actor = vtkActor()
+        actor.SetMapper(mapper)
+        if kind != 0:
+            actor.SetUserTransform(transform)
+        actor.GetProperty().SetColor(*OBSTACLE_COLOUR)
+        actor.GetProperty().SetOpacity(0.35)
+        actors.append(actor)
+    return actors
+
+
 def _text(renderer, text: str, x: int, y: int, size: int, top: bool = False) -> None:
     from vtkmodules.vtkRenderingCore import vtkTextActor
 
@@ -252,7 +316,7 @@ def _scale_bar(renderer, x: np.ndarray, length: float, label: str) -> None:
     from vtkmodules.vtkRenderingCore import vtkActor, vtkBillboardTextActor3D, vtkPolyDataMapper
 
     x1, y1, z = float(np.nanmax(x[:, 0])), float(np.nanmax(x[:, 1])), float(np.nanmax(x[:, 2]))
-    y = y1 + 0.03 * (y1 - float(np.nanmin(x[:, 1])))
+    y = y1 + 0.03 * max(y1 - float(np.nanmin(x[:, 1])), float(np.ptp(x[:, 0])))
     line = vtkLineSource()
     line.SetPoint1(x1 - length, y, z)
     line.SetPoint2(x1, y, z)
@@ -287,6 +351,10 @@ def _picture(run: Run, frame: int, path: Path, view: str, size=(1200, 900), wind
     if cells is not None:
         renderer.AddActor(cells)
         key += "; red squares: cells undone, drawn where they were at the cut"
+    if run.obstacles is not None and len(run.obstacles["kind"]):
+        for actor in _obstacle_actors(run, frame, x):
+            renderer.AddActor(actor)
+        key += "; grey: the obstacles"
     _text(renderer, key, 0, 0, max(11, size[0] // 90), top=True)
     if label:
         _text(renderer, label, 12, 12, 22)

@@ -94,7 +94,7 @@ def test_a_laddering_job_reports_its_stages_and_leaves_no_progress_file(tmp_path
             super().__call__(stage, fraction)
 
     monkeypatch.setattr(runner, "ProgressFile", Recording)
-    job = Job(scene="ladder", params={"n_x": 4, "n_y": 6, "lx": 0.30, "preset": "fast", "resolution": 12,
+    job = Job(scene="ladder", params={"n_x": 4, "n_y": 6, "lx": 0.40, "preset": "fast", "resolution": 12,
                                       "max_time_ms": 0.05, "observe_every_us": 5.0, "arrest_ms": 0.05},
               output=Output(frames=False))
     (tmp_path / "jobs").mkdir()

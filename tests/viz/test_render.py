@@ -463,3 +463,40 @@ def test_a_front_render_carries_a_scale_bar_of_one_stitch_length(run_folder, tmp
     black = image.max(axis=2) < 40
     bar = max(longest_run(row) for row in black[: 480 // 6])
     assert bar * metres_per_pixel == pytest.approx(run.l0, rel=0.05)
+
+
+def test_the_obstacles_of_one_s_own_scene_are_stored_and_drawn(tmp_path):
+    """A yarn pushed onto a cylinder under a plate coming down: the file keeps each obstacle's shape and where it
+    was at each frame (with units), and a render draws them (more of the picture covered than without them)."""
+    import imageio.v2 as imageio
+
+    import knitlad as kl
+    from knitlad.viz.render import render_run
+
+    s = np.linspace(-6e-3, 6e-3, 49)
+    scene = kl.Scene(kl.NYLON)
+    yarn = scene.add_yarn(np.column_stack([s, 0 * s, 1.1e-3 + 0 * s]))
+    scene.hold(yarn, [0, 48], velocity=(0, 0, -2.0))
+    obstacles = [kl.Cylinder(stiffness=50.0, mu=0.3, axis=(0, 1, 0), radius_m=1e-3),
+                 kl.Plane(stiffness=50.0, point_m=(0, 0, 2e-3), normal=(0, 0, -1), velocity_m_s=(0, 0, -1.0))]
+    sim = kl.Simulation(scene.build(), obstacles=obstacles)
+    recorder = kl.TrajectoryRecorder()
+    sim.run(4e-4, observe=recorder, observe_every_s=1e-4)
+    path = kl.write_trajectory(tmp_path / "mine.h5", recorder)
+    with h5py.File(path, "r") as f:
+        assert f["obstacles/kind"][()].tolist() == [1, 0] and "plane" in f["obstacles/kind"].attrs["meaning"]
+        assert f["obstacles/radius"][()] == pytest.approx([1e-3, 0.0])
+        points = f["obstacles/points"][()]
+        assert points.shape == (len(recorder.times), 2, 3) and f["obstacles/points"].attrs["unit"] == "m"
+        assert points[-1, 1, 2] - points[0, 1, 2] == pytest.approx(-1.0 * (recorder.times[-1] - recorder.times[0]))
+        bare = tmp_path / "bare.h5"
+        with h5py.File(bare, "w") as g:
+            for name in f:
+                if name != "obstacles":
+                    f.copy(name, g)
+            g.attrs.update(f.attrs)
+    covered = {}
+    for name, file in (("with", path), ("without", bare)):
+        picture = render_run(file, tmp_path / name, [recorder.times[-1]], ("oblique",), (320, 240))[0]
+        covered[name] = ((imageio.imread(picture)[..., :3] < 235).any(axis=2)).mean()
+    assert covered["with"] > covered["without"] + 0.1
