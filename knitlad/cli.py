@@ -280,7 +280,6 @@ def cut(
 
     made = not (Path(out).exists() if out else False)
     cfg, out_dir = _knit_run(_config.CutConfig, options, stitches, 13.6, out, "cut")
-    n_x, n_y = cfg.n_x, cfg.n_y
     earlier = earlier_run_outputs(out_dir)
     if earlier and not overwrite:
         fail(f"--out {out_dir}: holds an earlier run ({', '.join(p.name for p in earlier[:4])}"
@@ -322,6 +321,12 @@ def cut(
         raise typer.Exit(code)
     finally:
         lock.release()
+    _report_cut(cfg, result, summary, json_out, h5, png, out_dir)
+
+
+def _report_cut(cfg, result, summary: dict, json_out: bool, h5: Path, png: Path, out_dir: Path) -> None:
+    """What `cut` prints once its run is written: the summary as JSON, or as lines with their caveats."""
+    n_x, n_y = cfg.n_x, cfg.n_y
     if not result.fx_within_tolerance:
         typer.echo(
             f"knitlad: warning: f_x^ini = {result.fx_ini:.3f} is not within {100 * cfg.fx_tolerance:g} % of the "
@@ -349,6 +354,9 @@ def cut(
 def cycle(
     stitches: str = typer.Option("16", "--stitches", help="Fabric size: N (N x N) or NXxNY.", rich_help_panel=EXPERIMENT_PANEL),
     out: str = typer.Option(None, "--out", help="Output folder; default runs/cycle-<time>.", rich_help_panel=OUTPUT_PANEL),
+    resume: bool = typer.Option(False, "--resume", rich_help_panel=OUTPUT_PANEL, help="Continue the run that was "
+                                "stopped in --out (Ctrl-C, a killed job) from its last finished leg, with the same "
+                                "settings: the curve is the same to the bit."),
     options: dict = None,
 ) -> None:
     """Protocol B (paper Fig. 4a): cycle the knit with friction on between Delta x_min and --lx-max, cut a
@@ -360,12 +368,13 @@ def cycle(
     import json
 
     from knitlad.experiments.cycling import run_protocol_b
+    from knitlad.experiments.protocol import stretch
+    from knitlad.io.hdf5 import write_arrays
+    from knitlad.io.knit_cache import cached_stretch
 
     cfg, out_dir = _knit_run(_config.CycleConfig, options, stitches, 0.68, out, "cycle")
     n_x, n_y = cfg.n_x, cfg.n_y
-    earlier = [name for name in ("cycle.h5", "cycle.csv", "cycle.png") if (out_dir / name).exists()]
-    if earlier:  # cycle.csv alone is an interrupted run's readings: kept too
-        fail(f"--out {out_dir}: holds an earlier cycle run ({', '.join(earlier)}); choose another folder")
+    restart = _cycle_restart(out_dir, cfg, resume)
     _say_if_compiling()
     progress = _StageProgress()
     unwritten: list[str] = []
@@ -376,10 +385,20 @@ def cycle(
         except OSError as e:
             unwritten.append(str(e))
 
+    def keep_checkpoint(arrays) -> None:  # after each leg: where --resume goes on from
+        try:
+            write_arrays(out_dir / CYCLE_CHECKPOINT, arrays, {"config_json": cfg.model_dump_json()})
+        except OSError as e:
+            unwritten.append(str(e))
+
+    def run():
+        knit = cached_stretch(cfg.stretch_settings(), out_dir / "stretched", stretch, progress)[0]
+        return run_protocol_b(cfg.settings(), cfg.cycle_settings(), cut_at_max=cfg.cut, progress=progress, knit=knit,
+                              after_leg=keep_readings, keep=keep_checkpoint, resume=restart)
+
     result, ladder = _experiment_or_exit(
-        lambda: run_protocol_b(cfg.settings(), cfg.cycle_settings(), cut_at_max=cfg.cut, progress=progress,
-                               after_leg=keep_readings), progress,
-        kept=f"the readings so far are in {out_dir / 'cycle.csv'} (if a leg had ended)")
+        run, progress, kept=f"the readings so far are in {out_dir / 'cycle.csv'} (if a leg had ended); "
+                            f"knitlad cycle ... --out {out_dir} --resume goes on from the last leg")
     progress.close(finished=True)
     l0 = cfg.settings().material.stitch_length
     try:
@@ -390,6 +409,8 @@ def cycle(
         typer.echo(f"knitlad: run finished but its files could not be written ({e}); the summary is printed above",
                    err=True)
         raise typer.Exit(1)
+    (out_dir / CYCLE_CHECKPOINT).unlink(missing_ok=True)  # finished: nothing to resume, nor to re-stretch
+    shutil.rmtree(out_dir / "stretched", ignore_errors=True)
     typer.echo(
         f"{n_x} x {n_y} jersey, protocol B: {cfg.cycles} cycles at mu = {cfg.mu}, bars at {cfg.bar_speed:g} m/s, "
         f"{cfg.resolution} nodes/stitch\n"
@@ -407,6 +428,40 @@ def cycle(
                    f"(crossed courses {ladder.fx_fin_crossed:.3f}), stop: {ladder.stop_reason}\n"
                    f"  {_loop_line(ladder)}")
     typer.echo(f"  wall time {result.wall_s:.1f} s; wrote {h5}, {csv.name}, {png.name}")
+
+
+CYCLE_CHECKPOINT = "cycle.checkpoint.h5"  # where an unfinished cycle run stands (knitlad.experiments.cycling)
+
+
+def _cycle_restart(out_dir: Path, cfg, resume: bool) -> dict | None:
+    """The checkpoint ``--resume`` goes on from (None for a new run), or a one-line refusal: a folder holding a
+    finished or an interrupted run without --resume, --resume where nothing was stopped, or with other settings."""
+    import json
+
+    from knitlad.io.hdf5 import read_arrays
+
+    checkpoint = out_dir / CYCLE_CHECKPOINT
+    earlier = [name for name in ("cycle.h5", "cycle.csv", "cycle.png") if (out_dir / name).exists()]
+    if not resume:
+        if earlier or checkpoint.exists():  # cycle.csv alone is an interrupted run's readings: kept too
+            hint = "; --resume continues it" if checkpoint.exists() and "cycle.h5" not in earlier else ""
+            fail(f"--out {out_dir}: holds an earlier cycle run ({', '.join(earlier or [CYCLE_CHECKPOINT])}); "
+                 f"choose another folder{hint}")
+        return None
+    if "cycle.h5" in earlier:
+        fail(f"--resume: the run in {out_dir} has finished (cycle.h5); nothing to continue")
+    if not checkpoint.exists():
+        fail(f"--resume: no stopped run in {out_dir} (no {CYCLE_CHECKPOINT}: none was made, or no leg had ended)")
+    try:
+        arrays, attrs = read_arrays(checkpoint)
+    except OSError as e:
+        fail(f"--resume: {checkpoint} cannot be read ({e}); start the run again in another folder")
+    if attrs.get("config_json") != cfg.model_dump_json():
+        theirs = json.loads(attrs.get("config_json", "{}"))
+        changed = sorted(k for k, v in cfg.model_dump(mode="json").items() if theirs.get(k) != v)
+        fail(f"--resume: the stopped run had other settings ({', '.join(changed) or 'unreadable'}); give the same "
+             "ones, or use another folder")
+    return arrays
 
 
 def _write_cycle_table(path, readings) -> None:

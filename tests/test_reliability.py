@@ -680,3 +680,29 @@ def test_a_kill_while_the_run_is_written_leaves_no_half_written_file(tmp_path, m
     with pytest.raises(cli.Terminated):
         cli._replace_run_outputs(tmp_path, None, [])
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_cycle_stopped_by_ctrl_c_resumes_from_its_last_leg_to_the_same_curve(tmp_path):
+    """`cycle` had no resume after Ctrl-C. After each leg it keeps a checkpoint; `--resume` goes on from it
+    (with the same settings only) and reads the same curve, to the bit, as a run never stopped."""
+    args = ["cycle", "--stitches", "6x8", "--preset", "fast", "--resolution", "16", "--lx-max", "0.36", "--cycles", "2",
+            "--readings-per-leg", "2", "--hold-ms", "0.5", "--no-cut", "--fx-thr", "0.5"]
+    whole = knitlad(*args, "--out", str(tmp_path / "whole"))
+    assert whole.returncode == 0, whole.stderr
+    out = tmp_path / "stopped"
+    run = subprocess.Popen([*KNITLAD, *args, "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True, cwd=ROOT)
+    deadline = time.monotonic() + 600
+    while not (out / "cycle.checkpoint.h5").exists() and run.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    run.send_signal(signal.SIGINT)
+    _, stderr = run.communicate(timeout=120)
+    assert run.returncode == 130 and "--resume" in stderr, stderr
+    assert "--resume continues it" in one_line_error(knitlad(*args, "--out", str(out)))
+    assert "other settings (mu)" in one_line_error(knitlad(*args, "--mu", "0.3", "--out", str(out), "--resume"))
+    resumed = knitlad(*args, "--out", str(out), "--resume")
+    assert resumed.returncode == 0, resumed.stderr
+    assert (out / "cycle.csv").read_bytes() == (tmp_path / "whole" / "cycle.csv").read_bytes()
+    assert not (out / "cycle.checkpoint.h5").exists() and not (out / "stretched").exists()
+    assert "nothing to continue" in one_line_error(knitlad(*args, "--out", str(out), "--resume"))
+    assert "no stopped run" in one_line_error(knitlad(*args, "--out", str(tmp_path / "new"), "--resume"))

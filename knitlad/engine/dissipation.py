@@ -37,6 +37,7 @@ import numpy as np
 from knitlad.engine import units
 from knitlad.engine.kernels.dissipation import LEDGER_NAMES, DampingParams, branch_energy, relaxed_branches
 from knitlad.engine.kernels.elastic import edge_vectors
+from knitlad.engine.kernels.integrate import kinetic_energy, potential_energy
 
 NYLON_LOSS_FACTOR = 0.03  # the loss factor "on" means: the middle of dry Nylon's 0.01-0.05 (module docstring)
 STITCH_BENDING_HZ = 3.1e3  # c_b kappa0 / 2 pi of the paper's knit: 30.6 m/s x 645 /m / 2 pi
@@ -242,3 +243,12 @@ class DissipationControl:
             contact=e["contact"], kinetic=e["kinetic"], external=e["external"],
             **{name: float(totals[k]) for k, name in enumerate(LEDGER_NAMES)}, start=start,
             time_s=self.time_s - t0)
+
+    def energies_J(self) -> dict[str, float]:
+        """Kinetic, stretching, bending, twisting, contact (stored), external-potential and total energy [J]."""
+        es, eb, et, ec, ext = potential_energy(self.model, self.state, self.work, self.contacts, self.twist_mode,
+                                               self.has_contact)
+        ek = kinetic_energy(self.model, self.state)
+        e = {"kinetic": ek, "stretching": es, "bending": eb, "twisting": et, "contact": ec, "external": ext}
+        e["total"] = sum(e.values())
+        return {k: float(v) * units.ENERGY for k, v in e.items()}

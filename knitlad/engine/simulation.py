@@ -27,6 +27,7 @@ from knitlad.engine.contact import (
     contact_time_step,
     make_contacts,
 )
+from knitlad.engine.checkpoint import Checkpointing
 from knitlad.engine.dissipation import AirDrag, DissipationControl, MaterialDamping, damping_params
 from knitlad.engine.kernels.contact import GAPS_KNOWN, PAIRS_NEEDED, PEAK_OVERLAP, STALE, refresh_contacts, touching_pairs_among
 from knitlad.engine.kernels.integrate import (
@@ -42,8 +43,6 @@ from knitlad.engine.kernels.integrate import (
     first_bad_node,
     follow_images,
     half_kick,
-    kinetic_energy,
-    potential_energy,
     rail_forces,
     verlet_steps,
 )
@@ -303,6 +302,33 @@ class SupportControl:
         rail_forces(self.model.rail_node, self.model.rail_axis, self.work.force)
         self.replace_model(f_ext=f)
 
+    def reaction_forces_N(self) -> np.ndarray:
+        """Force [N] the supports exert on each held node (zero on free nodes).
+
+        A held node moves at constant prescribed velocity, so the support
+        balances every other force on it: R = -F_rest. Read while held nodes move under a global drag
+        (``ramp_held``), the reading carries the drag on everything they drag along, alpha M V
+        (:meth:`reaction_bias_N`): a :class:`MovingSupportWarning` says so, with its size; read after ``settle``.
+        """
+        r = -self.work.force * units.FORCE
+        r[~self.model.held] = 0.0
+        bias = self.reaction_bias_N()
+        if np.any(bias):
+            total = float(np.linalg.norm(r.sum(axis=0)))
+            warnings.warn(f"reaction read while the supports move under a drag of {self.drag / units.TIME:g} /s: "
+                          f"biased by about {np.linalg.norm(bias):.3g} N (of {total:.3g} N in all); read it after "
+                          "settle()", MovingSupportWarning, stacklevel=2)
+        return r
+
+    def reaction_bias_N(self) -> np.ndarray:
+        """(3,) the bias [N] of the supports' total reaction read now: the global drag on the free nodes,
+        alpha sum m v, which the supports pay while they move (zero when no held node moves or no drag acts)."""
+        m = self.model
+        if self.drag == 0.0 or not np.any(m.v_prescribed[m.held]):
+            return np.zeros(3)
+        free = ~m.held
+        return self.drag * (m.mass[free, None] * self.state.v[free]).sum(axis=0) * units.FORCE
+
 
 class ContactReadout:
     """What the contact saw, read from a :class:`Simulation`'s buffers (mixed into it): totals, each
@@ -358,7 +384,7 @@ class ContactReadout:
         return int(touching_pairs_among(self.state.x, m.edge_a, m.edge_b, m.edge_shift, c, in_a, in_b))
 
 
-class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, DissipationControl):
+class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, DissipationControl, Checkpointing):
     """Explicit dynamics and FIRE statics of a rod scene.
 
     Parameters
@@ -608,42 +634,6 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
     def forces_N(self) -> np.ndarray:
         """Net force on each node at the last evaluation [N]."""
         return self.work.force * units.FORCE
-
-    def reaction_forces_N(self) -> np.ndarray:
-        """Force [N] the supports exert on each held node (zero on free nodes).
-
-        A held node moves at constant prescribed velocity, so the support
-        balances every other force on it: R = -F_rest. Read while held nodes move under a global drag
-        (``ramp_held``), the reading carries the drag on everything they drag along, alpha M V
-        (:meth:`reaction_bias_N`): a :class:`MovingSupportWarning` says so, with its size; read after ``settle``.
-        """
-        r = -self.work.force * units.FORCE
-        r[~self.model.held] = 0.0
-        bias = self.reaction_bias_N()
-        if np.any(bias):
-            total = float(np.linalg.norm(r.sum(axis=0)))
-            warnings.warn(f"reaction read while the supports move under a drag of {self.drag / units.TIME:g} /s: "
-                          f"biased by about {np.linalg.norm(bias):.3g} N (of {total:.3g} N in all); read it after "
-                          "settle()", MovingSupportWarning, stacklevel=2)
-        return r
-
-    def reaction_bias_N(self) -> np.ndarray:
-        """(3,) the bias [N] of the supports' total reaction read now: the global drag on the free nodes,
-        alpha sum m v, which the supports pay while they move (zero when no held node moves or no drag acts)."""
-        m = self.model
-        if self.drag == 0.0 or not np.any(m.v_prescribed[m.held]):
-            return np.zeros(3)
-        free = ~m.held
-        return self.drag * (m.mass[free, None] * self.state.v[free]).sum(axis=0) * units.FORCE
-
-    def energies_J(self) -> dict[str, float]:
-        """Kinetic, stretching, bending, twisting, contact (stored), external-potential and total energy [J]."""
-        es, eb, et, ec, ext = potential_energy(self.model, self.state, self.work, self.contacts, self.twist_mode,
-                                               self.has_contact)
-        ek = kinetic_energy(self.model, self.state)
-        e = {"kinetic": ek, "stretching": es, "bending": eb, "twisting": et, "contact": ec, "external": ext}
-        e["total"] = sum(e.values())
-        return {k: float(v) * units.ENERGY for k, v in e.items()}
 
 
 def energy_history(sim: Simulation, samples: int, every_s: float) -> tuple[np.ndarray, np.ndarray]:

@@ -188,15 +188,29 @@ def shortening_to(unloading: np.ndarray, fx_thr: float, n_x: int) -> float:
     return n_x * (lx[0] - at)
 
 
+LOADED, UNLOADED = 1, 2  # a checkpoint's phase: after the hold at Delta x_max, after the return to Delta x_min
+
+
+def cycle_checkpoint(loaded: LoadedKnit, cycle: int, phase: int, hold_converged: bool) -> dict[str, np.ndarray]:
+    """Where protocol B stands after a leg: the simulation's :meth:`~knitlad.engine.simulation.Simulation.checkpoint`
+    and the cycle's own ("cycle/*": the cycle and phase done, the readings, the box, whether the hold settled)."""
+    return {**loaded.sim.checkpoint(), "cycle/done": np.array([cycle, phase]),
+            "cycle/readings": np.array(loaded.readings, dtype=float).reshape(-1, 5),
+            "cycle/box_lx": np.array([loaded.lx, float(hold_converged)])}
+
+
 def run_cycles(knit: StretchedKnit, s: CycleSettings, dynamics: DynamicsSettings,
                progress: Callable[[str, float], None] | None = None,
                at_the_cut: Callable[[StretchedKnit, Simulation], None] | None = None,
-               after_leg: Callable[[np.ndarray], None] | None = None) -> CycleResult:
+               after_leg: Callable[[np.ndarray], None] | None = None,
+               keep: Callable[[dict], None] | None = None, resume: dict | None = None) -> CycleResult:
     """Protocol B on ``knit`` (stretched at mu = 0 to Delta x_min) under ``dynamics`` (its friction on):
     ``cycles`` loadings to ``lx_max`` with a hold, back to the start; ``at_the_cut(snapshot, sim)`` is
     called at Delta x_max of the last cycle (to cut a copy: :func:`cut_cycled`); the last unloading is the
     uncut twin's, read for delta l. ``after_leg(readings)``: the readings so far after each leg and hold
-    (to keep them as they come: a run of an hour stopped early keeps its curve)."""
+    (to keep them as they come: a run of an hour stopped early keeps its curve). ``keep(checkpoint)``: a
+    :func:`cycle_checkpoint` after each leg up to the last cut; ``resume``: one of them, to continue from
+    (the same knit and settings; the run then goes on to the bit as it would have)."""
     if s.lx_max <= knit.box_lx:  # force control put Delta x_min beyond the asked Delta x_max: a negative stroke
         raise InfeasibleRun(f"lx_max: {s.lx_max:g} is not above the box's l_x/l0 at Delta x_min, {knit.box_lx:.4f} "
                             f"(where f_x = {knit.fx_ini:.3f}): the bars would move inwards; a larger lx_max or a "
@@ -205,15 +219,25 @@ def run_cycles(knit: StretchedKnit, s: CycleSettings, dynamics: DynamicsSettings
     loaded, lx_min = LoadedKnit(knit, s, dynamics), knit.box_lx
     loaded.readings.append((0, HOLD, 0.0, lx_min, loaded.tension()))
     result = CycleResult(settings=s, n_x=knit.settings.n_x, lx_min=lx_min, readings=np.zeros((0, 5)))
+    first, skip_loading = 1, False
+    if resume is not None:
+        loaded.sim.restore(resume)
+        done_cycle, done_phase = (int(v) for v in resume["cycle/done"])
+        loaded.readings = [tuple(r) for r in np.asarray(resume["cycle/readings"], dtype=float)]
+        loaded.lx, result.hold_converged = float(resume["cycle/box_lx"][0]), bool(resume["cycle/box_lx"][1])
+        first, skip_loading = (done_cycle, True) if done_phase == LOADED else (done_cycle + 1, False)
     legs = 2 * s.cycles
-    for cycle in range(1, s.cycles + 1):
+    for cycle in range(first, s.cycles + 1):
         def report(f, done=2 * (cycle - 1)):
             if progress:
                 progress("cycle", (done + f) / legs)
-        loaded.move_bars(s.lx_max, cycle, report)
-        result.hold_converged = bool(loaded.hold(cycle)["converged"])
-        if after_leg:
-            after_leg(np.array(loaded.readings, dtype=float))
+        if not (skip_loading and cycle == first):
+            loaded.move_bars(s.lx_max, cycle, report)
+            result.hold_converged = bool(loaded.hold(cycle)["converged"])
+            if after_leg:
+                after_leg(np.array(loaded.readings, dtype=float))
+            if keep:
+                keep(cycle_checkpoint(loaded, cycle, LOADED, result.hold_converged))
         if cycle == s.cycles:
             snap = loaded.snapshot()
             result.fx_ini, result.lx_over_l0, result.ly_over_l0 = snap.fx_ini, snap.lx_over_l0, snap.ly_over_l0
@@ -222,6 +246,8 @@ def run_cycles(knit: StretchedKnit, s: CycleSettings, dynamics: DynamicsSettings
         loaded.move_bars(lx_min, cycle, lambda f, done=2 * cycle - 1: report(f, done))
         if after_leg:
             after_leg(np.array(loaded.readings, dtype=float))
+        if keep and cycle < s.cycles:  # after the last cut, a resume starts from before it: the ladder is redone
+            keep(cycle_checkpoint(loaded, cycle, UNLOADED, result.hold_converged))
     result.readings = np.array(loaded.readings, dtype=float)
     if s.fx_thr is not None:
         start = np.flatnonzero((result.readings[:, 0] == s.cycles) & (result.readings[:, 1] == HOLD))[0]
@@ -233,10 +259,11 @@ def run_cycles(knit: StretchedKnit, s: CycleSettings, dynamics: DynamicsSettings
 
 def run_protocol_b(ladder: LadderSettings, s: CycleSettings, cut_at_max: bool = True,
                    progress: Callable[[str, float], None] | None = None, knit: StretchedKnit | None = None,
-                   after_leg: Callable[[np.ndarray], None] | None = None) -> tuple[CycleResult, LadderResult | None]:
+                   after_leg: Callable[[np.ndarray], None] | None = None, keep: Callable[[dict], None] | None = None,
+                   resume: dict | None = None) -> tuple[CycleResult, LadderResult | None]:
     """Stretch at mu = 0 to Delta x_min (``ladder.stretch``; or start from ``knit``, stretched so), cycle
-    (:func:`run_cycles`), and at Delta x_max of the last cycle cut a copy and follow its ladder under
-    ``ladder.dynamics`` (``cut_at_max``)."""
+    (:func:`run_cycles`, with its checkpoints ``keep`` and ``resume``), and at Delta x_max of the last cycle cut
+    a copy and follow its ladder under ``ladder.dynamics`` (``cut_at_max``)."""
     if knit is None:
         knit = stretch(ladder.stretch, progress)
     laddered: list[LadderResult] = []
@@ -245,5 +272,5 @@ def run_protocol_b(ladder: LadderSettings, s: CycleSettings, cut_at_max: bool = 
         if cut_at_max:
             laddered.append(analyse(propagate(cut_cycled(snapshot, sim, ladder.dynamics), progress=progress)))
 
-    result = run_cycles(knit, s, ladder.dynamics, progress, at_the_cut, after_leg)
+    result = run_cycles(knit, s, ladder.dynamics, progress, at_the_cut, after_leg, keep, resume)
     return result, (laddered[0] if laddered else None)

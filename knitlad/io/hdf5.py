@@ -437,3 +437,29 @@ def read_stretched_knit(path: str | Path):
     scalars["fx_within_tolerance"] = bool(scalars["fx_within_tolerance"])
     scalars["relax_steps"] = int(scalars["relax_steps"])
     return StretchedKnit(settings=StretchSettings(material=material, **settings), knit=knit, **scalars)
+
+
+def write_arrays(path: str | Path, arrays: dict[str, np.ndarray], attrs: dict | None = None) -> Path:
+    """Named arrays (``"group/name"``, e.g. a :meth:`knitlad.engine.simulation.Simulation.checkpoint`) and
+    ``attrs`` in one HDF5 file, atomically, each dataset with its checksum. Returns ``path``."""
+    path = Path(path)
+    with atomic_hdf5(path) as f:
+        for name, value in arrays.items():
+            if np.ndim(value):
+                checksummed_dataset(f, name, value)
+            else:  # a scalar cannot be chunked, so it carries no checksum
+                f.create_dataset(name, data=value)
+        _set_attrs(f, attrs or {})
+        f.attrs["knitlad_version"] = __version__
+    return path
+
+
+def read_arrays(path: str | Path) -> tuple[dict[str, np.ndarray], dict]:
+    """The arrays and attributes of a :func:`write_arrays` file; OSError if a checksum fails."""
+    arrays: dict[str, np.ndarray] = {}
+    with h5py.File(path, "r") as f:
+        def read(name, obj):
+            if isinstance(obj, h5py.Dataset):
+                arrays[name] = obj[()]
+        f.visititems(read)
+        return arrays, dict(f.attrs)

@@ -41,7 +41,10 @@ def cycled():
         away = (snapshot.knit.node_course() != snapshot.settings.n_y // 2) & ~sim.model.held
         seen["force_off_cut"] = [np.linalg.norm(r.sim.forces_N()[away], axis=1).max() for r in (seen["run"], forgetful)]
 
-    return cfg, knit, run_cycles(knit, cfg.cycle_settings(), cfg.dynamics_settings(), at_the_cut=at_the_cut), seen
+    seen["checkpoints"] = []
+    result = run_cycles(knit, cfg.cycle_settings(), cfg.dynamics_settings(), at_the_cut=at_the_cut,
+                        keep=seen["checkpoints"].append)
+    return cfg, knit, result, seen
 
 
 def test_the_cycles_collapse_onto_one_loop_from_the_first_retraction(cycled):
@@ -147,3 +150,22 @@ def test_an_unreached_threshold_says_why_delta_l_is_nan():
     assert "never fell to f_x^thr = 0.5 (its lowest f_x: 1.200)" in result.summary()["nan_reasons"]
     assert CycleResult(settings=s, n_x=6, lx_min=0.35, readings=readings, delta_l_over_l0=0.1,
                        lx_over_l0=0.39).nan_reasons() == {}
+
+
+def test_protocol_b_resumed_from_a_checkpoint_file_reads_the_same_curve_to_the_bit(cycled, tmp_path):
+    """A run stopped after a leg (Ctrl-C, a killed job) goes on from its last checkpoint: after the first cycle's
+    return, and after the last hold at Delta x_max (before the cut, which is then made again)."""
+    from knitlad.experiments.cycling import LOADED, UNLOADED
+    from knitlad.io.hdf5 import read_arrays, write_arrays
+
+    cfg, knit, result, seen = cycled
+    phases = [tuple(c["cycle/done"]) for c in seen["checkpoints"]]
+    assert phases == [(1, LOADED), (1, UNLOADED), (2, LOADED)]  # none after the last cut
+    for checkpoint in seen["checkpoints"][1:]:
+        arrays, _ = read_arrays(write_arrays(tmp_path / "checkpoint.h5", checkpoint))
+        cut_again = []
+        resumed = run_cycles(knit, cfg.cycle_settings(), cfg.dynamics_settings(), resume=arrays,
+                             at_the_cut=lambda snapshot, sim: cut_again.append(snapshot.fx_ini))
+        assert np.array_equal(resumed.readings, result.readings)
+        assert resumed.delta_l_over_l0 == result.delta_l_over_l0 and resumed.fx_ini == result.fx_ini
+        assert cut_again == [result.fx_ini]
