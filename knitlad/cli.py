@@ -324,6 +324,12 @@ def cut(
     _report_cut(cfg, result, summary, json_out, h5, png, out_dir)
 
 
+def _damage_line(parts: dict) -> str:
+    return (f"{parts['n_lad_released']} released by the ladder into loaded courses (Eq. 1's count: "
+            f"{parts['n_lad_released_over_ny']:.3f} n_y), {parts['n_lad_cut_row']} of the cut row, "
+            f"{parts['n_lad_immediate']} undone with the cut (0.1 ms)")
+
+
 def _report_cut(cfg, result, summary: dict, json_out: bool, h5: Path, png: Path, out_dir: Path) -> None:
     """What `cut` prints once its run is written: the summary as JSON, or as lines with their caveats."""
     n_x, n_y = cfg.n_x, cfg.n_y
@@ -341,6 +347,7 @@ def _report_cut(cfg, result, summary: dict, json_out: bool, h5: Path, png: Path,
         f"  f_x^ini     = {result.fx_ini:.3f}\n"
         f"  f_x^fin     = {result.fx_fin:.3f}{_fin_caveat(result)}\n    per course: {result.fx_fin_crossed:.3f} crossed by the ladder, {result.fx_fin_intact:.3f} not\n"
         f"  n_lad/n_y   = {result.n_lad_over_ny:.3f}  ({result.n_lad} cells; {_loop_line(result)})\n"
+        f"    of them {_damage_line(result.damage_record())}\n"
         f"  v_lad/c_b   = {result.v_lad_over_cb:.3f}  {_velocity_caveat(result)}\n"
         f"  l_x/l0, l_y/l0 = {result.lx_over_l0:.3f}, {result.ly_over_l0:.3f}\n"
         f"  stop: {result.stop_reason}\n"

@@ -842,6 +842,7 @@ class LadderResult:
         out.update(self.energy_record())
         out.update({f"wall_{k}_s": v for k, v in self.wall_s.items()})
         out.update(self.loop_record())
+        out.update(self.damage_record())
         out["nan_reasons"] = "; ".join(f"{k}: {why}" for k, why in self.nan_reasons().items())
         return out
 
@@ -849,6 +850,20 @@ class LadderResult:
         """The ladders the cut started, by column and direction, and the freed loop of Fig. 2d behind each
         (:func:`knitlad.fabric.measure.ladders_started`)."""
         return [] if self.undone_at is None else ladders_started(self.undone_at, self.cut_row)
+
+    def damage_record(self) -> dict:
+        """n_lad split as Eq. 1 reads it (:func:`knitlad.fabric.measure.damage_parts`): the cells of the cut row,
+        those undone within 0.1 ms of the cut, and those the ladder released into loaded courses, with the last
+        over n_y (``n_lad_released_over_ny``: the damage Eq. 1 predicts, like for like)."""
+        from knitlad.fabric.measure import damage_parts
+
+        if self.undone_at is None:
+            parts = {"cut_row": self.n_lad, "immediate": 0, "released": 0}  # an older file: nothing to split by
+        else:
+            parts = damage_parts(self.undone_at, self.cut_row)
+        n_y = self.settings.stretch.n_y
+        return {"n_lad_cut_row": parts["cut_row"], "n_lad_immediate": parts["immediate"],
+                "n_lad_released": parts["released"], "n_lad_released_over_ny": parts["released"] / n_y}
 
     def loop_record(self) -> dict:
         """Summary of :meth:`ladders`: ladders up and down, when the first downward (loops (2)/(3)) and the

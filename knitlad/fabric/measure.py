@@ -225,3 +225,20 @@ def ladders_started(undone_at: np.ndarray, cut_row: int) -> list[dict]:
         else:
             lad["loop"], first_up = ("1" if first_up else "4/5"), False
     return ladders
+
+
+IMMEDIATE_S = 1e-4  # cells undone this soon after the cut come undone with it (the cut's own damage) [s]
+
+
+def damage_parts(undone_at: np.ndarray, cut_row: int, immediate_s: float = IMMEDIATE_S) -> dict[str, int]:
+    """The undone cells split by what they free into the loaded knit (Eq. 1 counts l0 - l_x per cell released
+    into a loaded course): ``cut_row``, the cells of the cut's own course (its yarn is cut: it frees no length
+    into a loaded course); ``immediate``, the other cells undone within ``immediate_s`` of the cut (its
+    recoil, not the ladder's run); ``released``, the rest, the ladder's own. ``undone_at`` (n_rows, n_cols)
+    [s since the cut], NaN where a cell never came undone."""
+    done = np.isfinite(undone_at)
+    in_cut_row = np.zeros_like(done)
+    in_cut_row[cut_row] = done[cut_row]
+    immediate = done & ~in_cut_row & (undone_at <= immediate_s)
+    return {"cut_row": int(in_cut_row.sum()), "immediate": int(immediate.sum()),
+            "released": int((done & ~in_cut_row & ~immediate).sum())}

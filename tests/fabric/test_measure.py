@@ -161,3 +161,19 @@ def test_one_upward_and_two_downward_ladders_are_the_hindered_pattern():
     at[5, 3] = 1.2e-3                      # loop (4)/(5) lets go: a second upward ladder
     record = kl.LadderResult(settings=None, undone_at=at, cut_row=4).loop_record()
     assert not record["hindered"] and record["second_up_ms"] == pytest.approx(1.2)
+
+
+def test_damage_is_split_into_the_cut_row_the_cut_s_recoil_and_what_the_ladder_released():
+    """Eq. 1 counts l0 - l_x per cell released into a loaded course: the cut row's cells and those undone with
+    the cut (within 0.1 ms) are counted apart from the ladder's own."""
+    from knitlad.fabric.measure import damage_parts
+
+    nan = math.nan
+    undone_at = np.array([[nan, 9e-4, nan],   # row 0: the downward ladder, later
+                          [nan, 5e-5, nan],   # row 1: undone with the cut
+                          [2e-5, 0.0, 3e-4],  # row 2: the cut row, whenever its cells go
+                          [nan, 1e-4, nan],   # row 3: at 0.1 ms exactly, still the cut's
+                          [nan, 4e-4, 6e-4]])  # row 4: the upward ladder
+    assert damage_parts(undone_at, cut_row=2) == {"cut_row": 3, "immediate": 2, "released": 3}
+    assert damage_parts(undone_at, cut_row=2, immediate_s=0.0) == {"cut_row": 3, "immediate": 0, "released": 5}
+    assert sum(damage_parts(undone_at, cut_row=0).values()) == np.isfinite(undone_at).sum()
