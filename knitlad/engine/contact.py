@@ -68,6 +68,12 @@ def check_friction_coefficient(mu: float) -> None:
         raise ValueError(f"mu (the friction coefficient) must be >= 0, got {mu!r}")
 
 
+# the knit scenes' contact stiffness, said once: a contact carrying this force [f0] overlaps by KNIT_OVERLAP d
+# (halving or doubling it moves the 42 x 42 knit's v_lad by under 5 %: docs/dissipation.md)
+KNIT_CONTACT_FORCE_F0 = 20.0
+KNIT_OVERLAP = 0.05
+
+
 @renamed_field("friction", "mu", since="0.5.0")
 @dataclass(frozen=True)
 class ContactModel:
@@ -151,7 +157,7 @@ class ContactModel:
                                      getattr(settings, "sagitta_radius_d", 0.0), **kwargs)
 
     @staticmethod
-    def for_knit(material, contact_force_f0: float = 20.0, overlap_fraction: float = 0.05,
+    def for_knit(material, contact_force_f0: float = KNIT_CONTACT_FORCE_F0, overlap_fraction: float = KNIT_OVERLAP,
                  sagitta_radius_d: float = 0.0, **kwargs) -> "ContactModel":
         """The knit scenes' contact: a contact carrying ``contact_force_f0`` f0 overlaps by ``overlap_fraction`` d;
         ``sagitta_radius_d`` > 0: the sagitta correction for a yarn curved on that many diameters."""

@@ -11,6 +11,7 @@ from typing import ClassVar, Literal, get_args, get_origin
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP
 from knitlad.fabric.observers import AUTO_FRAMES
 from knitlad.fabric.presets import LADDER_PRESETS, LOOP_PRESETS, PRESET_HELP, STITCH_PRESETS
 
@@ -119,9 +120,9 @@ class CutConfig(_WithPreset):
     d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description=(
         "yarn diameter over stitch length d/l0 [-]; 1/70, the paper's rounded value and the default, means its "
         "Nylon itself: d = 0.14 mm with l0 = 9.74 mm, d/l0 = 0.01437 (knitlad.experiments.config.material_for)"))
-    contact_force_f0: float = Field(20.0, gt=0, description=(
+    contact_force_f0: float = Field(KNIT_CONTACT_FORCE_F0, gt=0, description=(
         "contact stiffness: a contact carrying this force overlaps by overlap_fraction d [f0]"))
-    overlap_fraction: float = Field(0.05, gt=0, lt=1, description="overlap at contact_force_f0, over d [-]")
+    overlap_fraction: float = Field(KNIT_OVERLAP, gt=0, lt=1, description="overlap at contact_force_f0, over d [-]")
     sagitta_radius: float | None = Field(None, ge=0, le=1000, description=(
         "the contact's sagitta correction: each segment's contact radius is r - l^2/(12 R), R this many yarn "
         "diameters (the stitch's contacts' radius of curvature), l the segment; 0: capsules of the yarn's "

@@ -31,7 +31,7 @@ import time
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
-from knitlad.engine.contact import ContactModel
+from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP, ContactModel
 from knitlad.fabric.observers import LetGo, TimeLimit
 from knitlad.engine.runloop import run_until
 from knitlad.fabric.scenes.jersey import Jersey
@@ -64,8 +64,8 @@ class LoopSettings:
     ly_over_l0: float
     nodes_per_stitch: int  # release time within 3 % of 48 nodes/stitch (24: up to 8 %, and f_x = 2 stays hooked)
     max_time_s: float  # releases take 50 to 150 us
-    contact_force_f0: float = 20.0  # as the knit's (CutConfig)
-    overlap_fraction: float = 0.05
+    contact_force_f0: float = KNIT_CONTACT_FORCE_F0
+    overlap_fraction: float = KNIT_OVERLAP
     observe_every_s: float = 0.5e-6  # contact checks
     topology_every_s: float = 1e-6  # threading checks (tau is resolved to this)
     confirm_s: float = 20e-6  # unthreaded this long: released

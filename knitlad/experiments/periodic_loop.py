@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from knitlad.engine import units
-from knitlad.engine.contact import ContactModel
+from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP, ContactModel
 from knitlad.experiments.loop_model import LoopReading, LoopResult, check_tension_and_friction
 from knitlad.fabric.observers import LetGo, TimeLimit
 from knitlad.engine.runloop import run_until
@@ -65,8 +65,8 @@ class PeriodicLoopSettings:
     confirm_s: float = 20e-6  # apart this long: released
     observe_every_s: float = 0.5e-6
     box_response_s: float = 0.3e-6  # the box's relaxation time under its stiffest (affine) response
-    contact_force_f0: float = 20.0
-    overlap_fraction: float = 0.05
+    contact_force_f0: float = KNIT_CONTACT_FORCE_F0
+    overlap_fraction: float = KNIT_OVERLAP
     dt_safety: float = DEFAULT_SAFETY
     material: Material = NYLON
 

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from knitlad.engine import units
-from knitlad.engine.contact import ContactModel
+from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP, ContactModel
 from knitlad.engine.kernels.contact import contact_energy
 from knitlad.engine.kernels.elastic import bending_energy, edge_vectors, framed_bending_twisting_energy, stretching_energy
 from knitlad.engine.kernels.frames import material_frames, transport_reference_frames, update_reference_twist
@@ -52,8 +52,8 @@ class StitchSettings:
     ly_over_l0: float
     nodes_per_stitch: int
     material: Material
-    contact_force_f0: float = 20.0
-    overlap_fraction: float = 0.05
+    contact_force_f0: float = KNIT_CONTACT_FORCE_F0
+    overlap_fraction: float = KNIT_OVERLAP
     sagitta_radius_d: float = 0.0  # the contact's sagitta correction (knitlad.engine.contact.sagitta_corrected_radius), in d; 0: none
     stretch_increment: float = 0.005
     relax_steps: int = 20_000  # per increment

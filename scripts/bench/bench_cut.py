@@ -20,12 +20,22 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent))
-from bench_rod import build, measure  # noqa: E402
+from knitlad.experiments.config import CutConfig
+from knitlad.experiments.protocol import run_ladder
+from knitlad.engine.simulation import numba_threads
 
-from knitlad.experiments.config import CutConfig  # noqa: E402
-from knitlad.experiments.protocol import run_ladder  # noqa: E402
-from knitlad.engine.simulation import numba_threads  # noqa: E402
+
+def _lean_kernel():
+    """``build`` and ``measure`` of ``bench_rod.py`` beside this file (a script, not a module of the package)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("bench_rod", Path(__file__).with_name("bench_rod.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.build, module.measure
+
+
+build, measure = _lean_kernel()
 
 
 def lean_rate() -> float:

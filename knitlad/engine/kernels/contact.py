@@ -58,8 +58,8 @@ class ContactParams(NamedTuple):
 
 class ListScratch(NamedTuple):
     """Work arrays of a contact-list rebuild (:func:`refresh_contacts`, :func:`build_candidate_pairs`), kept from
-    one rebuild to the next: fresh ones cost the kernel a page fault per 4 KiB each time (7,700 faults, about
-    15 of the 40 ms of a rebuild of the accurate 42 x 42 knit, 2026-12-04). Made by :func:`list_scratch`."""
+    one rebuild to the next: fresh ones cost the kernel a page fault per 4 KiB each time, over a third of a
+    rebuild of a large knit (docs/performance.md). Made by :func:`list_scratch`."""
 
     old_pairs: np.ndarray  # (cap, 2) the list before the rebuild (its slip is carried over)
     old_keys: np.ndarray  # (cap,)
@@ -396,7 +396,7 @@ def fast_edge_pairs(x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_
     midpoints' x. Same exclusions as :func:`_candidates_of_block`.
 
     The tests are written out in both loops: as one helper taking the arrays (compiled or inlined), the
-    pairs of 1,172 fast edges took 49 ms against 2 (42 x 42 accurate, 2026-12-04)."""
+    fast edges' pairs took 25 x longer (docs/performance.md)."""
     ne = edge_a.shape[0]
     half_skin = 0.5 * skin
     nf = fast.shape[0]
@@ -517,7 +517,7 @@ def _candidates_of_block(
                         continue
                     # excluded: same yarn and at most `exclusion` edges apart along it (cyclically if
                     # closed); written out here: as a call, even inlined (excluded_along_yarn), the search
-                    # is 1.08 x slower (42 x 42 accurate, 2026-12-04)
+                    # is slower (docs/performance.md)
                     y = edge_yarn[i]
                     if y == edge_yarn[j]:
                         gap = abs(edge_local[i] - edge_local[j])
@@ -886,7 +886,7 @@ def rod_contact_sum(r, n_blocks, bucket_start, bucket_fill, shares, share_edge, 
             k = share_edge[q] >> 1
             # +1 on a pair's first edge, -1 on its second; the products in one block, with no branch: a
             # branch for each side made the compiler hoist (1 - w) f out of it and drop the fused multiply-adds
-            # that the serial sum gets, which changed the last bits (2026-12-04)
+            # that the serial sum gets, which changed the last bits
             sign = 1.0 - 2.0 * (share_edge[q] & 1)
             lever_a = sign * (1 - shares[q, SHARE_LEVER])
             lever_b = sign * shares[q, SHARE_LEVER]
