@@ -7,11 +7,11 @@ straight yarn; l_y/l0 = 0.25 for the 42 x 42 crosses of Fig. 5a). Each point is 
     material      the Nylon's viscoelasticity, loss factor 0.03 at 3.1 kHz
     air           still air
     both          material and air
-    drag <g>      the authors' global drag -g m v [1/s] (not physics)
+    drag <g>      the authors' global drag -g m v [1/s] (not physics); 6000 and 10000 run when named
     d/l0 1/60     the public engine's yarn (its own stretched knits)
     k x0.5, k x2  the contact stiffness halved and doubled (their own stretched knits)
     ly 0.302      the other l_y of the paper's 42 x 42 crosses (Fig. 5a)
-    twist         the yarns carry twist, so friction also turns them
+    twist         the yarns carry twist, so friction also turns them (ly 0.302 and twist run when named)
 
 Paired ensembles: member k of a point is one knit (force-control targets 0.5 % apart,
 knitlad/studies/ensemble.py) cut under every dissipation variant that keeps its knit; the model's
@@ -52,7 +52,7 @@ VARIANTS = {
     "drag 2000": ({}, {"drag_per_s": 2000.0}),
     "drag 3000": ({}, {"drag_per_s": 3000.0}),
     "drag 6000": ({}, {"drag_per_s": 6000.0}),
-    "drag 10000": ({}, {"drag_per_s": 10000.0}),  # the public engine's later drag, 0.01 per axial-wave time
+    "drag 10000": ({}, {"drag_per_s": 10000.0}),  # the order of the public example's second drag (0.01 per axial-wave time)
     "d/l0 1/60": ({"d_over_l0": 1 / 60}, {}),
     "k x0.5": ({"contact_force_f0": 10.0}, {}),
     "k x2": ({"contact_force_f0": 40.0}, {}),
@@ -175,7 +175,7 @@ def main() -> None:
             "v_lad_over_cb", "n_lad_over_ny", "fx_fin", "stop_reason", "reached_edge", "steps", "nodes",
             "energy_start_J", "energy_end_J", "dissipated_friction_J", "dissipated_contact_dashpot_J",
             "dissipated_axial_dashpot_J", "dissipated_material_J", "dissipated_air_J", "dissipated_global_drag_J",
-            "ledger_residual")})
+            "ledger_residual", "ladders_up", "ladders_down")})
         row["ladder_s"] = time.perf_counter() - t1
         row["time_ms"] = result.times_s[-1] * 1e3 if result.times_s else float("nan")
         rows.append(row)
