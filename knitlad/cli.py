@@ -425,11 +425,14 @@ def cycle(
         f"(box l_x/l0 {result.lx_min:.4f} -> {cfg.lx_max:.4f})\n"
         f"  at Delta x_max: f_x^ini = {result.fx_ini:.3f}, l_x/l0 = {result.lx_over_l0:.4f}, l_y/l0 = {result.ly_over_l0:.4f}"
         f"{'' if result.hold_converged else ' (the hold did not settle within --hold-ms)'}")
-    if cfg.fx_thr is not None and result.nan_reasons():
+    if cfg.fx_thr is not None and "delta_l_over_l0" in result.nan_reasons():
         typer.echo(f"  delta l: not read ({result.nan_reasons()['delta_l_over_l0']})")
     elif cfg.fx_thr is not None:
         typer.echo(f"  delta l = {result.delta_l_over_l0 * l0 * 1e3:.3f} mm to f_x^thr = {cfg.fx_thr:g}: "
                    f"predicted n_lad/n_y = delta l/(l0 - l_x) = {result.predicted_damage:.3f}")
+    if not math.isnan(result.delta_l_own_over_l0):
+        typer.echo(f"  read as the paper reads it, to its own f_x^fin = {result.fx_thr_own:.3f}: delta l = "
+                   f"{result.delta_l_own_over_l0 * l0 * 1e3:.3f} mm, predicted n_lad/n_y = {result.predicted_damage_own:.3f}")
     if ladder is not None:
         typer.echo(f"  cut: n_lad/n_y = {ladder.n_lad_over_ny:.3f} ({ladder.n_lad} cells), f_x^fin = {ladder.fx_fin:.3f} "
                    f"(crossed courses {ladder.fx_fin_crossed:.3f}), stop: {ladder.stop_reason}\n"

@@ -79,6 +79,8 @@ def test_cycle_runs_protocol_b_end_to_end_on_a_small_knit(tmp_path):
     with h5py.File(tmp_path / "cycle.h5") as f:
         assert f["cycle/readings"].shape == (8, 5) and "series/fx" in f
         assert f.attrs["cycle_fx_ini"] > 1 and f.attrs["cycle_delta_l_over_l0"] > 0
+        # Eq. 1 also read at the cut copy's own f_x^fin (the paper's f_thr)
+        assert f.attrs["cycle_fx_thr_own"] == pytest.approx(f.attrs["fx_fin"])
     assert (tmp_path / "cycle.png").stat().st_size > 1000
     assert run("cycle", "--stitches", "6x8", "--lx-max", "0.36", "--out", str(tmp_path)).returncode == 2  # not over it
 

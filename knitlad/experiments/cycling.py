@@ -138,6 +138,9 @@ class CycleResult:
     lx_over_l0: float = math.nan  # measured l_x/l0 there (before the cut)
     ly_over_l0: float = math.nan
     delta_l_over_l0: float = math.nan  # the shortening from Delta x_max to f_x^thr on the uncut twin's unloading
+    # the paper's reading of Eq. 1: f_thr is the tension at the bars once the cut copy's ladder stopped (its f_x^fin)
+    fx_thr_own: float = math.nan
+    delta_l_own_over_l0: float = math.nan  # the same shortening, to fx_thr_own
     hold_converged: bool = False
     wall_s: float = 0.0
 
@@ -146,31 +149,48 @@ class CycleResult:
         """delta l / (l0 - l_x) (Eq. 1), l_x measured at Delta x_max."""
         return self.delta_l_over_l0 / (1.0 - self.lx_over_l0)
 
+    @property
+    def predicted_damage_own(self) -> float:
+        """Eq. 1 as the paper reads it: delta l to the run's own post-arrest tension at the bars, over (l0 - l_x)."""
+        return self.delta_l_own_over_l0 / (1.0 - self.lx_over_l0)
+
+    def shortening_at(self, fx_thr: float) -> float:
+        """delta l/l0 on the last unloading, from the hold at Delta x_max down to ``fx_thr`` (:func:`shortening_to`)."""
+        r, last = self.readings, self.settings.cycles
+        start = np.flatnonzero((r[:, 0] == last) & (r[:, 1] == HOLD))[0]
+        return shortening_to(np.vstack([r[start, 3:5], self.leg(last, UNLOADING)]), fx_thr, self.n_x)
+
     def leg(self, cycle: int, leg: int) -> np.ndarray:
         """(k, 2) box l_x/l0 and f_x of one leg, in order."""
         r = self.readings
         return r[(r[:, 0] == cycle) & (r[:, 1] == leg)][:, 3:5]
 
     def nan_reasons(self) -> dict[str, str]:
-        """Why delta l (and the damage Eq. 1 predicts from it) is NaN, when it is."""
-        if not math.isnan(self.delta_l_over_l0):
-            return {}
-        thr = self.settings.fx_thr
-        if thr is None:
-            why = "no f_x^thr was given (fx_thr)"
-        else:
-            unloading = self.leg(self.settings.cycles, -1)
-            if unloading.size and unloading[0, 1] <= thr:
-                why = f"f_x at Delta x_max, {unloading[0, 1]:.3f}, is already at or below f_x^thr = {thr:g}"
-            else:
-                low = f"{unloading[:, 1].min():.3f}" if unloading.size else "nothing (no unloading was read)"
-                why = f"the unloading never fell to f_x^thr = {thr:g} (its lowest f_x: {low})"
-        return {"delta_l_over_l0": why, "predicted_damage": why}
+        """Why delta l (and the damage Eq. 1 predicts from it) is NaN, when it is; the same for the reading at
+        the run's own f_x^fin."""
+        reasons = {}
+        if math.isnan(self.delta_l_over_l0):
+            why = "no f_x^thr was given (fx_thr)" if self.settings.fx_thr is None else self._unreached(self.settings.fx_thr)
+            reasons.update({"delta_l_over_l0": why, "predicted_damage": why})
+        if math.isnan(self.delta_l_own_over_l0):
+            why = ("no cut copy stopped with a finite f_x^fin" if math.isnan(self.fx_thr_own)
+                   else self._unreached(self.fx_thr_own))
+            reasons.update({"delta_l_own_over_l0": why, "predicted_damage_own": why})
+        return reasons
+
+    def _unreached(self, thr: float) -> str:
+        unloading = self.leg(self.settings.cycles, -1)
+        if unloading.size and unloading[0, 1] <= thr:
+            return f"f_x at Delta x_max, {unloading[0, 1]:.3f}, is already at or below f_x^thr = {thr:g}"
+        low = f"{unloading[:, 1].min():.3f}" if unloading.size else "nothing (no unloading was read)"
+        return f"the unloading never fell to f_x^thr = {thr:g} (its lowest f_x: {low})"
 
     def summary(self) -> dict:
         return {"fx_ini": self.fx_ini, "lx_over_l0": self.lx_over_l0, "ly_over_l0": self.ly_over_l0,
                 "lx_max": self.settings.lx_max, "lx_min": self.lx_min, "fx_thr": self.settings.fx_thr,
                 "delta_l_over_l0": self.delta_l_over_l0, "predicted_damage": self.predicted_damage,
+                "fx_thr_own": self.fx_thr_own, "delta_l_own_over_l0": self.delta_l_own_over_l0,
+                "predicted_damage_own": self.predicted_damage_own,
                 "cycles": self.settings.cycles, "bar_speed_m_s": self.settings.bar_speed_m_s,
                 "hold_converged": self.hold_converged, "wall_s": self.wall_s,
                 "nan_reasons": "; ".join(f"{k}: {why}" for k, why in self.nan_reasons().items())}
@@ -250,9 +270,7 @@ def run_cycles(knit: StretchedKnit, s: CycleSettings, dynamics: DynamicsSettings
             keep(cycle_checkpoint(loaded, cycle, UNLOADED, result.hold_converged))
     result.readings = np.array(loaded.readings, dtype=float)
     if s.fx_thr is not None:
-        start = np.flatnonzero((result.readings[:, 0] == s.cycles) & (result.readings[:, 1] == HOLD))[0]
-        unloading = np.vstack([result.readings[start, 3:5], result.leg(s.cycles, UNLOADING)])
-        result.delta_l_over_l0 = shortening_to(unloading, s.fx_thr, result.n_x)
+        result.delta_l_over_l0 = result.shortening_at(s.fx_thr)
     result.wall_s = time.perf_counter() - t0
     return result
 
@@ -273,4 +291,7 @@ def run_protocol_b(ladder: LadderSettings, s: CycleSettings, cut_at_max: bool = 
             laddered.append(analyse(propagate(cut_cycled(snapshot, sim, ladder.dynamics), progress=progress)))
 
     result = run_cycles(knit, s, ladder.dynamics, progress, at_the_cut, after_leg, keep, resume)
+    if laddered and math.isfinite(laddered[0].fx_fin):
+        result.fx_thr_own = laddered[0].fx_fin
+        result.delta_l_own_over_l0 = result.shortening_at(result.fx_thr_own)
     return result, (laddered[0] if laddered else None)

@@ -130,7 +130,7 @@ SCENES: dict[str, SweepScene] = {
         "wall_stretch_s", "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment", stretch_of),
     "cycle": SweepScene(CycleConfig, run_cycle_job, (
         "fx_ini", "lx_over_l0", "ly_over_l0", "lx_max", "fx_thr", "delta_l_over_l0", "predicted_damage",
-        "cut_n_lad_over_ny", "cut_fx_fin", "cut_fx_fin_crossed", "cut_reached_edge", "cut_ladders_up",
+        "fx_thr_own", "delta_l_own_over_l0", "predicted_damage_own", "cut_n_lad_over_ny", "cut_fx_fin", "cut_fx_fin_crossed", "cut_reached_edge", "cut_ladders_up",
         "cut_ladders_down", "cut_second_up_ms", "cut_hindered", "cut_n_lad_cut_row", "cut_n_lad_immediate",
         "cut_n_lad_released", "cut_n_lad_released_over_ny", "hold_converged", "nan_reasons", "cut_nan_reasons",
         "wall_s",

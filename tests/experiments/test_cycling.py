@@ -148,8 +148,27 @@ def test_an_unreached_threshold_says_why_delta_l_is_nan():
     result = CycleResult(settings=s, n_x=6, lx_min=0.35, readings=readings, lx_over_l0=0.39)
     assert math.isnan(result.predicted_damage)
     assert "never fell to f_x^thr = 0.5 (its lowest f_x: 1.200)" in result.summary()["nan_reasons"]
-    assert CycleResult(settings=s, n_x=6, lx_min=0.35, readings=readings, delta_l_over_l0=0.1,
-                       lx_over_l0=0.39).nan_reasons() == {}
+    assert "delta_l_over_l0" not in CycleResult(settings=s, n_x=6, lx_min=0.35, readings=readings,
+                                                delta_l_over_l0=0.1, lx_over_l0=0.39).nan_reasons()
+    assert "no cut copy" in result.nan_reasons()["predicted_damage_own"]
+
+
+def test_eq1_is_also_read_at_the_runs_own_post_arrest_tension():
+    """The paper's f_thr is the tension at the bars after the ladder stopped: delta l read down to the cut
+    copy's f_x^fin, on the same unloading (from the hold at Delta x_max) as the fixed threshold."""
+    from knitlad.experiments.cycling import CycleResult, CycleSettings
+
+    s = CycleSettings(lx_max=0.4, cycles=1, bar_speed_m_s=0.25, damping_per_s=2e4, readings_per_leg=2, hold_s=1e-3,
+                      hold_tol_f0=1e-3, fx_thr=2.0)
+    readings = np.array([[0, 0, 0.0, 0.35, 1.0], [1, 1, 0.1, 0.40, 9.0], [1, 0, 0.2, 0.40, 8.0],
+                         [1, -1, 0.3, 0.38, 4.0], [1, -1, 0.4, 0.36, 0.0]])
+    result = CycleResult(settings=s, n_x=10, lx_min=0.35, readings=readings, lx_over_l0=0.39)
+    # from (0.40, 8) to (0.38, 4): f_x 6 halfway, at 0.39; from (0.38, 4) to (0.36, 0): f_x 2 halfway, at 0.37
+    assert result.shortening_at(6.0) == pytest.approx(10 * 0.01)
+    assert result.shortening_at(2.0) == pytest.approx(10 * 0.03)
+    result.fx_thr_own, result.delta_l_own_over_l0 = 6.0, result.shortening_at(6.0)
+    assert result.predicted_damage_own == pytest.approx(0.1 / 0.61)
+    assert result.summary()["fx_thr_own"] == 6.0 and "predicted_damage_own" not in result.nan_reasons()
 
 
 def test_protocol_b_resumed_from_a_checkpoint_file_reads_the_same_curve_to_the_bit(cycled, tmp_path):
