@@ -1,6 +1,7 @@
 import math
 import time
 
+import numba
 import numpy as np
 import pytest
 
@@ -261,6 +262,7 @@ def test_the_thread_governor_keeps_the_faster_count_and_tries_two_only_where_a_c
     assert seen == [2, 1, 1] and g.current == 1
 
 
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs two Numba threads (NUMBA_NUM_THREADS >= 2)")
 def test_switching_thread_counts_mid_run_changes_no_bit():
     """The governor may change the count every chunk: the positions are those of a one-thread run."""
     counts = []
