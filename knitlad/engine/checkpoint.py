@@ -24,7 +24,7 @@ class Checkpointing:
 
     def checkpoint(self) -> dict[str, np.ndarray]:
         """Copies of every array a run changes, by name (internal units), and the clock ("clock": time [ms],
-        steps, the global drag, the ledger's start, the closing edges' drift)."""
+        steps, the global drag, the ledger's start, the closing edges' drift, the energy breaks took)."""
         out = {f"state/{k}": np.array(v) for k, v in self.state._asdict().items()}
         out |= {f"work/{k}": np.array(v) for k, v in self.work._asdict().items()}
         out |= {f"model/{k}": np.array(getattr(self.model, k)) for k in MODEL_CHANGES}
@@ -34,7 +34,8 @@ class Checkpointing:
             out["contacts/mu"] = np.array(self.contacts.params.mu)
         if self.obstacles is not None:
             out |= {f"obstacles/{k}": np.array(v) for k, v in self.obstacles._asdict().items()}
-        out["clock"] = np.array([self.time, self.steps, self.drag, *self._ledger_start, self._shift_drift],
+        out["clock"] = np.array([self.time, self.steps, self.drag, *self._ledger_start, self._shift_drift,
+                                 self._fracture_J],
                                 dtype=np.float64)
         return out
 
@@ -68,6 +69,9 @@ class Checkpointing:
         if self.obstacles is not None:
             for k, a in self.obstacles._asdict().items():
                 a[...] = fit(f"obstacles/{k}", a)
-        time, steps, drag, ledger_stored, ledger_time, drift = fit("clock", np.zeros(6))
+        older = np.shape(checkpoint.get("clock")) == (6,)  # written before breaks were booked: none were
+        clock = np.append(fit("clock", np.zeros(6)), 0.0) if older else fit("clock", np.zeros(7))
+        time, steps, drag, ledger_stored, ledger_time, drift, fracture = clock
         self.time, self.steps, self.drag = float(time), int(steps), float(drag)
         self._ledger_start, self._shift_drift = (float(ledger_stored), float(ledger_time)), float(drift)
+        self._fracture_J = float(fracture)

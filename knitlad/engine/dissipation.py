@@ -132,7 +132,8 @@ class EnergyLedger:
     out (each >= 0 up to round-off): ``axial_dashpot`` (the numerical dashpot of the axial springs, and with
     implicit axial springs the scheme's own damping of axial waves), ``contact_dashpot``, ``friction``
     (sliding at the Coulomb limit, the tangential dashpot, springs lost when pairs separate),
-    ``global_drag``, ``material``, ``air``. ``start``: the stored energy at the reset. ``residual``: the
+    ``global_drag``, ``material``, ``air``, ``fracture`` (the energy stored in what a break cut away:
+    :mod:`knitlad.engine.fracture`). ``start``: the stored energy at the reset. ``residual``: the
     change of the stored energy plus what was taken out less what was put in, which would be zero for an
     exact integrator; ``turnover``: what was put in or taken out, the scale the residual is judged against.
     """
@@ -154,8 +155,9 @@ class EnergyLedger:
     obstacle_work: float
     start: float
     time_s: float
+    fracture: float = 0.0
 
-    DISSIPATED = ("axial_dashpot", "contact_dashpot", "friction", "global_drag", "material", "air")
+    DISSIPATED = ("axial_dashpot", "contact_dashpot", "friction", "global_drag", "material", "air", "fracture")
     STORED = ("stretching", "bending", "twisting", "branches", "contact", "kinetic", "external")
 
     @property
@@ -224,6 +226,7 @@ class DissipationControl:
         start."""
         self.work.ledger[:] = 0.0
         self._ledger_start = (0.0, 0.0)
+        self._fracture_J = 0.0
         first = self.ledger()
         self._ledger_start = (first.stored, self.time_s)
 
@@ -242,7 +245,7 @@ class DissipationControl:
             stretching=e["stretching"], bending=e["bending"], twisting=e["twisting"], branches=float(branches),
             contact=e["contact"], kinetic=e["kinetic"], external=e["external"],
             **{name: float(totals[k]) for k, name in enumerate(LEDGER_NAMES)}, start=start,
-            time_s=self.time_s - t0)
+            time_s=self.time_s - t0, fracture=self._fracture_J)
 
     def energies_J(self) -> dict[str, float]:
         """Kinetic, stretching, bending, twisting, contact (stored), external-potential and total energy [J]."""

@@ -29,6 +29,7 @@ from knitlad.engine.contact import (
 )
 from knitlad.engine.checkpoint import Checkpointing
 from knitlad.engine.dissipation import AirDrag, DissipationControl, MaterialDamping, damping_params
+from knitlad.engine.fracture import Fracture
 from knitlad.engine.kernels.contact import GAPS_KNOWN, PAIRS_NEEDED, PEAK_OVERLAP, STALE, refresh_contacts, touching_pairs_among
 from knitlad.engine.kernels.integrate import (
     AXIAL_EXPLICIT,
@@ -384,7 +385,8 @@ class ContactReadout:
         return int(touching_pairs_among(self.state.x, m.edge_a, m.edge_b, m.edge_shift, c, in_a, in_b))
 
 
-class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, DissipationControl, Checkpointing):
+class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, DissipationControl, Checkpointing,
+                 Fracture):
     """Explicit dynamics and FIRE statics of a rod scene.
 
     Parameters
@@ -537,7 +539,7 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
         self.check_finite()
         allowed = numba.get_num_threads()
         while left > 0:
-            chunk = min(left, self.guard_every)
+            chunk = min(left, self.guard_every, self.break_check_every if self.breaking_force_N is not None else left)
             threads = self.threads.plan(allowed)
             numba.set_num_threads(threads)
             t0 = time.perf_counter()
@@ -557,6 +559,7 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
             self.time += done * self.dt
             left -= done
             self._guard()
+            self.break_overloaded()
 
     def run(
         self,

@@ -62,6 +62,14 @@ class Material:
     young_modulus   E        [Pa]
     poisson_ratio   nu       [-]   (sets the twist modulus G J = B / (1 + nu))
     stitch_length   l0       [m]   (yarn length per stitch; sets the paper's scales)
+    breaking_force  F_b      [N]   (the tension at which the yarn breaks: knitlad.engine.fracture)
+
+    The Nylon's breaking force is its tenacity times its linear density: drawn nylon 6 and 6,6 textile
+    filaments hold 40 to 60 cN/tex (Morton & Hearle, *Physical Properties of Textile Fibres*, 4th ed.,
+    2008, the tables of tensile properties), high-tenacity ones up to about 80; at 15.8 tex, 50 cN/tex gives
+    7.9 N (6.3 to 9.5 N; about 13 N for a high-tenacity line). That is a stress of 510 MPa, at the modulus
+    of 1.88 GPa a strain near 27 %: beyond where the rod's linear spring is exact, so a break's timing is
+    the model's, its force the material's. In the paper's units 7.9 N is 530 f0.
     """
 
     diameter: float = 0.14e-3
@@ -69,9 +77,10 @@ class Material:
     young_modulus: float = 1.88e9
     poisson_ratio: float = 0.4
     stitch_length: float = 9.74e-3
+    breaking_force: float = 7.9
 
     def __post_init__(self) -> None:
-        for name in ("diameter", "line_density", "young_modulus", "stitch_length"):
+        for name in ("diameter", "line_density", "young_modulus", "stitch_length", "breaking_force"):
             value = getattr(self, name)
             if not (value > 0 and math.isfinite(value)):
                 raise ValueError(f"Material.{name} must be a positive finite number, got {value!r}")

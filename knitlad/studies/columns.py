@@ -66,6 +66,7 @@ LADDER = {
     "dissipated_material_J": ("J", "energy the yarn's viscoelasticity took out (loss_factor > 0)"),
     "dissipated_air_J": ("J", "energy the air took out (air_drag)"),
     "dissipated_global_drag_J": ("J", "energy the global drag took out (drag_per_s > 0)"),
+    "dissipated_fracture_J": ("J", "elastic energy stored in the segments a break cut away (0: no yarn broke)"),
     "ledger_residual": ("1", "the energy ledger's residual over the energy turned over: the integrator's error "
                              "(docs/dissipation.md)"),
     "nan_reasons": ("-", "why each result that is NaN is NaN: 'column: reason; ...' (empty: none is)"),
