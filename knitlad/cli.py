@@ -375,7 +375,7 @@ def cycle(
     import json
 
     from knitlad.experiments.cycling import run_protocol_b
-    from knitlad.experiments.protocol import stretch
+    from knitlad.fabric.preparation import stretch
     from knitlad.io.hdf5 import write_arrays
     from knitlad.io.knit_cache import cached_stretch
 
@@ -537,7 +537,7 @@ def stitch(
     """Periodised jersey stitch: tensions per thread f_x, f_y at imposed (l_x, l_y), relaxed at mu = 0."""
     import json
 
-    from knitlad.experiments.stitch_model import StitchRun
+    from knitlad.fabric.stitch_model import StitchRun
 
     cfg = validated(_config.StitchConfig, options)
     settings = cfg.settings()
@@ -574,7 +574,7 @@ def diagram(
     from knitlad.experiments.config import StitchConfig
     from knitlad.io.atomic import atomic_path
     from knitlad.viz.plots import zero_tension_curve_plot
-    from knitlad.experiments.stitch_model import zero_tension_lx
+    from knitlad.fabric.stitch_model import zero_tension_lx
 
     values = ly or [0.20, 0.22, 0.24, 0.26, 0.28, 0.30]
     for v in values:
@@ -907,7 +907,7 @@ def _experiment_or_exit(run, progress, kept: str = "nothing written"):
     one line: Ctrl-C (130) and SIGTERM (143), a run that failed (1), settings found infeasible once the knit
     is built (2)."""
     from knitlad.fabric.observers import Interpenetration
-    from knitlad.experiments.protocol import InfeasibleRun
+    from knitlad.fabric.preparation import InfeasibleRun
     from knitlad.fabric.scenes.jersey import CourseTooWide
     from knitlad.engine.simulation import SimulationBlowUp
     from knitlad.fabric.stretching import OutOfReach

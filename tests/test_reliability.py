@@ -334,7 +334,8 @@ def test_a_run_of_absurdly_many_steps_is_refused_before_its_first_step(option, t
 def test_a_step_longer_than_the_observation_interval_is_refused():
     """d/l0 = 1e-6 gave a 1.2 ms step against 20 us between observations: the run 'finished' in 2 steps."""
     from knitlad.experiments.config import CutConfig
-    from knitlad.experiments.protocol import InfeasibleRun, check_feasible
+    from knitlad.experiments.protocol import check_feasible
+    from knitlad.fabric.preparation import InfeasibleRun
 
     dynamics = CutConfig(lx=0.38, preset="fast").dynamics_settings()
     check_feasible(1e-8, dynamics)
@@ -346,7 +347,7 @@ def test_a_step_longer_than_the_observation_interval_is_refused():
 @pytest.fixture(scope="module")
 def tiny_knit():
     from knitlad.experiments.config import CutConfig
-    from knitlad.experiments.protocol import stretch
+    from knitlad.fabric.preparation import stretch
 
     settings = CutConfig(n_x=4, n_y=4, lx=0.34, preset="fast", resolution=16).stretch_settings()
     return settings, stretch(settings)

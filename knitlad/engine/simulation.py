@@ -333,8 +333,8 @@ class SupportControl:
 
 class ContactReadout:
     """What the contact saw, read from a :class:`Simulation`'s buffers (mixed into it): totals, each
-    touching pair, the deepest overlap, the pairs between two yarns; and the friction history handed over
-    from another simulation of the same nodes."""
+    touching pair, the deepest overlap, the pairs between two yarns; the friction coefficient, and the
+    friction history handed over from another simulation of the same nodes."""
 
     def adopt_friction_history(self, contacts: Contacts, edge_map: np.ndarray) -> None:
         """Take the contact pairs and their tangential springs from ``contacts`` (another simulation's, of the
@@ -344,6 +344,13 @@ class ContactReadout:
             self.contacts = make_contacts(self.rods, self.contact_model, capacity=2 * self.contacts.pairs.shape[0],
                                           previous=self.contacts)
         self.compute_forces()
+
+    def set_friction(self, mu: float) -> None:
+        """Change the Coulomb coefficient from the next step on (the paper: 0 while stretching, then 0.4)."""
+        if self.contact_model is None:
+            raise ValueError("this simulation has no contact model")
+        check_friction_coefficient(mu)
+        self.contacts = self.contacts._replace(params=self.contacts.params._replace(mu=float(mu)))
 
     @property
     def mu(self) -> float:
@@ -471,13 +478,6 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
                                      self.has_contact, self.damping, self.dt, self.axial_mode, self.dashpot_mode,
                                      *self._obstacle_args):
                 self._grow_contacts()
-
-    def set_friction(self, mu: float) -> None:
-        """Change the Coulomb coefficient from the next step on (the paper: 0 while stretching, then 0.4)."""
-        if self.contact_model is None:
-            raise ValueError("this simulation has no contact model")
-        check_friction_coefficient(mu)
-        self.contacts = self.contacts._replace(params=self.contacts.params._replace(mu=float(mu)))
 
     @property
     def model(self):

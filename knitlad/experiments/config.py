@@ -224,7 +224,7 @@ class CutConfig(_WithPreset):
         return self.nodes * (2048 + 24 * frames)  # positions and velocities, float32
 
     def stretch_settings(self):
-        from knitlad.experiments.protocol import StretchSettings
+        from knitlad.fabric.preparation import StretchSettings
 
         return StretchSettings(
             n_x=self.n_x, n_y=self.n_y, lx_over_l0=self.lx, fx_target=self.fx, ly_over_l0=self.ly,
@@ -371,8 +371,8 @@ class StitchConfig(_WithPreset):
         return self
 
     def settings(self, **model_choices):
-        """The run's settings; ``model_choices``: other fields of :class:`knitlad.experiments.stitch_model.StitchSettings`."""
-        from knitlad.experiments.stitch_model import StitchSettings
+        """The run's settings; ``model_choices``: other fields of :class:`knitlad.fabric.stitch_model.StitchSettings`."""
+        from knitlad.fabric.stitch_model import StitchSettings
 
         return StitchSettings(lx_over_l0=self.lx, ly_over_l0=self.ly, nodes_per_stitch=self.resolution,
                               material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,

@@ -33,18 +33,16 @@ from knitlad.engine import units
 from knitlad.engine.contact import carry_friction_history
 from knitlad.experiments.protocol import (
     DynamicsSettings,
-    InfeasibleRun,
     LadderResult,
     Laddering,
     LadderSettings,
-    StretchedKnit,
     analyse,
     cut,
     dynamics_rods,
     dynamics_simulation,
     propagate,
-    stretch,
 )
+from knitlad.fabric.preparation import InfeasibleRun, StretchedKnit, stretch
 from knitlad.engine.simulation import Simulation
 
 LOADING, HOLD, UNLOADING = 1, 0, -1  # the leg column of the readings

@@ -40,7 +40,7 @@ from knitlad.fabric.observers import LetGo, TimeLimit
 from knitlad.engine.runloop import run_until
 from knitlad.fabric.scenes.rows import PeriodicRows, build_periodic_rows
 from knitlad.engine.simulation import Simulation, small_scene_threads
-from knitlad.experiments.stitch_model import StitchRun, StitchSettings, cell_energy
+from knitlad.fabric.stitch_model import StitchRun, StitchSettings, cell_energy
 from knitlad.fabric.stretching import force_control
 from knitlad.engine.timestep import DEFAULT_SAFETY
 from knitlad.engine.units import NYLON, Material
@@ -98,7 +98,7 @@ class PeriodicLoopResult(LoopResult):
 class TensionBox:
     """The period L as an overdamped degree of freedom under an imposed force F:
     gamma dL/dt = F - dE/dL, with dE/dL the energy derivative of the rows present under an
-    affine stretch along x (the virial tension, :func:`knitlad.experiments.stitch_model.cell_energy`).
+    affine stretch along x (the virial tension, :func:`knitlad.fabric.stitch_model.cell_energy`).
 
     gamma = k_aff * response, k_aff the affine stiffness dF/dL measured at the start: the
     stiffest response of the stack (the relaxed one is an order of magnitude softer), so

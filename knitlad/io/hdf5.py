@@ -35,7 +35,7 @@ and, with obstacles (``Plane``, ``Cylinder``), their shapes and where each was a
     /obstacles/direction, radius   (k, 3) the plane's normal or the cylinder's axis; (k,) [m] (0 for a plane)
     /obstacles/points   (n_frames, k, 3) [m] a point of each obstacle (its reference point, moved)
 
-A stretched knit (:class:`knitlad.experiments.protocol.StretchedKnit`, ``stretched.h5``): its scalars
+A stretched knit (:class:`knitlad.fabric.preparation.StretchedKnit`, ``stretched.h5``): its scalars
 and settings as attributes, ``/model/*`` and ``/state/*`` (the arrays of
 :class:`knitlad.engine.state.RodModel` and :class:`~knitlad.engine.state.RodState`, internal units)
 and ``/knit/*`` (the course bookkeeping of :class:`knitlad.fabric.scenes.jersey.KnitScene`).
@@ -379,7 +379,7 @@ _KNIT_SCALARS = ("box_lx", "box_ly", "fx_ini", "lx_over_l0", "ly_over_l0", "fx_w
 
 
 def write_stretched_knit(path: str | Path, knit) -> Path:
-    """Write a :class:`knitlad.experiments.protocol.StretchedKnit` so that :func:`read_stretched_knit` gives it back exactly."""
+    """Write a :class:`knitlad.fabric.preparation.StretchedKnit` so that :func:`read_stretched_knit` gives it back exactly."""
     path = Path(path)
     k = knit.knit
     with atomic_hdf5(path) as f:
@@ -403,8 +403,8 @@ def write_stretched_knit(path: str | Path, knit) -> Path:
 
 
 def read_stretched_knit(path: str | Path):
-    """The :class:`knitlad.experiments.protocol.StretchedKnit` of a file of :func:`write_stretched_knit`."""
-    from knitlad.experiments.protocol import StretchedKnit, StretchSettings
+    """The :class:`knitlad.fabric.preparation.StretchedKnit` of a file of :func:`write_stretched_knit`."""
+    from knitlad.fabric.preparation import StretchedKnit, StretchSettings
     from knitlad.fabric.scenes.jersey import Jersey, KnitScene
     from knitlad.engine.state import RodModel, Rods, RodState
     from knitlad.engine.units import Material

@@ -1,6 +1,6 @@
 """Stretched knits kept on disk and reused: jobs that share the stretch's settings stretch once.
 
-A stretched knit depends only on its :class:`knitlad.experiments.protocol.StretchSettings` (the
+A stretched knit depends only on its :class:`knitlad.fabric.preparation.StretchSettings` (the
 stretch at mu = 0 is deterministic) and on the code that stretches it, so it is stored
 under a hash of those settings, the knitlad version and the package's source,
 ``<folder>/<hash>.h5``, and read back exactly (:func:`knitlad.io.hdf5.read_stretched_knit`).

@@ -11,6 +11,7 @@ over the stitch length, ``c_b`` a velocity over the bending-wave speed, ``-`` te
 from __future__ import annotations
 
 import re
+from pathlib import Path
 from typing import Literal, get_args, get_origin
 
 # columns every row has, whatever its scene
@@ -161,9 +162,8 @@ def column_dictionary(scene: str) -> list[tuple[str, str, str]]:
     return rows
 
 
-def write_column_dictionary(out_dir, scenes) -> "Path":
+def write_column_dictionary(out_dir, scenes) -> Path:
     """``out_dir/summary_columns.csv``: the dictionary of ``scenes`` (scene, column, unit, meaning), atomically."""
-    from pathlib import Path
 
     import pandas as pd
 

@@ -47,7 +47,8 @@ def run_ladder_job(cfg: CutConfig, output, folder: Path | None = None, progress=
 
     from knitlad.io.hdf5 import write_ladder_result
     from knitlad.io.knit_cache import cached_stretch
-    from knitlad.experiments.protocol import analyse, cut, propagate, require_memory, require_tension, stretch
+    from knitlad.experiments.protocol import analyse, cut, propagate, require_memory, require_tension
+    from knitlad.fabric.preparation import stretch
 
     require_memory(cfg.memory_estimate_bytes(), f"a {cfg.n_x} x {cfg.n_y} knit at {cfg.resolution} nodes per stitch")
     t0 = time.perf_counter()
@@ -74,7 +75,7 @@ def run_cycle_job(cfg: CycleConfig, output, folder: Path | None = None, progress
     from knitlad.experiments.cycling import run_protocol_b
     from knitlad.io.hdf5 import write_cycle_result
     from knitlad.io.knit_cache import cached_stretch
-    from knitlad.experiments.protocol import stretch
+    from knitlad.fabric.preparation import stretch
 
     knit = None if folder is None else cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch,
                                                       progress)[0]
@@ -113,7 +114,7 @@ def run_loop_job(cfg: LoopConfig, output, folder: Path | None = None, progress=N
 
 
 def run_stitch_job(cfg: StitchConfig, output, folder: Path | None = None, progress=None):
-    from knitlad.experiments.stitch_model import StitchRun
+    from knitlad.fabric.stitch_model import StitchRun
 
     return _attributes_only(StitchRun(cfg.settings()).run())
 

@@ -14,7 +14,7 @@ import time
 from knitlad.experiments.config import LoopConfig
 from knitlad.experiments.loop_model import LoopRun
 from knitlad.experiments.config import StitchConfig
-from knitlad.experiments.stitch_model import StitchRun
+from knitlad.fabric.stitch_model import StitchRun
 
 
 def timed(make, repeat: int) -> tuple[float, object]:

@@ -46,7 +46,7 @@ BUSY = "while True: pass"
 def make_knit(path: Path, stitches: int, preset: str) -> None:
     from knitlad.experiments.config import CutConfig
     from knitlad.io.hdf5 import write_stretched_knit
-    from knitlad.experiments.protocol import stretch
+    from knitlad.fabric.preparation import stretch
 
     if not path.exists():
         cfg = CutConfig(n_x=stitches, n_y=stitches, fx=4.0, preset=preset)

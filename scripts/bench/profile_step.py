@@ -44,7 +44,8 @@ from knitlad.engine.kernels.integrate import (
     verlet_steps,
 )
 from knitlad.engine.kernels.options import PARALLEL_OPTS
-from knitlad.experiments.protocol import cut, stretch
+from knitlad.experiments.protocol import cut
+from knitlad.fabric.preparation import stretch
 from knitlad.engine.simulation import numba_threads
 
 

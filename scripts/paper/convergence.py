@@ -72,7 +72,7 @@ def variations(static: bool = False, only: list[str] | None = None) -> list[dict
 
 def stitch_run(cfg: dict) -> dict:
     from knitlad.experiments.config import StitchConfig
-    from knitlad.experiments.stitch_model import StitchRun
+    from knitlad.fabric.stitch_model import StitchRun
 
     t = time.perf_counter()
     res = StitchRun(StitchConfig(preset="fast", lx=0.35, ly=0.25, resolution=cfg["nodes_per_stitch"]).settings(
@@ -142,7 +142,8 @@ def model_runs(size: int, tensions: list[float], csv: Path, study: dict[str, lis
     to: the change against the default run is what is reported, to be read against the
     run-to-run scatter. Resumable."""
     from knitlad.experiments.config import CutConfig
-    from knitlad.experiments.protocol import analyse, cut, propagate, stretch
+    from knitlad.experiments.protocol import analyse, cut, propagate
+    from knitlad.fabric.preparation import stretch
 
     defaults = {name: f.default for name, f in CutConfig.model_fields.items()}
     rows = pd.read_csv(csv, dtype={"setting_value": str}).to_dict("records") if csv.exists() else []

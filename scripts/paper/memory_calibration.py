@@ -22,7 +22,7 @@ import pandas as pd
 import knitlad as kl
 from knitlad.experiments.config import CutConfig
 from knitlad.fabric.shape_memory import flattened_curvature, positional_curvature
-from knitlad.experiments.protocol import stretch
+from knitlad.fabric.preparation import stretch
 from knitlad.engine.simulation import Simulation
 
 

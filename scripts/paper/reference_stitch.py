@@ -22,7 +22,7 @@ import time
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 from knitlad.experiments.config import StitchConfig  # noqa: E402
-from knitlad.experiments.stitch_model import StitchRun  # noqa: E402
+from knitlad.fabric.stitch_model import StitchRun  # noqa: E402
 
 from knitlad.studies.ensemble import resumed_rows, save_rows  # noqa: E402
 

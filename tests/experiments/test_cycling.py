@@ -9,7 +9,8 @@ import pytest
 
 from knitlad.experiments.config import CycleConfig
 from knitlad.experiments.cycling import HOLD, LOADING, UNLOADING, cut_cycled, run_cycles, shortening_to
-from knitlad.experiments.protocol import cut, stretch
+from knitlad.experiments.protocol import cut
+from knitlad.fabric.preparation import stretch
 
 
 def test_delta_l_is_read_between_readings_where_the_unloading_crosses_the_threshold():

@@ -1,4 +1,4 @@
-"""The laddering protocol: its stages, and the choices that measurements made (where the knit is built)."""
+"""The laddering protocol: its stages after the stretch (knitlad.fabric.preparation), and the choices that measurements made."""
 
 from __future__ import annotations
 
@@ -7,9 +7,8 @@ import pytest
 
 from knitlad.engine import units
 from knitlad.experiments.config import CutConfig
-from knitlad.experiments.protocol import KnitBox, analyse, build_width, cut, propagate, stretch
-from knitlad.fabric.scenes.jersey import BUILD_LX
-from knitlad.fabric.stretching import OutOfReach, stretch_to
+from knitlad.experiments.protocol import analyse, cut, propagate
+from knitlad.fabric.preparation import KnitBox, stretch
 from knitlad.engine.timestep import DEFAULT_SAFETY
 from knitlad.engine.units import NYLON
 
@@ -17,39 +16,6 @@ from knitlad.engine.units import NYLON
 def config(**kw) -> CutConfig:
     """The coarse model these tests run (the fast preset: capsules of the yarn's radius, explicit axial springs)."""
     return CutConfig(**{"preset": "fast", **kw})
-
-
-def test_tall_cells_are_built_narrower_so_that_the_loops_interlock():
-    """At l_y/l0 = 0.302, Crane loops built at 0.30 l0 overlap the next course by 0.12 d only and the
-    knit comes apart; at the stitch's f_x = 0 width they overlap by more than 2 d."""
-    assert build_width(0.25, NYLON) == BUILD_LX
-    lx = build_width(0.302, NYLON)
-    assert 0.24 < lx < 0.29
-    box = KnitBox(config(n_x=4, n_y=6, lx=0.35, ly=0.302).stretch_settings())
-    l0, d = NYLON.stitch_length, NYLON.diameter
-    overlap = 2 * box.knit.H - 0.302 * l0
-    assert overlap > 2 * d
-
-
-@pytest.mark.parametrize("start", ["tiled", "affine"])
-def test_force_control_reaches_its_target_in_a_tall_knit(start):
-    knit = stretch(config(n_x=6, n_y=8, fx=4.0, ly=0.302, resolution=16, stretch_start=start).stretch_settings())
-    assert knit.fx_within_tolerance
-    assert knit.fx_ini == pytest.approx(4.0, rel=0.02)
-
-
-def test_the_tiled_stretch_relaxes_only_what_the_edges_change():
-    """Force control from the periodised stitch: the knit reaches f_x 8 within the tolerance in
-    fewer FIRE steps than one affine increment takes (the tiled knit is already at equilibrium
-    but near its edges), and the stretch of a knit with tails, which the stitch has no copy of,
-    stays affine."""
-    cfg = config(n_x=8, n_y=8, fx=8.0)
-    knit = stretch(cfg.stretch_settings())
-    assert knit.fx_within_tolerance and knit.fx_ini == pytest.approx(8.0, rel=0.02)
-    assert knit.relax_steps < cfg.steps_per_increment
-    assert knit.box_lx == pytest.approx(knit.lx_over_l0, rel=0.002)
-    tail = stretch(config(n_x=4, n_y=4, lx=0.33, edge="tail", resolution=16).stretch_settings())
-    assert tail.relax_steps > 0 and tail.tension_history.shape[0] > 2
 
 
 def test_dashpot_and_drag_settings_reach_the_knit_and_the_laddering_dynamics():
@@ -94,45 +60,6 @@ def test_a_negative_dissipation_setting_is_refused_before_anything_runs(name):
 def test_an_unknown_contact_counting_is_refused_before_anything_runs():
     with pytest.raises(ValueError, match="contact_counting"):
         config(fx=4.0, contact_counting="every")
-
-
-def _relax_in_rounds(box: KnitBox, rounds: int) -> tuple[list[float], dict]:
-    """The protocol's FIRE rounds at a fixed box; f_x after each, and the last round's report."""
-    readings, info = [], {}
-    for _ in range(rounds):
-        info = box.relax()
-        readings.append(box.tension())
-        if info["converged"]:
-            break
-    return readings, info
-
-
-def test_at_mu_0_a_knit_with_clamped_course_ends_reaches_equilibrium_at_a_fixed_box():
-    """Course ends clamped at the edge sinkers (position and tangent, the mirror symmetry of the
-    periodic stitch there): FIRE reaches its force tolerance (1e-3 f0), so f_x has settled. Ends held at the tip of
-    straight tails instead leave the edge stitches free to trade yarn, and the knit creeps: 8 x 10
-    at l_x/l0 = 0.355 wandered between f_x 1.21 and 1.46 over 30 rounds, residual ~0.4 f0."""
-    clamped = KnitBox(config(n_x=8, n_y=10, lx=0.355, edge="clamped").stretch_settings())
-    stretch_to(clamped, 0.355, 0.25, clamped.s.stretch_increment)
-    readings, info = _relax_in_rounds(clamped, 40)
-    assert info["converged"], f"residual {info['max_force_N'] / NYLON.f0:.3g} f0 after {len(readings)} rounds"
-
-    tail = KnitBox(config(n_x=8, n_y=10, lx=0.355, edge="tail").stretch_settings())
-    stretch_to(tail, 0.355, 0.25, tail.s.stretch_increment)
-    _, info = _relax_in_rounds(tail, len(readings) + 10)
-    assert info["max_force_N"] > 10 * 1e-3 * NYLON.f0
-
-
-def test_an_unknown_edge_is_refused_before_anything_runs():
-    with pytest.raises(ValueError, match="edge"):
-        config(n_x=4, n_y=4, lx=0.35, edge="loose")
-
-
-def test_force_control_says_when_the_knit_as_built_is_already_past_the_target():
-    """With tails, the 8 x 10 knit built at l_x/l0 = 0.30 carries f_x ~ 0.4: a target of 0.05
-    cannot be reached by stretching, and force control says so (position control is advised)."""
-    with pytest.raises(OutOfReach, match="use position control"):
-        stretch(config(n_x=8, n_y=10, fx=0.05, edge="tail").stretch_settings())
 
 
 def test_one_stretched_knit_cut_twice_ladders_like_two_fresh_runs():

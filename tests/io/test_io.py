@@ -58,7 +58,7 @@ def test_the_summary_reads_back_as_written(tmp_path):
 def test_a_stretched_knit_reads_back_to_the_bit(tmp_path):
     from knitlad.experiments.config import CutConfig
     from knitlad.io.hdf5 import read_stretched_knit, write_stretched_knit
-    from knitlad.experiments.protocol import stretch
+    from knitlad.fabric.preparation import stretch
 
     knit = stretch(CutConfig(n_x=4, n_y=6, lx=0.36, preset="fast", resolution=12, steps_per_increment=5).stretch_settings())
     back = read_stretched_knit(write_stretched_knit(tmp_path / "k.h5", knit))

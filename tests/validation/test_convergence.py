@@ -19,7 +19,7 @@ import pytest
 from knitlad.experiments.config import CutConfig, StitchConfig
 from knitlad.experiments.protocol import run_ladder
 from knitlad.engine.simulation import numba_threads
-from knitlad.experiments.stitch_model import StitchRun, stitch_tensions, zero_tension_lx
+from knitlad.fabric.stitch_model import StitchRun, stitch_tensions, zero_tension_lx
 
 REFERENCE = Path(__file__).parents[2] / "docs" / "reference" / "stitch.csv"
 # the default preset's promised error at fixed (l_x, l_y) where f_x > 1 (docs/accuracy.md: measured
@@ -92,7 +92,8 @@ def test_the_accurate_preset_ladders_at_its_step_as_at_a_quarter_of_it():
     0.175 x it (the paired study, three knits per tension at 1.6, 4 and 13.6: docs/performance.md, measured
     v_lad +0.1 %, f_x^fin +0.2 %, damage one stitch of 16 less in two knits of three): v_lad within 2 %,
     f_x^fin within 1 %, the damage within two stitches."""
-    from knitlad.experiments.protocol import analyse, cut, propagate, stretch
+    from knitlad.experiments.protocol import analyse, cut, propagate
+    from knitlad.fabric.preparation import stretch
 
     cfg = CutConfig(n_x=16, n_y=16, fx=13.6, preset="accurate")
     assert cfg.dt_safety == 0.7

@@ -16,7 +16,8 @@ import math
 import pytest
 
 from knitlad.experiments.config import CutConfig
-from knitlad.experiments.protocol import analyse, cut, propagate, run_ladder, stretch
+from knitlad.experiments.protocol import analyse, cut, propagate, run_ladder
+from knitlad.fabric.preparation import stretch
 from tests.validation.references import paper_der_line
 
 PAPER_SLOPE = paper_der_line(1.0) - paper_der_line(0.0)

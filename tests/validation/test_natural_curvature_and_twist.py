@@ -93,7 +93,7 @@ def test_a_course_freed_of_the_knit_relaxes_to_the_natural_curvature_it_was_give
     over the Voronoi length), is K within 2 %. Stretched, the same course is bent more (1.86)."""
     from knitlad.experiments.config import CutConfig
     from knitlad.fabric.shape_memory import positional_curvature
-    from knitlad.experiments.protocol import stretch
+    from knitlad.fabric.preparation import stretch
     from knitlad.engine.simulation import Simulation
 
     K = 1.0

@@ -58,7 +58,8 @@ def test_without_friction_the_threshold_is_about_the_memory_and_friction_raises_
     holds at f_x^ini 0.5 (2 cells measured) and ladders at 2 (25 cells), so f_x^thr(mu = 0) lies between
     K/2 and 2K. The same stretched knit at 2, cut with mu = 0.4, holds (its bracket: 5 to 6): friction
     raises the threshold, paired on one stretch."""
-    from knitlad.experiments.protocol import analyse, cut, propagate, stretch
+    from knitlad.experiments.protocol import analyse, cut, propagate
+    from knitlad.fabric.preparation import stretch
 
     def cells(fx, mus):
         cfg = CutConfig(n_x=16, n_y=16, twist=True, max_time_ms=10, fx=fx, natural_curvature=1.0)

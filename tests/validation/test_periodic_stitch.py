@@ -10,7 +10,7 @@ import knitlad as kl
 from knitlad.engine import units
 from knitlad.engine.contact import ContactModel
 from knitlad.fabric.scenes.stitch import PeriodicStitch
-from knitlad.experiments.stitch_model import cell_tensions, stitch_tensions, zero_tension_lx
+from knitlad.fabric.stitch_model import cell_tensions, stitch_tensions, zero_tension_lx
 
 M = kl.NYLON
 D = M.diameter
@@ -88,7 +88,7 @@ def test_the_fabric_away_from_its_edges_carries_the_tension_of_the_periodic_stit
     (-0.9 %); at 1.59, -2.6 %; at 15.6, where f_x rises by ~300 per unit of l_x/l0, -5.3 %.
     Bound 5 %; with the ends held at the tip of tails the fabric read +11 % at 15.6."""
     from knitlad.experiments.config import CutConfig
-    from knitlad.experiments.protocol import stretch
+    from knitlad.fabric.preparation import stretch
 
     # the affine stretch: the tiled one starts from the stitch and would agree by construction
     r = stretch(CutConfig(fx=4.0, preset="fast", stretch_start="affine").stretch_settings())
@@ -104,7 +104,7 @@ def test_the_tiled_knit_carries_the_stitch_tension_through_its_held_ends(lx):
     of one tension), and its measured periodicities are the cell's. Measured: equal to 4 digits
     (-0.028 at 0.33, 6.270 at 0.37), no FIRE step needed. Bounds 0.5 % (0.01 near f_x = 0), 0.2 %."""
     from knitlad.experiments.config import CutConfig
-    from knitlad.experiments.protocol import stretch
+    from knitlad.fabric.preparation import stretch
 
     knit = stretch(CutConfig(n_x=6, n_y=6, lx=lx, preset="fast").stretch_settings())
     stitch = stitch_tensions(lx, 0.25, nodes_per_stitch=24, sagitta_radius_d=0.0)
