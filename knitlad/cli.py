@@ -474,14 +474,70 @@ def _cycle_restart(out_dir: Path, cfg, resume: bool) -> dict | None:
     return arrays
 
 
-def _write_cycle_table(path, readings) -> None:
-    """cycle.csv: the readings (cycle, leg: 1 loading, 0 hold, -1 unloading, t [s], box l_x/l0, f_x), atomically."""
+@app.command()
+@config_options(_config.TensileConfig, exclude=("n_x", "n_y"))
+def tensile(
+    stitches: str = typer.Option("16", "--stitches", help="Fabric size: N (N x N) or NXxNY.", rich_help_panel=EXPERIMENT_PANEL),
+    out: str = typer.Option(None, "--out", help="Output folder; default runs/tensile-<time>.", rich_help_panel=OUTPUT_PANEL),
+    json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object.", rich_help_panel=OUTPUT_PANEL),
+    options: dict = None,
+) -> None:
+    """The fabric's tensile test: the knit stretched at mu = 0, then with friction on pulled to --lx-max
+    and/or --ly-max, held, and brought back; f_x and f_y read after every ramp.
+
+    Without --fx or --lx, the knit starts at f_x = 0.68 (the experiments' holding tension). Writes
+    tensile.csv (the readings), tensile.png (the force-displacement loops) and tensile.h5.
+    """
+    from knitlad.experiments.tensile import COLUMNS, run_tensile
+    from knitlad.fabric.preparation import stretch
+    from knitlad.io.hdf5 import write_tensile_result
+    from knitlad.viz.plots import tensile_curve_plot
+
+    cfg, out_dir = _knit_run(_config.TensileConfig, options, stitches, 0.68, out, "tensile")
+    _say_if_compiling()
+    progress = _StageProgress()
+    result = _experiment_or_exit(
+        lambda: run_tensile(stretch(cfg.stretch_settings(), progress), cfg.tensile_settings(), cfg.dynamics_settings(),
+                            progress), progress)
+    progress.close(finished=True)
+    summary = result.summary()
+    try:
+        _write_table(out_dir / "tensile.csv", result.readings, COLUMNS)
+        write_tensile_result(out_dir / "tensile.h5", result, cfg.model_dump())
+        tensile_curve_plot(result.readings, out_dir / "tensile.png")
+    except OSError as e:  # a full disk: the results said on stdout, the failure in one line
+        typer.echo(_json(summary))
+        typer.echo(f"knitlad: run finished but its files could not be written ({e}); the summary is printed above",
+                   err=True)
+        raise typer.Exit(1)
+    if json_out:
+        typer.echo(_json(summary))
+        return
+    typer.echo(
+        f"{cfg.n_x} x {cfg.n_y} jersey, tensile test at mu = {cfg.mu}, bars at {cfg.bar_speed:g} m/s, "
+        f"{cfg.resolution} nodes/stitch\n"
+        f"  start: f_x = {summary['fx_start']:.3f}, f_y = {summary['fy_start']:.3f}\n"
+        f"  top:   f_x = {summary['fx_top']:.3f}, f_y = {summary['fy_top']:.3f} at l_x/l0 = "
+        f"{summary['lx_top_over_l0']:.4f}, l_y/l0 = {summary['ly_top_over_l0']:.4f}"
+        f"{'' if summary['hold_converged'] else ' (the hold did not settle within --hold-ms)'}\n"
+        f"  end:   f_x = {summary['fx_end']:.3f}, f_y = {summary['fy_end']:.3f}; friction took "
+        f"{summary['dissipated_per_stitch']:.4f} f0 l0 per stitch; coupling {summary['coupling']:.3f}\n"
+        f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/tensile.csv, tensile.h5, tensile.png")
+
+
+def _write_table(path, rows, columns) -> None:
+    """A CSV of ``rows`` under ``columns``, atomically."""
     import pandas as pd
 
     from knitlad.io.atomic import atomic_path
 
     with atomic_path(path) as tmp:
-        pd.DataFrame(readings, columns=["cycle", "leg", "t_s", "box_lx_over_l0", "fx"]).to_csv(tmp, index=False)
+        pd.DataFrame(rows, columns=list(columns)).to_csv(tmp, index=False)
+
+
+def _write_cycle_table(path, readings) -> None:
+    """cycle.csv: the readings (cycle, leg: 1 loading, 0 hold, -1 unloading, t [s], box l_x/l0, f_x), atomically."""
+    _write_table(path, readings, ["cycle", "leg", "t_s", "box_lx_over_l0", "fx"])
 
 
 def _write_cycle_outputs(out_dir, cfg, result, ladder):

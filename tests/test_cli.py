@@ -85,6 +85,23 @@ def test_cycle_runs_protocol_b_end_to_end_on_a_small_knit(tmp_path):
     assert run("cycle", "--stitches", "6x8", "--lx-max", "0.36", "--out", str(tmp_path)).returncode == 2  # not over it
 
 
+def test_tensile_pulls_a_small_knit_and_writes_its_loops(tmp_path):
+    """`knitlad tensile` on a 6 x 8 knit (fast preset) along x: the readings in the CSV and the HDF5 file (with
+    their unit), the loops as a PNG; without --lx-max or --ly-max the box does not move: exit 2."""
+    p = run("tensile", "--stitches", "6x8", "--preset", "fast", "--lx", "0.36", "--lx-max", "0.37",
+            "--readings-per-leg", "2", "--out", str(tmp_path))
+    assert p.returncode == 0, p.stderr
+    assert "friction took" in p.stdout
+    table = (tmp_path / "tensile.csv").read_text().splitlines()
+    assert table[0] == "leg,t_s,box_lx_over_l0,box_ly_over_l0,lx_over_l0,ly_over_l0,fx,fy" and len(table) == 1 + 1 + 2 + 1 + 2
+    with h5py.File(tmp_path / "tensile.h5") as f:
+        assert f["tensile/readings"].shape == (6, 8) and "unit" in f["tensile/readings"].attrs
+        assert f.attrs["tensile_fx_top"] > f.attrs["tensile_fx_start"]
+    assert (tmp_path / "tensile.png").stat().st_size > 1000
+    bad = run("tensile", "--stitches", "6x8", "--lx", "0.36", "--out", str(tmp_path / "no"))
+    assert bad.returncode == 2 and "lx_max" in bad.stderr and "Traceback" not in bad.stderr
+
+
 def test_a_run_that_fails_is_reported_in_one_line_with_exit_code_1(tmp_path, monkeypatch):
     """A run that stops on its own (force control out of reach, interpenetration, blow-up)
     raises; the command prints one line and writes nothing. The failure is injected: the

@@ -259,6 +259,31 @@ class CutConfig(_WithPreset):
         return LadderSettings(self.stretch_settings(), self.dynamics_settings())
 
 
+# the bars' settings, shared by protocol B (CycleConfig) and the tensile test (TensileConfig): declared once
+def _bar_speed():
+    return Field(0.25, gt=0, le=10, description=(
+        "speed of each held end away from (or towards) the knit's centre line [m/s]; quasi-static when halving it "
+        "changes nothing that counts (16 x 16: 0.5 against 0.25 m/s moves delta l by 2 %, docs/quasistatic.md)"))
+
+
+def _bar_damping():
+    return Field(2e4, gt=0, le=1e7, description=(
+        "mass-proportional damping alpha while the bars move and hold [1/s]; biases a reading taken while "
+        "moving by alpha M V (knitlad/engine/quasistatic.py)"))
+
+
+def _readings_per_leg(default: int):
+    return Field(default, ge=2, le=10000, description="readings per loading or unloading [-]")
+
+
+def _hold_ms():
+    return Field(5.0, gt=0, le=1000, description="longest hold at the top of the loading, a settle [ms]")
+
+
+def _hold_tol_f0():
+    return Field(1e-3, gt=0, le=1, description="a hold has settled when no free node carries more [f0]")
+
+
 class CycleConfig(CutConfig):
     """Protocol B (``knitlad cycle``, sweep scene ``cycle``; paper Fig. 4a): the knit stretched at mu = 0 to
     Delta x_min (``fx``, the holding tension, or ``lx``), then cycled with friction on to Delta x_max
@@ -273,15 +298,11 @@ class CycleConfig(CutConfig):
     mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient while cycling and laddering [-]")
     lx_max: float = Field(..., gt=0.2, lt=1.0, description="the box's l_x/l0 at Delta x_max [-]")
     cycles: int = Field(3, ge=1, le=10, description="loading cycles; the cut comes at Delta x_max of the last [-]")
-    bar_speed: float = Field(0.25, gt=0, le=10, description=(
-        "speed of each held end away from (or towards) the knit's centre line [m/s]; quasi-static when halving it "
-        "changes nothing that counts (16 x 16: 0.5 against 0.25 m/s moves delta l by 2 %, docs/quasistatic.md)"))
-    cycle_damping_per_s: float = Field(2e4, gt=0, le=1e7, description=(
-        "mass-proportional damping alpha while the bars move and hold [1/s]; biases a reading taken while "
-        "moving by alpha M V (knitlad/engine/quasistatic.py)"))
-    readings_per_leg: int = Field(20, ge=2, le=10000, description="f_x readings per loading or unloading [-]")
-    hold_ms: float = Field(5.0, gt=0, le=1000, description="longest hold at Delta x_max, a settle [ms]")
-    hold_tol_f0: float = Field(1e-3, gt=0, le=1, description="a hold has settled when no free node carries more [f0]")
+    bar_speed: float = _bar_speed()
+    cycle_damping_per_s: float = _bar_damping()
+    readings_per_leg: int = _readings_per_leg(20)
+    hold_ms: float = _hold_ms()
+    hold_tol_f0: float = _hold_tol_f0()
     fx_thr: float | None = Field(None, gt=0, le=40, description=(
         "threshold tension f_x^thr [-]: delta l is read where the uncut twin's unloading crosses it; none: not read"))
     cut: bool = Field(True, description="cut a copy at Delta x_max of the last cycle and follow its ladder [-]")
@@ -302,6 +323,39 @@ class CycleConfig(CutConfig):
             lx_max=self.lx_max, cycles=self.cycles, bar_speed_m_s=self.bar_speed,
             damping_per_s=self.cycle_damping_per_s, readings_per_leg=self.readings_per_leg, hold_s=self.hold_ms * 1e-3,
             hold_tol_f0=self.hold_tol_f0, fx_thr=self.fx_thr)
+
+
+class TensileConfig(CutConfig):
+    """The fabric's tensile test (``knitlad tensile``, sweep scene ``tensile``; knitlad.experiments.tensile): the
+    knit stretched at mu = 0 (``fx`` or ``lx``, and ``ly``), then with friction on its box pulled to
+    (``lx_max``, ``ly_max``), held, and brought back; f_x and f_y read after every ramp."""
+
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ()
+    mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient while pulled [-]")
+    lx_max: float | None = Field(None, gt=0.2, lt=1.0, description="the box's l_x/l0 at the top [-] (none: l_x stays)")
+    ly_max: float | None = Field(None, gt=0.2, lt=0.5, description="the box's l_y/l0 at the top [-] (none: l_y stays)")
+    unload: bool = Field(True, description="bring the box back to the start after the hold [-]")
+    bar_speed: float = _bar_speed()
+    cycle_damping_per_s: float = _bar_damping()
+    readings_per_leg: int = _readings_per_leg(10)
+    hold_ms: float = _hold_ms()
+    hold_tol_f0: float = _hold_tol_f0()
+
+    @model_validator(mode="after")
+    def moves(self) -> "TensileConfig":
+        if self.lx_max is None and self.ly_max is None:
+            raise ValueError("lx_max: give lx_max, ly_max or both (the box must move)")
+        if self.lx is not None and self.lx_max is not None and self.lx_max == self.lx:
+            raise ValueError(f"lx_max: {self.lx_max:g} is the start lx (the box must move)")
+        return self
+
+    def tensile_settings(self):
+        from knitlad.experiments.tensile import TensileSettings
+
+        return TensileSettings(
+            lx_max=self.lx_max, ly_max=self.ly_max, unload=self.unload, bar_speed_m_s=self.bar_speed,
+            damping_per_s=self.cycle_damping_per_s, readings_per_leg=self.readings_per_leg,
+            hold_s=self.hold_ms * 1e-3, hold_tol_f0=self.hold_tol_f0)
 
 
 class LoopConfig(_WithPreset):

@@ -69,32 +69,45 @@ class CycleSettings:
 
 
 class LoadedKnit:
-    """A stretched knit under the laddering's dynamics (friction, dashpots, twist, step), its held ends
-    moved affinely along x (as the stretch moved them)."""
+    """A stretched knit under the laddering's dynamics (friction, dashpots, twist, step), its held ends and
+    bars moved affinely (as the stretch moved them): along x for protocol B, along x and y for the tensile test."""
 
     def __init__(self, knit: StretchedKnit, s: CycleSettings, dynamics: DynamicsSettings) -> None:
         self.knit, self.s = knit, s
         rods = dynamics_rods(knit.knit.rods.copy(), dynamics, knit.settings.material)
         self.sim = dynamics_simulation(rods, knit, dynamics)
         self.held = np.flatnonzero(self.sim.model.held)
-        self.lx = knit.box_lx
+        self.lx, self.ly = knit.box_lx, knit.box_ly
+        held_y = self.sim.state.x[self.held, 1]
+        self.y_centre = 0.5 * (held_y.min() + held_y.max())  # the box's centre line (x's is x = 0)
         self.readings: list[tuple[int, int, float, float, float]] = []  # cycle, leg, t [s], box l_x/l0, f_x
 
     def tension(self) -> float:
         return self.knit.gauge.tension(self.sim)
 
+    def move_box(self, lx: float, ly: float, report: Callable[[float], None] | None = None,
+                 read: Callable[[], None] | None = None) -> None:
+        """Bring the box to (``lx``, ``ly``) (l/l0) in ``readings_per_leg`` ramps of the held nodes, affine about
+        the box's centre, calling ``read`` after each."""
+        s, x = self.s, self.sim.state.x
+        lx0, ly0 = self.lx, self.ly
+        for k, f in enumerate(np.linspace(0.0, 1.0, s.readings_per_leg + 1)[1:], start=1):
+            tx, ty = lx0 + (lx - lx0) * f, ly0 + (ly - ly0) * f
+            by = np.zeros((self.held.size, 3))
+            by[:, 0] = x[self.held, 0] * (tx / self.lx - 1.0) * units.LENGTH
+            by[:, 1] = (x[self.held, 1] - self.y_centre) * (ty / self.ly - 1.0) * units.LENGTH
+            self.sim.ramp_held(self.held, by_m=by, speed_m_s=s.bar_speed_m_s, damping_per_s=s.damping_per_s)
+            self.lx, self.ly = tx, ty
+            if read:
+                read()
+            if report:
+                report(k / s.readings_per_leg)
+
     def move_bars(self, lx: float, cycle: int, report: Callable[[float], None] | None = None) -> None:
         """Bring the box to ``lx`` (l_x/l0) in ``readings_per_leg`` ramps, reading f_x after each."""
         leg = LOADING if lx > self.lx else UNLOADING
-        s, x = self.s, self.sim.state.x
-        for k, target in enumerate(np.linspace(self.lx, lx, s.readings_per_leg + 1)[1:], start=1):
-            by = np.zeros((self.held.size, 3))
-            by[:, 0] = x[self.held, 0] * (target / self.lx - 1.0) * units.LENGTH  # affine about the centre
-            self.sim.ramp_held(self.held, by_m=by, speed_m_s=s.bar_speed_m_s, damping_per_s=s.damping_per_s)
-            self.lx = target
-            self.readings.append((cycle, leg, self.sim.time_s, self.lx, self.tension()))
-            if report:
-                report(k / s.readings_per_leg)
+        self.move_box(lx, self.ly, report,
+                      lambda: self.readings.append((cycle, leg, self.sim.time_s, self.lx, self.tension())))
 
     def hold(self, cycle: int) -> dict:
         """Keep the bars still until the knit is static (or ``hold_s`` has passed); read f_x."""

@@ -28,6 +28,15 @@ def tension_per_thread(reactions_N: np.ndarray, left_end: np.ndarray, right_end:
     return float(F_x / (len(right_end) * f0))
 
 
+def transverse_tension(reactions_N: np.ndarray, held: np.ndarray, y: np.ndarray, n_x: int, f0: float) -> float:
+    """f_y = F_y / (n_x f0), the pull across the courses per column: F_y the mean of the y-reactions of the held
+    nodes above the box's centre line and minus those below it (the bars, and the course ends' clamps, which
+    hold y too) [-]. ``held``: node indices, ``y``: their heights [any unit]."""
+    centre = 0.5 * (y.min() + y.max())
+    F_y = 0.5 * (reactions_N[held[y > centre], 1].sum() - reactions_N[held[y < centre], 1].sum())
+    return float(F_y / (n_x * f0))
+
+
 def course_tensions(reactions_N: np.ndarray, left_end: np.ndarray, right_end: np.ndarray, f0: float) -> np.ndarray:
     """Each course's own f_x: its right-end pull and minus its left-end pull, averaged, over f0 ((n_y,) [-]).
 

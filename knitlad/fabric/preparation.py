@@ -25,7 +25,14 @@ from knitlad.engine.contact import ContactModel
 from knitlad.engine.simulation import Simulation, small_scene_threads
 from knitlad.engine.state import with_twist
 from knitlad.engine.units import Material
-from knitlad.fabric.measure import cell_overlap, course_tensions, laddered_cells, periodicities, tension_per_thread
+from knitlad.fabric.measure import (
+    cell_overlap,
+    course_tensions,
+    laddered_cells,
+    periodicities,
+    tension_per_thread,
+    transverse_tension,
+)
 from knitlad.fabric.observers import Interpenetration, OverlapGuard
 from knitlad.fabric.scenes.jersey import BUILD_LX, CourseTooWide, Jersey, KnitScene, build_jersey, widest_fitting_width
 from knitlad.fabric.stitch_model import StitchRun, StitchSettings, zero_tension_lx
@@ -111,6 +118,12 @@ class KnitGauge:
     def tension(self, sim: Simulation) -> float:
         k = self.knit
         return tension_per_thread(sim.reaction_forces_N(), k.left_end, k.right_end, self.material.f0)
+
+    def tension_y(self, sim: Simulation) -> float:
+        """f_y per column (:func:`knitlad.fabric.measure.transverse_tension`)."""
+        held = np.flatnonzero(sim.model.held)
+        return transverse_tension(sim.reaction_forces_N(), held, sim.state.x[held, 1], self.knit.geometry.n_x,
+                                  self.material.f0)
 
     def course_tensions(self, sim: Simulation) -> np.ndarray:
         """Each free course's f_x, bottom to top (:func:`knitlad.fabric.measure.course_tensions`)."""

@@ -248,6 +248,8 @@ RUN_UNITS = {
     "contacts/normal_force": "N", "contacts/friction_force": "N", "contacts/sliding": "1",
     "obstacles/kind": "1", "obstacles/direction": "1", "obstacles/radius": "m", "obstacles/points": "m",
     "cycle/readings": "cycle, leg (1 loading, 0 hold, -1 unloading), s, l0 (the box's l_x), f0 (f_x)",
+    "tensile/readings": ("leg (1 loading, 0 hold, -1 unloading), s, l0 (the box's l_x, l_y), l0 (the knit's l_x, "
+                         "l_y), f0 (f_x per course, f_y per column)"),
     # the energy ledger at each observation (knitlad.engine.dissipation.EnergyLedger)
     **{f"ledger/{name}": "J" for name in (*EnergyLedger.STORED, *EnergyLedger.DISSIPATED, "support_work",
                                           "obstacle_work", "start", "stored", "dissipated", "work_in", "residual",
@@ -329,6 +331,17 @@ def write_cycle_result(path: str | Path, cycle, ladder, config: dict, compressio
     if ladder is None:
         return write_record(path, attrs, datasets=data)
     return write_ladder_result(path, ladder, compression=compression, attrs=attrs, datasets=data)
+
+
+def write_tensile_result(path: str | Path, result, config: dict, attrs: dict | None = None) -> Path:
+    """The tensile test's file (:class:`knitlad.experiments.tensile.TensileResult`): its readings
+    (``tensile/readings``), its summary as ``tensile_*`` attributes, the config and the scales."""
+    from knitlad.engine.units import Scales
+
+    scales = {f"scale_{k}": v for k, v in Scales(result.material).as_attributes().items()}
+    return write_record(path, {**{f"tensile_{k}": v for k, v in result.summary().items()}, **scales,
+                               "config_json": json.dumps(config), **(attrs or {})},
+                        datasets={"tensile/readings": result.readings})
 
 
 def write_record(path: str | Path, attrs: dict, datasets: dict | None = None) -> Path:

@@ -129,7 +129,23 @@ STITCH = {
     "relax_steps": ("1", "FIRE steps of the relaxation"),
 }
 
-RESULTS = {"ladder": LADDER, "cycle": CYCLE, "loop": LOOP, "stitch": STITCH}
+TENSILE = {
+    "fx_start": ("f0", "f_x per course at the start (the knit stretched at mu = 0)"),
+    "fy_start": ("f0", "f_y per column at the start"),
+    "fx_top": ("f0", "f_x after the hold at the top of the loading"),
+    "fy_top": ("f0", "f_y after the hold at the top"),
+    "lx_top_over_l0": ("l0", "the knit's own l_x/l0 there (measured on its free courses)"),
+    "ly_top_over_l0": ("l0", "the knit's own l_y/l0 there"),
+    "fx_end": ("f0", "f_x after the unloading (or at the top without one)"),
+    "fy_end": ("f0", "f_y after the unloading"),
+    "coupling": ("1", "the loading's change of the transverse tension over the pulled one (d f_y/d f_x pulling "
+                      "along x, d f_x/d f_y along y; NaN biaxial): the Poisson coupling at fixed bars"),
+    "dissipated_per_stitch": ("f0 l0", "the work friction took per stitch over the closed path, the integral of "
+                                       "f_x dl_x + f_y dl_y (NaN without the unloading)"),
+    "hold_converged": ("-", "the hold at the top settled within hold_ms"),
+}
+
+RESULTS = {"ladder": LADDER, "cycle": CYCLE, "tensile": TENSILE, "loop": LOOP, "stitch": STITCH}
 
 
 def unit_of(description: str) -> str:

@@ -17,7 +17,7 @@ from typing import Callable
 
 from pydantic import BaseModel
 
-from knitlad.experiments.config import CutConfig, CycleConfig, LoopConfig, StitchConfig
+from knitlad.experiments.config import CutConfig, CycleConfig, LoopConfig, StitchConfig, TensileConfig
 
 
 @dataclass(frozen=True)
@@ -92,6 +92,23 @@ def run_cycle_job(cfg: CycleConfig, output, folder: Path | None = None, progress
     return summary, write
 
 
+def run_tensile_job(cfg: TensileConfig, output, folder: Path | None = None, progress=None):
+    """The tensile test (`knitlad tensile`): its file holds the readings (:func:`knitlad.io.hdf5.write_tensile_result`)."""
+    from knitlad.experiments.tensile import run_tensile
+    from knitlad.fabric.preparation import stretch
+    from knitlad.io.hdf5 import write_tensile_result
+    from knitlad.io.knit_cache import cached_stretch
+
+    knit = (stretch(cfg.stretch_settings(), progress) if folder is None else
+            cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch, progress)[0])
+    result = run_tensile(knit, cfg.tensile_settings(), cfg.dynamics_settings(), progress)
+
+    def write(path: Path, record: dict) -> None:
+        write_tensile_result(path, result, cfg.model_dump(), attrs=record)
+
+    return result.summary(), write
+
+
 def _attributes_only(result):
     """A reduced model's summary, and a writer of a file of attributes (summary, settings, scales)."""
     from knitlad.io.hdf5 import write_record
@@ -136,6 +153,10 @@ SCENES: dict[str, SweepScene] = {
         "cut_n_lad_released", "cut_n_lad_released_over_ny", "hold_converged", "nan_reasons", "cut_nan_reasons",
         "wall_s",
         "job_wall_s"), "`knitlad cycle`: protocol B, the damage prediction's loading", stretch_of),
+    "tensile": SweepScene(TensileConfig, run_tensile_job, (
+        "fx_start", "fy_start", "fx_top", "fy_top", "lx_top_over_l0", "ly_top_over_l0", "fx_end", "fy_end", "coupling",
+        "dissipated_per_stitch", "hold_converged", "wall_s", "job_wall_s"),
+        "`knitlad tensile`: the fabric's tensile test", stretch_of),
     "loop": SweepScene(LoopConfig, run_loop_job, (
         "tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before", "steps",
         "nodes", "lx_over_l0", "lx_end_over_l0", "climb_over_ly", "wall_s", "job_wall_s"),

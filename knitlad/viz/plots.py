@@ -28,7 +28,7 @@ PNG_DPI = 200
 
 # the paper's symbols, rendered (matplotlib's mathtext), for the columns of a summary table
 SYMBOL = {
-    "fx": r"$f_x$", "fx_ini": r"$f_x^{\mathrm{ini}}$", "fx_fin": r"$f_x^{\mathrm{fin}}$",
+    "fx": r"$f_x$", "fy": r"$f_y$", "fx_ini": r"$f_x^{\mathrm{ini}}$", "fx_fin": r"$f_x^{\mathrm{fin}}$",
     "n_lad_over_ny": r"$n_{\mathrm{lad}}/n_y$", "v_lad_over_cb": r"$v_{\mathrm{lad}}/c_b$", "mu": r"$\mu$",
     "lx": r"$l_x/l_0$", "ly": r"$l_y/l_0$", "natural_curvature": r"$K$", "resolution": "nodes per stitch",
 }
@@ -383,6 +383,24 @@ def cycle_curve_plot(readings, n_x: int, stitch_length_m: float, fx_thr: float |
             ax.text(top - 0.5 * delta_l_over_l0 * stitch_length_m * 1e3, fx_thr, r"$\delta l$", ha="center",
                     va="bottom")
     return _labelled(fig, ax, r"$\Delta x - \Delta x_{\min}$ [mm]", symbol("fx"), "protocol B", path)
+
+
+def tensile_curve_plot(readings, path: str | Path) -> Path:
+    """The tensile test (knitlad.experiments.tensile): f_x and f_y against the box's l_x/l0 (or l_y/l0 when only
+    l_y moves), loading solid, unloading dashed, the hold a dot: the loop's area is what friction took."""
+    plt = _pyplot()
+    r = np.asarray(readings)
+    along_y = np.ptp(r[:, 2]) == 0
+    x = r[:, 3] if along_y else r[:, 2]
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    top = int(np.flatnonzero(r[:, 0] == 0)[0])
+    for col, name in ((6, "fx"), (7, "fy")):
+        line, = ax.plot(x[: top + 1], r[: top + 1, col], lw=1.2, label=symbol(name))
+        ax.plot(x[top:], r[top:, col], lw=1.2, ls="--", color=line.get_color())
+        ax.plot(x[top], r[top, col], "o", ms=3, color=line.get_color())
+    ax.xaxis.set_major_locator(plt.MaxNLocator(5))
+    return _labelled(fig, ax, r"$l_y/l_0$ of the box" if along_y else r"$l_x/l_0$ of the box",
+                     r"tension per thread [$f_0$]", "tensile test (dashed: unloading)", path)
 
 
 def damage_prediction_plot(df, path: str | Path) -> Path:

@@ -1,0 +1,69 @@
+"""The fabric's tensile test (knitlad.experiments.tensile): against the periodised stitch at mu = 0, friction's
+loop, the coupling of the two directions, `knitlad tensile`."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from knitlad.experiments.config import TensileConfig
+from knitlad.experiments.tensile import run_tensile
+from knitlad.fabric.preparation import stitch_of, stretch
+from knitlad.fabric.stretching import stretch_to
+
+
+def config(**changes) -> TensileConfig:
+    return TensileConfig(**{"n_x": 6, "n_y": 8, "preset": "fast", "lx": 0.36, "lx_max": 0.38, "readings_per_leg": 3,
+                            **changes})
+
+
+@pytest.fixture(scope="module")
+def pulled():
+    """One 6 x 8 knit stretched at mu = 0 to l_x/l0 0.36, pulled to 0.38 and back at mu = 0 and 0.4."""
+    knit = stretch(config().stretch_settings())
+    return knit, {mu: run_tensile(knit, config(mu=mu).tensile_settings(), config(mu=mu).dynamics_settings())
+                  for mu in (0.0, 0.4)}
+
+
+def test_at_mu_0_the_knit_pulled_carries_the_periodised_stitchs_tension(pulled):
+    """At the top, held until static, the knit's f_x is the periodised stitch's at the knit's own (l_x, l_y)
+    within 5 % (its edges: +4 % measured on 6 columns); its f_y lies above the stitch's by the pull the
+    course ends' clamps add (they hold y too) and within 25 % (+17 % on 6 columns)."""
+    knit, runs = pulled
+    top = runs[0.0].readings[runs[0.0].readings[:, 0] == 0][0]
+    cell = stitch_of(knit.settings, top[4])
+    stretch_to(cell, top[4], top[5], knit.settings.stretch_increment)
+    cell.settle()
+    fx, fy = cell.tensions()
+    assert top[6] == pytest.approx(fx, rel=0.05)
+    assert fy < top[7] < 1.25 * fy
+
+
+def test_friction_opens_a_loop_that_mu_0_does_not(pulled):
+    """At mu = 0.4 the unloading lies below the loading at every box between the ends and the closed path
+    costs work (f0 l0 per stitch); at mu = 0 only the damping of the moving bars takes any (its bias alpha M V
+    on the readings, in proportion to the bars' speed: 0.8 % of friction's at 0.25 m/s, 6 % at 0.5), under
+    5 % of that at the default speed."""
+    _, runs = pulled
+    r = runs[0.4].readings
+    loading, unloading = r[r[:, 0] == 1], r[r[:, 0] == -1]
+    inner = loading[1:-1]
+    for row in inner:
+        below = unloading[np.isclose(unloading[:, 2], row[2])]
+        assert below.size and below[0, 6] < row[6]
+    work = runs[0.4].dissipated_per_stitch
+    assert work > 0
+    assert abs(runs[0.0].dissipated_per_stitch) < 0.05 * work
+
+
+def test_pulled_along_x_between_held_bars_the_courses_draw_together_and_pull_on_the_bars(pulled):
+    """The Poisson coupling at fixed bars: the knit's own l_y falls inside its box and f_y rises with f_x."""
+    _, runs = pulled
+    s = runs[0.0].summary()
+    assert s["ly_top_over_l0"] < 0.25 - 1e-3
+    assert s["coupling"] > 0.5 and s["fy_top"] > s["fy_start"]
+
+
+def test_the_box_must_move():
+    with pytest.raises(ValueError, match="lx_max"):
+        config(lx_max=None)
