@@ -177,3 +177,13 @@ def test_damage_is_split_into_the_cut_row_the_cut_s_recoil_and_what_the_ladder_r
     assert damage_parts(undone_at, cut_row=2) == {"cut_row": 3, "immediate": 2, "released": 3}
     assert damage_parts(undone_at, cut_row=2, immediate_s=0.0) == {"cut_row": 3, "immediate": 0, "released": 5}
     assert sum(damage_parts(undone_at, cut_row=0).values()) == np.isfinite(undone_at).sum()
+
+
+def test_the_transverse_tension_is_the_mean_pull_of_the_held_nodes_above_and_below_per_column():
+    from knitlad.fabric.measure import transverse_tension
+
+    reactions = np.zeros((6, 3))
+    reactions[[0, 1], 1] = -2.0  # below the centre line, pulled down by the knit: the support pulls down
+    reactions[[4, 5], 1] = 2.0
+    held, y = np.array([0, 1, 4, 5]), np.array([-1.0, -1.0, 1.0, 1.0])
+    assert transverse_tension(reactions, held, y, n_x=4, f0=0.5) == pytest.approx(4.0 / (4 * 0.5))
