@@ -848,8 +848,11 @@ def plot(
     """
     from pathlib import Path
 
+    import h5py
+
     from knitlad.viz.plots import (FORMATS, column_midline_diagram, energy_ledger_plot, job_figure_names,
-                                   spatio_temporal_from_file, summary_plots, tension_history_plot)
+                                   spatio_temporal_from_file, summary_plots, tensile_curve_plot,
+                                   tension_history_plot)
 
     if fmt not in FORMATS:
         fail(f"--format: one of {', '.join(FORMATS)}, got {fmt!r}")
@@ -894,6 +897,15 @@ def plot(
                                                        fig_dir / f"{names[job]}.{fmt}"))
             except (OSError, KeyError, ValueError) as e:
                 problems.append(f"job {job}: no diagram ({type(e).__name__}: {str(e).splitlines()[0]})")
+        pulled = (df["status"] == "ok") & (df["scene"] == "tensile")
+        names = job_figure_names(df[pulled])
+        for job in df.loc[pulled, "job_id"]:  # each tensile job's loops, from its file
+            try:
+                with h5py.File(Path(folder) / "jobs" / f"{job}.h5", "r") as f:
+                    readings = f["tensile/readings"][()]
+                paths.append(tensile_curve_plot(readings, fig_dir / f"tensile_{names[job]}.{fmt}"))
+            except (OSError, KeyError, ValueError) as e:
+                problems.append(f"job {job}: no tensile loop ({type(e).__name__}: {str(e).splitlines()[0]})")
     typer.echo(f"wrote {len(paths)} figures in {fig_dir}")
     for line in problems:
         typer.echo(f"knitlad: {line}", err=True)

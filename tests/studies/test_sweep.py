@@ -396,3 +396,24 @@ def test_an_ensemble_is_a_sweep_axis_of_paired_knits_and_its_plot_draws_means_wi
     with pytest.raises(SweepError, match="sweep.ensemble: needs force control"):
         load_sweep(write_config(tmp_path / "p.yaml", {"fixed": {**TINY, "lx": 0.4},
                                                        "sweep": {"axes": {"mu": [0.1]}, "ensemble": 2}}))
+
+
+def test_a_tensile_sweep_writes_its_summary_and_plot_draws_each_jobs_loops(tmp_path):
+    """The sweep scene `tensile` (one 6 x 8 job): its summary columns, its file's readings, and `knitlad plot`
+    drawing the job's force-displacement loops."""
+    config = tmp_path / "tensile.yaml"
+    config.write_text(yaml.safe_dump({
+        "scene": "tensile", "fixed": {"n_x": 6, "n_y": 8, "preset": "fast", "lx": 0.36, "lx_max": 0.37,
+                                      "readings_per_leg": 2},
+        "sweep": {"expand": "grid", "axes": {"mu": [0.4]}}, "output": {"frames": False}}))
+    out = tmp_path / "out"
+    p = knitlad("sweep", str(config), "--out", str(out))
+    assert p.returncode == 0, p.stderr
+    df = read_summary(out)
+    assert (df["status"] == "ok").all() and (df["fx_top"] > df["fx_start"]).all()
+    assert (df["dissipated_per_stitch"] > 0).all()
+    with h5py.File(out / "jobs" / f"{df['job_id'][0]}.h5") as f:
+        assert f["tensile/readings"].shape == (6, 8)
+    p = knitlad("plot", str(out))
+    assert p.returncode == 0, p.stderr
+    assert len(list((out / "plots").glob("tensile_*.png"))) == 1
