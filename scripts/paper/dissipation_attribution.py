@@ -7,7 +7,7 @@ straight yarn; l_y/l0 = 0.25 for the 42 x 42 crosses of Fig. 5a). Each point is 
     material      the Nylon's viscoelasticity, loss factor 0.03 at 3.1 kHz
     air           still air
     both          material and air
-    drag <g>      the authors' global drag -g m v [1/s] (not physics); 6000 and 10000 run when named
+    drag <g>      the authors' global drag -g m v [1/s] (not physics); 6000, 8000 and 10000 run when named
     d/l0 1/60     the public engine's yarn (its own stretched knits)
     k x0.5, k x2  the contact stiffness halved and doubled (their own stretched knits)
     ly 0.302      the other l_y of the paper's 42 x 42 crosses (Fig. 5a)
@@ -53,6 +53,7 @@ VARIANTS = {
     "drag 2000": ({}, {"drag_per_s": 2000.0}),
     "drag 3000": ({}, {"drag_per_s": 3000.0}),
     "drag 6000": ({}, {"drag_per_s": 6000.0}),
+    "drag 8000": ({}, {"drag_per_s": 8000.0}),
     "drag 10000": ({}, {"drag_per_s": 10000.0}),  # the order of the public example's second drag (0.01 per axial-wave time)
     "d/l0 1/60": ({"d_over_l0": 1 / 60}, {}),
     "k x0.5": ({"contact_force_f0": 10.0}, {}),
@@ -70,7 +71,7 @@ def commit() -> str:
         return "unknown"
 
 
-ASKED = ("ly 0.302", "twist", "drag 6000", "drag 10000")  # run only when named (--variants)
+ASKED = ("ly 0.302", "twist", "drag 6000", "drag 8000", "drag 10000")  # run only when named (--variants)
 # the model's sensitivities (not dissipations): on the first knit of each point only
 SENSITIVITY = ("drag 1000", "d/l0 1/60", "k x0.5", "k x2", "ly 0.302", "twist")
 
