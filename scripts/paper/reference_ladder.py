@@ -35,6 +35,17 @@ from knitlad.studies.ensemble import resumed_rows, save_rows, target_offsets  # 
 KEY = ("fx_nominal", "resolution", "member", "variant")  # one row per run: merged with other writers of the file
 
 
+def front_arrivals_ms(result) -> str:
+    """When the followed front first reached 1, 2, ... stitches above the cut [ms after the cut], ';'-joined:
+    the raw record that v_lad and the step-time statistics of scripts/paper/front_steps.py are read from."""
+    times, up = result.times_s, result.front_up
+    out = []
+    for k in range(1, (max(up) if up else 0) + 1):
+        i = next(j for j, u in enumerate(up) if u >= k)
+        out.append(f"{times[i] * 1e3:.4f}")
+    return ";".join(out)
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--size", type=int, default=16, help="knit size N for N x N")
@@ -49,6 +60,8 @@ def main() -> None:
     p.add_argument("--loss-factor", type=float, default=0.0, help="the yarn's material damping (0: none)")
     p.add_argument("--air", action="store_true", help="air drag in the laddering")
     p.add_argument("--out", default="docs/reference")
+    p.add_argument("--need-arrivals", action="store_true",
+                   help="rerun finished runs that lack the front's arrival times (runs are deterministic)")
     args = p.parse_args()
     variant = f"sagitta {args.sagitta:g}" + (" implicit" if args.implicit_axial else "") if args.sagitta or \
         args.implicit_axial else "plain"
@@ -56,7 +69,9 @@ def main() -> None:
         variant += (f" loss {args.loss_factor:g}" if args.loss_factor else "") + (" air" if args.air else "")
     csv, rows = resumed_rows(args.out, f"ladder{args.size}")
     done = {(r["fx_nominal"], r["resolution"], r["member"], r.get("variant") if isinstance(r.get("variant"), str)
-             else "plain") for r in rows}
+             else "plain") for r in rows
+            if not args.need_arrivals or isinstance(r.get("arrivals_ms"), str) or isinstance(r.get("error"), str)}
+    new = []
     total = args.total_members or args.members
     offsets = target_offsets(total)
     for k in range(args.member_offset, args.member_offset + args.members):
@@ -73,10 +88,10 @@ def main() -> None:
                 try:
                     result = analyse(propagate(cut(knit, cfg.dynamics_settings())))
                 except (Interpenetration, SimulationBlowUp) as error:  # a failed run is a result too: kept, not retried
-                    rows.append({"fx_nominal": fx, "resolution": res, "member": k, "variant": variant, "fx_target": cfg.fx,
+                    new.append({"fx_nominal": fx, "resolution": res, "member": k, "variant": variant, "fx_target": cfg.fx,
                                  "fx_ini": knit.fx_ini, "lx_over_l0": knit.lx_over_l0, "error": str(error),
                                  "stretch_s": t1 - t0, "date": time.strftime("%Y-%m-%d")})
-                    save_rows(csv, rows, KEY)
+                    save_rows(csv, new, KEY)
                     print(f"f_x {fx:5.2f} res {res:3d} member {k}: failed: {error}", flush=True)
                     continue
                 row = {"fx_nominal": fx, "resolution": res, "member": k, "variant": variant, "fx_target": cfg.fx,
@@ -86,11 +101,12 @@ def main() -> None:
                        "stop_reason": result.stop_reason, "reached_edge": result.reached_edge,
                        **{k: v for k, v in result.energy_record().items() if k.startswith("dissipated")
                           or k == "ledger_residual"},
+                       "arrivals_ms": front_arrivals_ms(result),
                        "steps": result.steps, "nodes": result.nodes,
                        "stretch_s": t1 - t0, "ladder_s": time.perf_counter() - t1,
                        "date": time.strftime("%Y-%m-%d")}
-                rows.append(row)
-                save_rows(csv, rows, KEY)
+                new.append(row)
+                save_rows(csv, new, KEY)  # only this process's runs: merged with the file, whoever else writes it
                 print(f"{variant}: f_x {fx:5.2f} res {res:3d} member {k}: f_x^ini {row['fx_ini']:.3f} l_x {row['lx_over_l0']:.4f} "
                       f"v {row['v_lad_over_cb']:.3f} n {row['n_lad_over_ny']:.3f} fin {row['fx_fin']:.3f} "
                       f"({row['ladder_s']:.0f} s, {row['steps']} steps)", flush=True)
