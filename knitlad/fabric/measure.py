@@ -186,6 +186,33 @@ def laddering_velocity(times: np.ndarray, front: np.ndarray, l_y: float, first: 
     return float(slope * l_y)
 
 
+def front_arrivals(times: np.ndarray, front: np.ndarray) -> np.ndarray:
+    """When the front first reached 1, 2, ... stitches (its farthest), from its extent at each time [s]."""
+    times = np.asarray(times, dtype=float)
+    front = np.asarray(front, dtype=float)
+    top = int(np.nanmax(front)) if front.size else 0
+    return np.array([times[np.argmax(front >= k)] for k in range(1, top + 1)])
+
+
+def front_step_speeds(arrivals: np.ndarray, l_y: float) -> np.ndarray:
+    """The front's speed over each stitch it crossed, l_y over the time between its arrivals at stitch k and
+    k + 1 (``arrivals`` from :func:`front_arrivals`). A stick-slip front is a mixture of fast slips and
+    stalls: its distribution, not one fit, is what a resolution study can compare."""
+    steps = np.diff(np.asarray(arrivals, dtype=float))
+    with np.errstate(divide="ignore"):
+        return np.where(steps > 0, l_y / np.where(steps > 0, steps, 1.0), np.inf)
+
+
+def mean_front_speed(arrivals: np.ndarray, l_y: float, first: int = 1) -> float:
+    """The front's mean speed from stitch ``first`` to the farthest it reached: (stitches run) l_y over the
+    time it took, stalls included (NaN if it ran no stitch past ``first``). Unlike v_lad's fit over
+    stitches 2 to 10 it also measures a ladder that arrested."""
+    arrivals = np.asarray(arrivals, dtype=float)
+    if arrivals.size <= first:
+        return float("nan")
+    return float((arrivals.size - first) * l_y / (arrivals[-1] - arrivals[first - 1]))
+
+
 def node_strain_and_curvature(x: np.ndarray, edges: np.ndarray, rest: np.ndarray):
     """Per node: the mean axial strain of its edges, and the turning angle over the Voronoi length."""
     n = x.shape[0]

@@ -28,6 +28,7 @@ from knitlad.fabric.observers import Interpenetration  # noqa: E402
 from knitlad.experiments.protocol import analyse, cut, propagate
 from knitlad.fabric.preparation import stretch  # noqa: E402
 from knitlad.engine.simulation import SimulationBlowUp  # noqa: E402
+from knitlad.fabric.measure import front_arrivals  # noqa: E402
 
 from knitlad.studies.ensemble import resumed_rows, save_rows, target_offsets  # noqa: E402
 
@@ -37,13 +38,8 @@ KEY = ("fx_nominal", "resolution", "member", "variant")  # one row per run: merg
 
 def front_arrivals_ms(result) -> str:
     """When the followed front first reached 1, 2, ... stitches above the cut [ms after the cut], ';'-joined:
-    the raw record that v_lad and the step-time statistics of scripts/paper/front_steps.py are read from."""
-    times, up = result.times_s, result.front_up
-    out = []
-    for k in range(1, (max(up) if up else 0) + 1):
-        i = next(j for j, u in enumerate(up) if u >= k)
-        out.append(f"{times[i] * 1e3:.4f}")
-    return ";".join(out)
+    the raw record that v_lad and the step statistics of scripts/paper/front_steps.py are read from."""
+    return ";".join(f"{t * 1e3:.4f}" for t in front_arrivals(result.times_s, result.front_up))
 
 
 def main() -> None:

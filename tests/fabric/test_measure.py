@@ -14,7 +14,10 @@ from knitlad.fabric.measure import (
     ladders_started,
     laddered_cells,
     laddering_column,
+    front_arrivals,
+    front_step_speeds,
     laddering_velocity,
+    mean_front_speed,
     periodicities,
     tension_per_thread,
 )
@@ -187,3 +190,17 @@ def test_the_transverse_tension_is_the_mean_pull_of_the_held_nodes_above_and_bel
     reactions[[4, 5], 1] = 2.0
     held, y = np.array([0, 1, 4, 5]), np.array([-1.0, -1.0, 1.0, 1.0])
     assert transverse_tension(reactions, held, y, n_x=4, f0=0.5) == pytest.approx(4.0 / (4 * 0.5))
+
+
+def test_the_fronts_arrivals_step_speeds_and_mean_speed_of_a_stick_slip_front():
+    """A front that slips a stitch every 0.1 ms but stalls 0.4 ms at stitch 3: the step speeds are l_y/0.1 ms
+    but one, l_y/0.5 ms; the mean speed from stitch 1 to the last is 5 l_y over 0.9 ms."""
+    arrive = np.array([0.0, 0.1, 0.2, 0.7, 0.8, 0.9]) * 1e-3  # stitches 1 to 6
+    t = np.arange(0.0, 1.0e-3, 1e-6)
+    front = np.searchsorted(arrive, t, side="right")  # stitches reached by each time
+    assert front_arrivals(t, front) == pytest.approx(arrive, abs=1.1e-6)
+    l_y = 2.5e-3
+    speeds = front_step_speeds(arrive, l_y)
+    assert speeds == pytest.approx([25.0, 25.0, 5.0, 25.0, 25.0])
+    assert mean_front_speed(arrive, l_y) == pytest.approx(5 * l_y / 0.9e-3)
+    assert np.isnan(mean_front_speed(arrive[:1], l_y))
