@@ -74,17 +74,21 @@ class Plane(_Contact):
 class Cylinder(_Contact):
     """A rigid cylinder of radius ``radius_m`` [m] about the line through ``point_m`` along ``axis``;
     the yarn stays outside. Its radius should exceed the yarn's edge length (module docstring of
-    :mod:`knitlad.engine.kernels.obstacles`)."""
+    :mod:`knitlad.engine.kernels.obstacles`). ``length_m`` [m]: endless (inf, the default), or a pin of
+    that length centred on ``point_m``, with hemispherical caps (a snag's needle)."""
 
     point_m: tuple = (0.0, 0.0, 0.0)
     axis: tuple = (0.0, 0.0, 1.0)
     radius_m: float = 1e-3
+    length_m: float = math.inf
 
     def __post_init__(self) -> None:
         self._check()
         _unit(self.axis, "axis")
         if not (self.radius_m > 0 and math.isfinite(self.radius_m)):
             raise ValueError(f"radius_m must be positive, got {self.radius_m!r}")
+        if not self.length_m >= 0:
+            raise ValueError(f"length_m must be >= 0 m (inf: endless), got {self.length_m!r}")
 
 
 Obstacle = Plane | Cylinder
@@ -97,10 +101,11 @@ def obstacle_state(obstacles: Sequence[Obstacle], n_nodes: int) -> ObstacleState
     point = np.array([o.point_m for o in obstacles], dtype=float).reshape(k, 3) / units.LENGTH
     axis = np.array([_unit(o.normal if isinstance(o, Plane) else o.axis, "axis") for o in obstacles]).reshape(k, 3)
     radius = np.array([0.0 if isinstance(o, Plane) else o.radius_m / units.LENGTH for o in obstacles])
+    half_length = np.array([math.inf if isinstance(o, Plane) else 0.5 * o.length_m / units.LENGTH for o in obstacles])
     velocity = np.array([o.velocity_m_s for o in obstacles], dtype=float).reshape(k, 3) / units.VELOCITY
     k_n = np.array([o.stiffness * STIFFNESS_INTERNAL for o in obstacles])
     return ObstacleState(
-        kind, point, axis, radius, velocity, k_n, np.array([o.damping_ratio for o in obstacles], dtype=float),
+        kind, point, axis, radius, half_length, velocity, k_n, np.array([o.damping_ratio for o in obstacles], dtype=float),
         k_n * np.array([o.tangential_stiffness_ratio for o in obstacles], dtype=float),
         np.array([o.tangential_damping_ratio for o in obstacles], dtype=float),
         np.array([o.mu for o in obstacles], dtype=float), np.zeros((n_nodes, k, 3)),
@@ -133,6 +138,27 @@ class ObstacleReadout:
         if shift.shape != (3,) or not np.all(np.isfinite(shift)):
             raise ValueError(f"by_m must be a finite 3-vector [m], got {by_m!r}")
         self.obstacles.point[index] += shift / units.LENGTH
+
+    def set_obstacle_velocity(self, index: int, velocity_m_s) -> None:
+        """Translate obstacle ``index`` at ``velocity_m_s`` [m/s] from the next step on (zeros: it stops)."""
+        self._obstacle(index)
+        v = np.asarray(velocity_m_s, dtype=float)
+        if v.shape != (3,) or not np.all(np.isfinite(v)):
+            raise ValueError(f"velocity_m_s must be a finite 3-vector [m/s], got {velocity_m_s!r}")
+        self.obstacles.velocity[index] = v / units.VELOCITY
+
+    def release_obstacle(self, index: int) -> None:
+        """Let go: obstacle ``index`` exerts no force from the next step on (its springs, dashpots and friction
+        zeroed, its contact history forgotten) and stops; it stays in the record where it was."""
+        self._obstacle(index)
+        o = self.obstacles
+        o.k_n[index] = o.k_t[index] = o.damping_n[index] = o.damping_t[index] = o.mu[index] = 0.0
+        o.slip[:, index] = 0.0
+        o.velocity[index] = 0.0
+
+    def _obstacle(self, index: int) -> None:
+        if self.obstacles is None or not 0 <= index < self.obstacles.kind.shape[0]:
+            raise IndexError(f"no obstacle {index}")
 
     def obstacle_reactions_N(self) -> np.ndarray:
         """(k, 3) the force the yarns exert on each obstacle at the last force evaluation [N]."""

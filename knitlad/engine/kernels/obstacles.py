@@ -5,8 +5,9 @@ radius of curvature must exceed the edge length for the chain to feel it smoothl
 
 * Plane (point p, unit normal n): the yarn lies on the side n points to; overlap
   delta = r - (x - p).n, normal n.
-* Cylinder (point p on its axis, unit axis a, radius R): the yarn lies outside; with
-  rho = |(x - p) - ((x - p).a) a|, overlap delta = R + r - rho, normal the radial direction.
+* Cylinder (point p on its axis, unit axis a, radius R, half-length h): the yarn lies outside; with
+  s = (x - p).a clamped to [-h, h] and rho = |(x - p) - s a|, overlap delta = R + r - rho, normal
+  along (x - p) - s a. An endless cylinder has h = inf; a finite one has hemispherical caps (a pin).
 * The force, as :func:`knitlad.engine.kernels.contact.pair_contact_forces` gives a pair of yarns (Cundall
   & Strack 1979): f_n = k_n delta - 2 zeta_n sqrt(k_n m) v_n, never pulling; a tangential spring
   stretched by the slip u_t accumulated while the node touches, plus a dashpot, capped by Coulomb
@@ -35,6 +36,7 @@ class ObstacleState(NamedTuple):
     point: np.ndarray  # (k, 3) a point of the plane, or of the cylinder's axis, now
     axis: np.ndarray  # (k, 3) unit normal of the plane (towards the yarn), or the cylinder's axis
     radius: np.ndarray  # (k,) the cylinder's radius (0 for a plane)
+    half_length: np.ndarray  # (k,) half the cylinder's length along its axis (inf: endless; unused for a plane)
     velocity: np.ndarray  # (k, 3) translation velocity
     k_n: np.ndarray  # (k,) normal stiffness
     damping_n: np.ndarray  # (k,) normal dashpot, fraction of critical
@@ -47,7 +49,7 @@ class ObstacleState(NamedTuple):
 
 
 @njit(**NUMBA_OPTS)
-def obstacle_gap(kind, point, axis, radius, x, i, o):
+def obstacle_gap(kind, point, axis, radius, half_length, x, i, o):
     """(signed distance from the obstacle's surface to node i's axis point, unit normal towards the node)."""
     rx = x[i, 0] - point[o, 0]
     ry = x[i, 1] - point[o, 1]
@@ -55,6 +57,7 @@ def obstacle_gap(kind, point, axis, radius, x, i, o):
     along = dot(rx, ry, rz, axis[o, 0], axis[o, 1], axis[o, 2])
     if kind[o] == PLANE:
         return along, axis[o, 0], axis[o, 1], axis[o, 2]
+    along = min(max(along, -half_length[o]), half_length[o])  # a finite cylinder's caps
     rx -= along * axis[o, 0]
     ry -= along * axis[o, 1]
     rz -= along * axis[o, 2]
@@ -73,7 +76,7 @@ def obstacle_forces(x, v, mass, node_radius, held, o, dt, force):
     power = 0.0
     for i in range(x.shape[0]):
         for b in range(o.kind.shape[0]):
-            gap, nx, ny, nz = obstacle_gap(o.kind, o.point, o.axis, o.radius, x, i, b)
+            gap, nx, ny, nz = obstacle_gap(o.kind, o.point, o.axis, o.radius, o.half_length, x, i, b)
             overlap = node_radius[i] - gap
             if overlap <= 0.0 or held[i]:
                 o.slip[i, b, 0] = 0.0
