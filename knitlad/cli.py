@@ -525,6 +525,71 @@ def tensile(
         f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/tensile.csv, tensile.h5, tensile.png")
 
 
+@app.command()
+@config_options(_config.SnagConfig, exclude=("n_x", "n_y"))
+def snag(
+    stitches: str = typer.Option("16", "--stitches", help="Fabric size: N (N x N) or NXxNY.", rich_help_panel=EXPERIMENT_PANEL),
+    out: str = typer.Option(None, "--out", help="Output folder; default runs/snag-<time>.", rich_help_panel=OUTPUT_PANEL),
+    json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object.", rich_help_panel=OUTPUT_PANEL),
+    options: dict = None,
+) -> None:
+    """A snag: a pin behind one loop's head pulls it out of the stretched knit until the yarn breaks, then the
+    ladder runs from the break.
+
+    Without --fx or --lx, force control to f_x^ini = 4. Writes snag.csv and snag.png (the pull-out curve) and,
+    after a break, the ladder as `cut` does (ladder.h5, ladder.xdmf, spatio_temporal.png).
+    """
+    import numpy as np
+
+    from knitlad.experiments.snag import snag as run_snag
+    from knitlad.fabric.preparation import stretch
+    from knitlad.viz.plots import snag_curve_plot
+
+    cfg, out_dir = _knit_run(_config.SnagConfig, options, stitches, 4.0, out, "snag")
+    earlier = [p for p in ("snag.csv", "ladder.h5") if (out_dir / p).exists()]
+    if earlier:
+        fail(f"--out {out_dir}: holds an earlier snag run ({', '.join(earlier)}); choose another folder")
+    _say_if_compiling()
+    progress = _StageProgress()
+    result = _experiment_or_exit(
+        lambda: run_snag(stretch(cfg.stretch_settings(), progress), cfg.dynamics_settings(), cfg.snag_settings(),
+                         progress), progress)
+    progress.close(finished=True)
+    summary = result.summary()
+    try:
+        _write_table(out_dir / "snag.csv", np.column_stack([result.pull_m * 1e3, result.force_N]),
+                     ("pull_mm", "force_N"))
+        snag_curve_plot(result.pull_m, result.force_N, out_dir / "snag.png", result.broke)
+        if result.ladder is not None:
+            _write_run_outputs(out_dir, result.ladder)
+    except OSError as e:
+        typer.echo(_json(summary))
+        typer.echo(f"knitlad: run finished but its files could not be written ({e}); the summary is printed above",
+                   err=True)
+        raise typer.Exit(1)
+    if json_out:
+        typer.echo(_json(summary))
+        return
+    head = (f"{cfg.n_x} x {cfg.n_y} jersey at f_x^ini = {summary['fx_ini']:.3f}" if result.ladder else
+            f"{cfg.n_x} x {cfg.n_y} jersey") + f", pin at {cfg.snag_speed:g} m/s behind the loop of course " \
+        f"{summary['snag_row']}, column {summary['snag_column']}, mu = {cfg.mu}, {cfg.resolution} nodes/stitch"
+    if not result.broke:
+        typer.echo(f"{head}\n  no break within {cfg.max_pull_mm:g} mm: peak pull-out force "
+                   f"{summary['peak_force_N']:.4f} N; the pin put in {summary['pin_work_J']:.3e} J\n"
+                   f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/snag.csv, snag.png")
+        return
+    typer.echo(
+        f"{head}\n"
+        f"  the yarn broke at {summary['break_tension_N']:.3f} N after {summary['pull_at_break_mm']:.3f} mm "
+        f"(course {summary['break_row']}, column {summary['break_column']}); peak pull-out force "
+        f"{summary['peak_force_N']:.4f} N\n"
+        f"  energy: the pin put in {summary['pin_work_J']:.3e} J (friction took {summary['friction_before_break_J']:.3e}"
+        f" J of it); the ladder released {summary['ladder_released_J']:.3e} J\n"
+        f"  ladder: n_lad/n_y = {summary['n_lad_over_ny']:.3f}, v_lad/c_b = {summary['v_lad_over_cb']:.3f}, "
+        f"f_x^fin = {summary['fx_fin']:.3f}{' (reached an edge course)' if summary['reached_edge'] else ''}\n"
+        f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/snag.csv, snag.png, ladder.h5, spatio_temporal.png")
+
+
 def _write_table(path, rows, columns) -> None:
     """A CSV of ``rows`` under ``columns``, atomically."""
     import pandas as pd

@@ -102,6 +102,21 @@ def test_tensile_pulls_a_small_knit_and_writes_its_loops(tmp_path):
     assert bad.returncode == 2 and "lx_max" in bad.stderr and "Traceback" not in bad.stderr
 
 
+def test_snag_breaks_a_worn_loop_and_writes_the_curve_and_the_ladder(tmp_path):
+    """`knitlad snag` on a 6 x 6 knit (fast preset) with a 0.1 N worn spot: the break and the ladder said, the
+    pull-out curve as CSV and PNG, the ladder's file; a snag outside the knit: exit 2 in one line."""
+    p = run("snag", "--stitches", "6", "--preset", "fast", "--snag-speed", "3", "--weak-point-force", "0.1",
+            "--max-time-ms", "1", "--out", str(tmp_path))
+    assert p.returncode == 0, p.stderr
+    assert "the yarn broke at 0.10" in p.stdout and "ladder: n_lad/n_y" in p.stdout
+    table = (tmp_path / "snag.csv").read_text().splitlines()
+    assert table[0] == "pull_mm,force_N" and len(table) > 10
+    assert (tmp_path / "snag.png").stat().st_size > 1000 and (tmp_path / "ladder.h5").exists()
+    bad = run("snag", "--stitches", "6", "--snag-row", "9", "--out", str(tmp_path / "no"))
+    assert bad.returncode == 2 and "snag_row" in bad.stderr and "Traceback" not in bad.stderr
+    assert not (tmp_path / "no").exists() or not any((tmp_path / "no").iterdir())
+
+
 def test_a_run_that_fails_is_reported_in_one_line_with_exit_code_1(tmp_path, monkeypatch):
     """A run that stops on its own (force control out of reach, interpenetration, blow-up)
     raises; the command prints one line and writes nothing. The failure is injected: the

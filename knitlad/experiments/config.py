@@ -358,6 +358,38 @@ class TensileConfig(CutConfig):
             hold_s=self.hold_ms * 1e-3, hold_tol_f0=self.hold_tol_f0)
 
 
+class SnagConfig(CutConfig):
+    """A snag (``knitlad snag``; knitlad.experiments.snag): the knit stretched at mu = 0 (``fx`` or ``lx``, and
+    ``ly``), then with friction on a pin behind one loop's head pulls it out of the fabric until the yarn
+    breaks; the ladder follows from the break as from the paper's cut."""
+
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ()
+    snag_speed: float = Field(1.0, gt=0, le=30, description="the pin's pull speed, out of the fabric's plane [m/s]")
+    pin_radius_mm: float = Field(0.2, gt=0, le=2, description="the pin's radius [mm]")
+    max_pull_mm: float = Field(10.0, gt=0, le=100, description="the pin lets go after this travel without a break [mm]")
+    breaking_force: float | None = Field(None, gt=0, description=(
+        "every segment's breaking force [N] (none: the material's, 7.9 N for the paper's Nylon)"))
+    weak_point_force: float | None = Field(None, gt=0, description=(
+        "the breaking force of the hooked head's segments, a worn spot [N] (none: as the rest)"))
+    snag_row: int | None = Field(None, ge=0, description="the hooked loop's course [-] (none: the centre)")
+    snag_column: int | None = Field(None, ge=0, description="the hooked loop's column [-] (none: the centre)")
+
+    @model_validator(mode="after")
+    def snag_in_knit(self) -> "SnagConfig":
+        if self.snag_row is not None and self.snag_row >= self.n_y:
+            raise ValueError(f"snag_row: {self.snag_row} is outside the knit's {self.n_y} courses")
+        if self.snag_column is not None and self.snag_column >= self.n_x:
+            raise ValueError(f"snag_column: {self.snag_column} is outside the knit's {self.n_x} columns")
+        return self
+
+    def snag_settings(self):
+        from knitlad.experiments.snag import SnagSettings
+
+        return SnagSettings(speed_m_s=self.snag_speed, pin_radius_m=self.pin_radius_mm * 1e-3,
+                            max_pull_m=self.max_pull_mm * 1e-3, breaking_force_N=self.breaking_force,
+                            weak_point_N=self.weak_point_force, row=self.snag_row, column=self.snag_column)
+
+
 class LoopConfig(_WithPreset):
     """One single-loop run (``knitlad loop``, paper Fig. 5b,c)."""
 

@@ -195,8 +195,9 @@ def dynamics_rods(rods: Rods, dynamics: DynamicsSettings, material: Material) ->
     return rods
 
 
-def dynamics_simulation(rods: Rods, knit: StretchedKnit, dynamics: DynamicsSettings) -> Simulation:
-    """A simulation of ``rods`` (:func:`dynamics_rods`) under the dynamics' contact, friction and step."""
+def dynamics_simulation(rods: Rods, knit: StretchedKnit, dynamics: DynamicsSettings, obstacles=()) -> Simulation:
+    """A simulation of ``rods`` (:func:`dynamics_rods`) under the dynamics' contact, friction and step, with
+    ``obstacles`` (a snag's pin) if any."""
     contact = stretch_contact(knit.settings, mu=dynamics.mu, damping_ratio=dynamics.contact_damping_ratio,
                               tangential_damping_ratio=dynamics.contact_damping_ratio,
                               counting=dynamics.contact_counting)
@@ -205,7 +206,7 @@ def dynamics_simulation(rods: Rods, knit: StretchedKnit, dynamics: DynamicsSetti
     sim = Simulation(rods, contact=contact, dt_s=min(stretch_step, laddering_time_step(rods, contact, dynamics)),
                      drag_per_s=dynamics.drag_per_s, framed_twist=dynamics.framed_twist,
                      implicit_axial=dynamics.implicit_axial, predicted_dashpots=dynamics.predicted_dashpots,
-                     material_damping=dynamics.material_damping, air=dynamics.air)
+                     material_damping=dynamics.material_damping, air=dynamics.air, obstacles=obstacles)
     check_feasible(sim.dt_s, dynamics)
     return sim
 

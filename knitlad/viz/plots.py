@@ -403,6 +403,18 @@ def tensile_curve_plot(readings, path: str | Path) -> Path:
                      r"tension per thread [$f_0$]", "tensile test (dashed: unloading)", path)
 
 
+def snag_curve_plot(pull_m, force_N, path: str | Path, broke: bool = False) -> Path:
+    """The snag's pull-out curve (knitlad.experiments.snag): the force the yarn holds the pin back with against
+    the pin's travel; a cross where the yarn broke."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    pull_mm = np.asarray(pull_m) * 1e3
+    ax.plot(pull_mm, force_N, lw=1.2)
+    if broke and len(pull_mm) > 1:  # the last reading is after the break: mark the one before it
+        ax.plot(pull_mm[-2], np.asarray(force_N)[-2], "x", ms=8, color="C3", label="the yarn breaks")
+    return _labelled(fig, ax, "pin travel [mm]", "pull-out force [N]", "snag", path)
+
+
 def damage_prediction_plot(df, path: str | Path) -> Path:
     """Paper Fig. 4c: the damage of protocol B's cut, n_lad/n_y, against Eq. 1's delta l/(l0 - l_x), one
     series per l_y/l0 (or per ``series`` label, where the table has that column: sweeps compared); open

@@ -1,0 +1,214 @@
+"""A snag: a pin hooks one loop of the stretched knit and pulls it out until the yarn breaks; the ladder follows.
+
+How runs start in worn fabric, where the paper's experiment cuts a loop with scissors:
+
+1. **hook** (:func:`pin_behind_head`): a pin, a rigid cylinder of finite length along the courses
+   (:class:`knitlad.engine.obstacles.Cylinder` with ``length_m``), sits just behind the head of the loop
+   of course ``row``, column ``column``, between the legs of the course above that pass behind it; as
+   long as fits there.
+2. **pull** (:func:`snag`): with friction on (the dynamics' mu, also between pin and yarn), the pin moves
+   out of the fabric's plane (+z, the side the heads face) at ``speed_m_s``. Each yarn segment breaks
+   when its tension exceeds its breaking force (:mod:`knitlad.engine.fracture`: the material's, and a
+   weaker ``weak_point_N`` on the hooked head's segments if given: a worn spot). Recorded every
+   ``record_every_s``: the pin's travel and the force the yarn holds it back with (the pull-out curve).
+   The pull ends at the first break, or without one at ``max_pull_m``.
+3. **ladder**: at a break the pin lets go (:meth:`~knitlad.engine.simulation.Simulation.release_obstacle`)
+   and the knit runs on as after the paper's cut (:func:`knitlad.experiments.protocol.propagate`,
+   :func:`~knitlad.experiments.protocol.analyse`): the fronts are followed in the broken loop's column
+   and the one beside it, cells counted from the state at the break (what the snag distorted before it
+   is not the ladder's damage).
+
+The energy ledger starts when the pull does: the work the pin put in up to the break is
+``pin_work_J``; at the break the ledger starts again, so the ladder's record is what the break released.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from knitlad.engine import units
+from knitlad.engine.fracture import Break
+from knitlad.engine.obstacles import Cylinder
+from knitlad.experiments.protocol import (
+    DynamicsSettings,
+    LadderResult,
+    Laddering,
+    analyse,
+    dynamics_rods,
+    dynamics_simulation,
+    propagate,
+)
+from knitlad.fabric.preparation import InfeasibleRun, StretchedKnit, stretch_contact
+
+PIN_GAP_D = 0.15  # the pin starts this many yarn diameters behind the head
+PIN_SIDE_MARGIN_D = 0.5  # ... and its caps this far from the legs beside it
+
+
+@dataclass(frozen=True)
+class SnagSettings:
+    """The snag's pin and pull (SI). ``row``/``column``: the hooked loop (None: the knit's centre, where the
+    paper cuts); ``breaking_force_N``: every segment's (None: the material's); ``weak_point_N``: the hooked
+    head's segments' (None: as the rest)."""
+
+    speed_m_s: float = 1.0
+    pin_radius_m: float = 0.2e-3
+    max_pull_m: float = 10e-3
+    breaking_force_N: float | None = None
+    weak_point_N: float | None = None
+    row: int | None = None
+    column: int | None = None
+    record_every_s: float = 20e-6
+
+    def __post_init__(self) -> None:
+        for name in ("speed_m_s", "pin_radius_m", "max_pull_m", "record_every_s"):
+            value = getattr(self, name)
+            if not (value > 0 and math.isfinite(value)):
+                raise ValueError(f"{name} must be a positive number, got {value!r}")
+        for name in ("breaking_force_N", "weak_point_N"):
+            value = getattr(self, name)
+            if value is not None and not (value > 0 and math.isfinite(value)):
+                raise ValueError(f"{name} must be a positive number of N or None, got {value!r}")
+
+
+@dataclass
+class SnagResult:
+    """The pull-out curve, the break and the ladder that followed it (None without a break)."""
+
+    settings: SnagSettings
+    row: int
+    column: int
+    pull_m: np.ndarray  # (k,) the pin's travel at each record
+    force_N: np.ndarray  # (k,) the force the yarn holds the pin back with, along the pull
+    breaks: tuple[Break, ...]  # what broke, in the order it did
+    break_row: int = -1  # the course and column of the first break (-1: none)
+    break_column: int = -1
+    pin_work_J: float = 0.0  # the work the pin did on the knit up to the break (or the end of the pull)
+    friction_before_break_J: float = 0.0  # what friction took during the pull
+    stored_at_break_J: float = math.nan  # the knit's stored energy when it broke
+    ladder: LadderResult | None = None
+    wall_s: float = 0.0
+    energy_pull: dict = field(default_factory=dict)  # the ledger at the break (EnergyLedger.as_dict) [J]
+
+    @property
+    def broke(self) -> bool:
+        return bool(self.breaks)
+
+    def summary(self) -> dict:
+        """One row: the peak pull-out force, the break (when, where, its tension), the pin's work, and the
+        ladder's observables (NaN without a break)."""
+        first = self.breaks[0] if self.breaks else None
+        out = {
+            "snag_row": self.row, "snag_column": self.column, "broke": self.broke,
+            "peak_force_N": float(self.force_N.max()) if self.force_N.size else math.nan,
+            "pull_at_break_mm": float(self.pull_m[-1] * 1e3) if first and self.pull_m.size else math.nan,
+            "break_tension_N": first.tension_N if first else math.nan,
+            "break_row": self.break_row, "break_column": self.break_column,
+            "pin_work_J": self.pin_work_J, "friction_before_break_J": self.friction_before_break_J,
+        }
+        ladder = self.ladder
+        for key in ("fx_ini", "n_lad_over_ny", "v_lad_over_cb", "fx_fin", "reached_edge"):
+            out[key] = getattr(ladder, key) if ladder is not None else (math.nan if key != "reached_edge" else False)
+        if ladder is not None:
+            record = ladder.energy_record()
+            out["ladder_released_J"] = record.get("energy_start_J", math.nan) - record.get("energy_end_J", math.nan)
+        else:
+            out["ladder_released_J"] = math.nan
+        return out
+
+
+def loop_head_node(knit: StretchedKnit, row: int, column: int) -> int:
+    """The node at the apex of the head of the loop of course ``row`` in ``column`` (the highest node of the
+    course within a quarter stitch of the column's centre)."""
+    k = knit.knit
+    nodes = k.course_nodes(row)
+    x = k.rods.state.x[nodes]
+    l_x = knit.box_lx * knit.settings.material.stitch_length / units.LENGTH
+    centre = knit.gauge.column_centres(knit.box_lx)[column]
+    near = np.flatnonzero(np.abs(x[:, 0] - centre) < 0.25 * l_x)
+    return int(nodes.start + near[np.argmax(x[near, 1])])
+
+
+def pin_behind_head(knit: StretchedKnit, row: int, column: int, radius_m: float, speed_m_s: float,
+                    mu: float) -> Cylinder:
+    """The snag's pin: along x, just behind the head's apex (PIN_GAP_D diameters from the yarn), inside the
+    head's arc, as long as fits between the nodes beside it (PIN_SIDE_MARGIN_D diameters clear of them),
+    moving +z at ``speed_m_s``; contact stiffness that of the yarns', friction ``mu``. InfeasibleRun if no
+    pin of that radius fits there."""
+    m = knit.settings.material
+    x = knit.knit.rods.state.x * units.LENGTH  # m
+    apex = loop_head_node(knit, row, column)
+    r = 0.5 * m.diameter
+    centre = x[apex] - np.array([0.0, 0.5 * radius_m, r + radius_m + PIN_GAP_D * m.diameter])
+    reach = radius_m + r + PIN_SIDE_MARGIN_D * m.diameter
+    # the nodes a pin along x would meet: within reach of its axis line, apart from the head's own arc
+    course = knit.knit.node_course()
+    near_axis = np.hypot(x[:, 1] - centre[1], x[:, 2] - centre[2]) < reach
+    head_arc = (course == row) & (np.abs(x[:, 0] - x[apex, 0]) < 0.5 * radius_m)
+    blocking = near_axis & ~head_arc
+    half = (np.min(np.abs(x[blocking, 0] - centre[0])) if blocking.any() else math.inf) - reach
+    if not half > 0.0:
+        raise InfeasibleRun(f"a pin of radius {radius_m * 1e3:g} mm does not fit behind the head of the loop at "
+                            f"course {row}, column {column}: choose a thinner pin (pin_radius_mm)")
+    contact = stretch_contact(knit.settings)
+    return Cylinder(stiffness=contact.stiffness, mu=mu, point_m=tuple(centre), axis=(1.0, 0.0, 0.0),
+                    radius_m=radius_m, length_m=2.0 * half, velocity_m_s=(0.0, 0.0, speed_m_s))
+
+
+def cell_of_node(knit: StretchedKnit, node: int) -> tuple[int, int]:
+    """(course, column) of a node of the stretched knit: its yarn's course, the nearest column centre."""
+    x = knit.knit.rods.state.x[node]
+    columns = knit.gauge.column_centres(knit.box_lx)
+    return int(knit.knit.node_course()[node]), int(np.argmin(np.abs(columns - x[0])))
+
+
+def snag(knit: StretchedKnit, dynamics: DynamicsSettings, settings: SnagSettings, progress=None) -> SnagResult:
+    """Hook, pull until a break (or ``max_pull_m``), then let the ladder run (module docstring)."""
+    t0 = time.perf_counter()
+    s, m = knit.settings, knit.settings.material
+    row = s.n_y // 2 if settings.row is None else settings.row
+    column = s.n_x // 2 if settings.column is None else settings.column
+    if not (0 <= row < s.n_y and 0 <= column < s.n_x):
+        raise ValueError(f"row, column: ({row}, {column}) is outside the {s.n_x} x {s.n_y} knit")
+    pin = pin_behind_head(knit, row, column, settings.pin_radius_m, settings.speed_m_s, dynamics.mu)
+    rods = dynamics_rods(knit.knit.rods, dynamics, m)
+    sim = dynamics_simulation(rods, knit, dynamics, obstacles=[pin])
+    strength = np.full(sim.model.edge_a.shape[0], settings.breaking_force_N or m.breaking_force)
+    if settings.weak_point_N is not None:
+        x = sim.positions_m()
+        a, b = sim.model.edge_a, sim.model.edge_b
+        middle = 0.5 * (x[a] + x[b])
+        on_pin = (np.abs(middle[:, 0] - pin.point_m[0]) < 0.5 * pin.length_m + pin.radius_m) & (
+            knit.knit.node_course()[a] == row) & (np.abs(middle[:, 1] - pin.point_m[1]) < 4 * pin.radius_m)
+        strength[on_pin] = settings.weak_point_N
+    sim.set_breaking_force(strength)
+    sim.reset_ledger()
+    every = max(1, int(round(settings.record_every_s / sim.dt_s)))
+    pull, force = [0.0], [0.0]
+    start_z = sim.obstacle_positions_m()[0, 2]
+    while not sim.breaks and pull[-1] < settings.max_pull_m:
+        sim.step(every)
+        pull.append(float(sim.obstacle_positions_m()[0, 2] - start_z))
+        force.append(float(-sim.obstacle_reactions_N()[0, 2]))
+        if progress:
+            progress("pull", min(pull[-1] / settings.max_pull_m, 1.0))
+    ledger = sim.ledger()
+    result = SnagResult(settings, row, column, np.array(pull), np.array(force), sim.breaks,
+                        pin_work_J=ledger.obstacle_work, friction_before_break_J=ledger.friction,
+                        energy_pull=ledger.as_dict())
+    sim.release_obstacle(0)
+    if sim.breaks:
+        first = sim.breaks[0]
+        result.break_row, result.break_column = cell_of_node(knit, first.node)
+        result.stored_at_break_J = ledger.stored
+        sim.reset_ledger()  # the ladder's ledger: what the break released
+        # the laddered cells at the break are the baseline: what the snag distorted is not the ladder's damage
+        baseline = knit.gauge.laddered(sim.state.x, knit.box_lx, knit.box_ly)
+        run = Laddering(knit, dynamics, sim, first.edge, result.break_row, result.break_column, baseline,
+                        time.perf_counter() - t0)
+        result.ladder = analyse(propagate(run, progress=progress))
+    result.wall_s = time.perf_counter() - t0
+    return result
