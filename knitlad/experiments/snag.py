@@ -117,6 +117,7 @@ class SnagResult:
             out["ladder_released_J"] = record.get("energy_start_J", math.nan) - record.get("energy_end_J", math.nan)
         else:
             out["ladder_released_J"] = math.nan
+        out["wall_s"] = self.wall_s
         return out
 
 

@@ -248,6 +248,7 @@ RUN_UNITS = {
     "contacts/normal_force": "N", "contacts/friction_force": "N", "contacts/sliding": "1",
     "obstacles/kind": "1", "obstacles/direction": "1", "obstacles/radius": "m", "obstacles/points": "m",
     "cycle/readings": "cycle, leg (1 loading, 0 hold, -1 unloading), s, l0 (the box's l_x), f0 (f_x)",
+    "snag/pull": "m", "snag/force": "N",
     "tensile/readings": ("leg (1 loading, 0 hold, -1 unloading), s, l0 (the box's l_x, l_y), l0 (the knit's l_x, "
                          "l_y), f0 (f_x per course, f_y per column)"),
     # the energy ledger at each observation (knitlad.engine.dissipation.EnergyLedger)
@@ -333,15 +334,32 @@ def write_cycle_result(path: str | Path, cycle, ladder, config: dict, compressio
     return write_ladder_result(path, ladder, compression=compression, attrs=attrs, datasets=data)
 
 
+def scale_attributes(material) -> dict:
+    """The paper's scales of ``material`` as file attributes (``scale_f0_N``, ...): in every output file."""
+    from knitlad.engine.units import Scales
+
+    return {f"scale_{k}": v for k, v in Scales(material).as_attributes().items()}
+
+
 def write_tensile_result(path: str | Path, result, config: dict, attrs: dict | None = None) -> Path:
     """The tensile test's file (:class:`knitlad.experiments.tensile.TensileResult`): its readings
     (``tensile/readings``), its summary as ``tensile_*`` attributes, the config and the scales."""
-    from knitlad.engine.units import Scales
-
-    scales = {f"scale_{k}": v for k, v in Scales(result.material).as_attributes().items()}
-    return write_record(path, {**{f"tensile_{k}": v for k, v in result.summary().items()}, **scales,
-                               "config_json": json.dumps(config), **(attrs or {})},
+    return write_record(path, {**{f"tensile_{k}": v for k, v in result.summary().items()},
+                               **scale_attributes(result.material), "config_json": json.dumps(config), **(attrs or {})},
                         datasets={"tensile/readings": result.readings})
+
+
+def write_snag_result(path: str | Path, result, material, config: dict, compression: str | None = "gzip",
+                      attrs: dict | None = None) -> Path:
+    """A snag's file (:class:`knitlad.experiments.snag.SnagResult`): the pull-out curve (``snag/pull`` [m],
+    ``snag/force`` [N]), its summary as ``snag_*`` attributes, the config, the scales and, after a break,
+    the ladder's run file."""
+    attrs = {**{f"snag_{k}": v for k, v in result.summary().items()}, **scale_attributes(material),
+             "snag_config_json": json.dumps(config, default=str), **(attrs or {})}
+    data = {"snag/pull": result.pull_m, "snag/force": result.force_N}
+    if result.ladder is None:
+        return write_record(path, attrs, datasets=data)
+    return write_ladder_result(path, result.ladder, compression=compression, attrs=attrs, datasets=data)
 
 
 def write_record(path: str | Path, attrs: dict, datasets: dict | None = None) -> Path:

@@ -145,7 +145,26 @@ TENSILE = {
     "hold_converged": ("-", "the hold at the top settled within hold_ms"),
 }
 
-RESULTS = {"ladder": LADDER, "cycle": CYCLE, "tensile": TENSILE, "loop": LOOP, "stitch": STITCH}
+SNAG = {
+    "snag_row": ("1", "the hooked loop's course"),
+    "snag_column": ("1", "the hooked loop's column"),
+    "broke": ("-", "the yarn broke before the pin's max_pull_mm"),
+    "peak_force_N": ("N", "the largest force the yarn held the pin back with (the pull-out curve's peak)"),
+    "pull_at_break_mm": ("mm", "the pin's travel when the yarn broke (NaN: no break)"),
+    "break_tension_N": ("N", "the broken segment's tension at the break"),
+    "break_row": ("1", "the course of the first break (-1: none)"),
+    "break_column": ("1", "the column of the first break (-1: none)"),
+    "pin_work_J": ("J", "the work the pin did on the knit until the break (or the pull's end)"),
+    "friction_before_break_J": ("J", "what friction took during the pull"),
+    "ladder_released_J": ("J", "the stored energy the ladder released, from the break to its stop"),
+    "fx_ini": ("f0", "f_x of the stretched knit before the snag"),
+    "n_lad_over_ny": ("1", "the ladder's undone cells over n_y, counted from the break"),
+    "v_lad_over_cb": ("c_b", "the ladder's velocity (fit over stitches 2 to 10 above the break)"),
+    "fx_fin": ("f0", "f_x after the ladder arrested"),
+    "reached_edge": ("-", "the ladder reached an edge course"),
+}
+
+RESULTS = {"ladder": LADDER, "cycle": CYCLE, "tensile": TENSILE, "snag": SNAG, "loop": LOOP, "stitch": STITCH}
 
 
 def unit_of(description: str) -> str:

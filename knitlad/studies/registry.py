@@ -17,7 +17,7 @@ from typing import Callable
 
 from pydantic import BaseModel
 
-from knitlad.experiments.config import CutConfig, CycleConfig, LoopConfig, StitchConfig, TensileConfig
+from knitlad.experiments.config import CutConfig, CycleConfig, LoopConfig, SnagConfig, StitchConfig, TensileConfig
 
 
 @dataclass(frozen=True)
@@ -109,14 +109,34 @@ def run_tensile_job(cfg: TensileConfig, output, folder: Path | None = None, prog
     return result.summary(), write
 
 
+def run_snag_job(cfg: SnagConfig, output, folder: Path | None = None, progress=None):
+    """A snag (`knitlad snag`): its file holds the pull-out curve and, after a break, the ladder
+    (:func:`knitlad.io.hdf5.write_snag_result`)."""
+    from knitlad.experiments.snag import snag
+    from knitlad.fabric.preparation import stretch
+    from knitlad.io.hdf5 import write_snag_result
+    from knitlad.io.knit_cache import cached_stretch
+
+    knit = (stretch(cfg.stretch_settings(), progress) if folder is None else
+            cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch, progress)[0])
+    result = snag(knit, cfg.dynamics_settings(), cfg.snag_settings(), progress)
+    if result.ladder is not None and not output.frames:
+        result.ladder.frames, result.ladder.frame_times_s = [], []
+
+    def write(path: Path, record: dict) -> None:
+        write_snag_result(path, result, knit.settings.material, cfg.model_dump(),
+                          compression=None if output.compression == "none" else output.compression, attrs=record)
+
+    return result.summary(), write
+
+
 def _attributes_only(result):
     """A reduced model's summary, and a writer of a file of attributes (summary, settings, scales)."""
-    from knitlad.io.hdf5 import write_record
-    from knitlad.engine.units import Scales
+    from knitlad.io.hdf5 import scale_attributes, write_record
 
     summary = result.summary()
     settings = {k: v for k, v in dataclasses.asdict(result.settings).items() if k != "material"}
-    scales = {f"scale_{k}": v for k, v in Scales(result.settings.material).as_attributes().items()}
+    scales = scale_attributes(result.settings.material)
 
     def write(path: Path, record: dict) -> None:
         write_record(path, {**summary, **record, "settings_json": json.dumps(settings), **scales})
@@ -157,6 +177,11 @@ SCENES: dict[str, SweepScene] = {
         "fx_start", "fy_start", "fx_top", "fy_top", "lx_top_over_l0", "ly_top_over_l0", "fx_end", "fy_end", "coupling",
         "dissipated_per_stitch", "hold_converged", "wall_s", "job_wall_s"),
         "`knitlad tensile`: the fabric's tensile test", stretch_of),
+    "snag": SweepScene(SnagConfig, run_snag_job, (
+        "snag_row", "snag_column", "broke", "peak_force_N", "pull_at_break_mm", "break_tension_N", "break_row",
+        "break_column", "pin_work_J", "friction_before_break_J", "ladder_released_J", "fx_ini", "n_lad_over_ny",
+        "v_lad_over_cb", "fx_fin", "reached_edge", "wall_s", "job_wall_s"),
+        "`knitlad snag`: a pin pulls a loop out until the yarn breaks; the ladder follows", stretch_of),
     "loop": SweepScene(LoopConfig, run_loop_job, (
         "tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before", "steps",
         "nodes", "lx_over_l0", "lx_end_over_l0", "climb_over_ly", "wall_s", "job_wall_s"),

@@ -417,3 +417,21 @@ def test_a_tensile_sweep_writes_its_summary_and_plot_draws_each_jobs_loops(tmp_p
     p = knitlad("plot", str(out))
     assert p.returncode == 0, p.stderr
     assert len(list((out / "plots").glob("tensile_*.png"))) == 1
+
+
+def test_a_snag_sweep_breaks_worn_loops_and_writes_the_curve_and_the_ladder(tmp_path):
+    """The sweep scene `snag` (one 6 x 6 job, a 0.1 N worn spot): its summary says the break and the ladder,
+    its file holds the pull-out curve with units and the ladder's series."""
+    config = tmp_path / "snag.yaml"
+    config.write_text(yaml.safe_dump({
+        "scene": "snag", "fixed": {"n_x": 6, "n_y": 6, "preset": "fast", "fx": 4.0, "snag_speed": 3.0,
+                                   "max_time_ms": 1.0},
+        "sweep": {"expand": "grid", "axes": {"weak_point_force": [0.1]}}, "output": {"frames": False}}))
+    out = tmp_path / "out"
+    p = knitlad("sweep", str(config), "--out", str(out))
+    assert p.returncode == 0, p.stderr
+    df = read_summary(out)
+    assert (df["status"] == "ok").all() and df["broke"].all() and (df["n_lad_over_ny"] > 0).all()
+    with h5py.File(out / "jobs" / f"{df['job_id'][0]}.h5") as f:
+        assert f["snag/force"].attrs["unit"] == "N" and f["snag/pull"].shape == f["snag/force"].shape
+        assert "series/front_up" in f and f.attrs["scale_f0_N"] > 0
