@@ -272,7 +272,6 @@ def cut(
 
     Without --fx or --lx, force control to f_x^ini = 13.6 (the paper's Fig. 3c,d).
     """
-    import json
 
     from knitlad.experiments.protocol import run_ladder
 
@@ -372,7 +371,6 @@ def cycle(
     Without --fx or --lx, Delta x_min holds the knit at f_x = 0.68 (the experiments'). Writes cycle.csv
     (the force-displacement readings), cycle.png (Fig. 4a), cycle.h5 (readings, and the ladder of the cut).
     """
-    import json
 
     from knitlad.experiments.cycling import run_protocol_b
     from knitlad.fabric.preparation import stretch
@@ -627,7 +625,6 @@ def loop(
 
     None of its geometries reproduces the paper's Fig 5c (docs/single_loop.md); the fabric's own v_lad against f_x and mu is in docs/paper_claims.md (knitlad sweep docs/reference/velocity24_mu.yaml).
     """
-    import json
 
     from knitlad.experiments.periodic_loop import run_single_loop
 
@@ -656,7 +653,6 @@ def stitch(
     options: dict = None,
 ) -> None:
     """Periodised jersey stitch: tensions per thread f_x, f_y at imposed (l_x, l_y), relaxed at mu = 0."""
-    import json
 
     from knitlad.fabric.stitch_model import StitchRun
 
@@ -1125,7 +1121,6 @@ def _json(summary: dict) -> str:
 
 def _write_run_log(path, summary: dict):
     """run.log: the command line, where, when and with what it ran, and its summary, as plain text."""
-    import json
 
     from knitlad.io.provenance import run_provenance
 
@@ -1160,7 +1155,6 @@ def _write_run_outputs(out_dir, result):
 
 def _keep_summary(out_dir, summary: dict):
     """summary.json beside the run (a few hundred bytes), or None if even that cannot be written."""
-    import json
 
     from knitlad.io.atomic import atomic_path
 

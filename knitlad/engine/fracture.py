@@ -17,7 +17,6 @@ yarn breaks at its weakest point, which a per-segment strength gives it.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np

@@ -28,7 +28,7 @@ from knitlad.engine.contact import (
     make_contacts,
 )
 from knitlad.engine.checkpoint import Checkpointing
-from knitlad.engine.dissipation import AirDrag, DissipationControl, MaterialDamping, damping_params
+from knitlad.engine.dissipation import AirDrag, DissipationControl, MaterialDamping
 from knitlad.engine.fracture import Fracture
 from knitlad.engine.kernels.contact import GAPS_KNOWN, PAIRS_NEEDED, PEAK_OVERLAP, STALE, refresh_contacts, touching_pairs_among
 from knitlad.engine.kernels.integrate import (

@@ -30,7 +30,6 @@ from typing import Callable
 import numpy as np
 
 from knitlad.engine import units
-from knitlad.engine.contact import carry_friction_history
 from knitlad.experiments.protocol import (
     DynamicsSettings,
     LadderResult,

@@ -81,7 +81,6 @@ class StitchResult:
 class StitchRun:
     def __init__(self, settings: StitchSettings) -> None:
         self.s = settings
-        m = settings.material
         self.ly = min(settings.ly_over_l0, BUILD_LY)
         self.lx, geometry = self._build_geometry()
         self.cell: PeriodicStitch = build_periodic_stitch(geometry)

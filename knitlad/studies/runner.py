@@ -15,7 +15,6 @@ same command runs only the jobs without a file.
 from __future__ import annotations
 
 import json
-import math
 import os
 import signal
 import sys

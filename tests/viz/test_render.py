@@ -306,7 +306,6 @@ def test_a_damaged_run_file_is_refused_in_one_line_not_drawn_from_stray_memory(r
     import shutil
 
     import h5py
-    import numpy as np
 
     folder = tmp_path / "run"
     shutil.copytree(run_folder, folder, ignore=shutil.ignore_patterns("render", "*.mp4", "*.gif"))
