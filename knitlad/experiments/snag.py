@@ -137,21 +137,26 @@ def pin_behind_head(knit: StretchedKnit, row: int, column: int, radius_m: float,
                     mu: float) -> Cylinder:
     """The snag's pin: along x, just behind the head's apex (PIN_GAP_D diameters from the yarn), inside the
     head's arc, as long as fits between the nodes beside it (PIN_SIDE_MARGIN_D diameters clear of them),
-    moving +z at ``speed_m_s``; contact stiffness that of the yarns', friction ``mu``. InfeasibleRun if no
-    pin of that radius fits there."""
+    moving +z at ``speed_m_s``, at most half a stitch long; contact stiffness that of the yarns', friction
+    ``mu``. InfeasibleRun if no pin of that radius fits there without touching the knit."""
     m = knit.settings.material
     x = knit.knit.rods.state.x * units.LENGTH  # m
     apex = loop_head_node(knit, row, column)
     r = 0.5 * m.diameter
     centre = x[apex] - np.array([0.0, 0.5 * radius_m, r + radius_m + PIN_GAP_D * m.diameter])
     reach = radius_m + r + PIN_SIDE_MARGIN_D * m.diameter
-    # the nodes a pin along x would meet: within reach of its axis line, apart from the head's own arc
+    # the nodes a pin along x would meet: within reach of its axis line, apart from the head's own arc (a
+    # quarter stitch either side of the apex: what the pin is there to hook)
     course = knit.knit.node_course()
+    l_x = knit.box_lx * m.stitch_length
     near_axis = np.hypot(x[:, 1] - centre[1], x[:, 2] - centre[2]) < reach
-    head_arc = (course == row) & (np.abs(x[:, 0] - x[apex, 0]) < 0.5 * radius_m)
+    head_arc = (course == row) & (np.abs(x[:, 0] - x[apex, 0]) < 0.25 * l_x)
     blocking = near_axis & ~head_arc
     half = (np.min(np.abs(x[blocking, 0] - centre[0])) if blocking.any() else math.inf) - reach
-    if not half > 0.0:
+    half = min(half, 0.25 * l_x)
+    along = np.clip(x[:, 0] - centre[0], -half, half)
+    clearance = np.linalg.norm(x - centre - along[:, None] * np.array([1.0, 0.0, 0.0]), axis=1) - radius_m - r
+    if not (half > 0.0 and clearance.min() > 0.0):
         raise InfeasibleRun(f"a pin of radius {radius_m * 1e3:g} mm does not fit behind the head of the loop at "
                             f"course {row}, column {column}: choose a thinner pin (pin_radius_mm)")
     contact = stretch_contact(knit.settings)
