@@ -180,7 +180,7 @@ def snag(knit: StretchedKnit, dynamics: DynamicsSettings, settings: SnagSettings
     if not (0 <= row < s.n_y and 0 <= column < s.n_x):
         raise ValueError(f"row, column: ({row}, {column}) is outside the {s.n_x} x {s.n_y} knit")
     pin = pin_behind_head(knit, row, column, settings.pin_radius_m, settings.speed_m_s, dynamics.mu)
-    rods = dynamics_rods(knit.knit.rods, dynamics, m)
+    rods = dynamics_rods(knit.knit.rods.copy(), dynamics, m)  # the stretched knit stays as it was, for reuse
     sim = dynamics_simulation(rods, knit, dynamics, obstacles=[pin])
     strength = np.full(sim.model.edge_a.shape[0], settings.breaking_force_N or m.breaking_force)
     if settings.weak_point_N is not None:

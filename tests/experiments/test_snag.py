@@ -64,3 +64,11 @@ def test_a_bad_snag_is_refused_naming_the_field():
         SnagSettings(speed_m_s=0.0)
     with pytest.raises(ValueError, match="snag_row"):
         SnagConfig(n_x=6, n_y=6, snag_row=6)
+
+
+def test_a_snag_leaves_the_stretched_knit_as_it_was(knit_6x6):
+    """The stretched knit is a value: a snag runs on a copy, so one stretch serves many snags (a sweep's)."""
+    cfg, knit = knit_6x6
+    before = knit.knit.rods.state.x.copy()
+    snag(knit, cfg.dynamics_settings(), SnagSettings(speed_m_s=3.0, max_pull_m=0.1e-3))
+    np.testing.assert_array_equal(knit.knit.rods.state.x, before)
