@@ -90,6 +90,7 @@ class SnagResult:
     friction_before_break_J: float = 0.0  # what friction took during the pull
     stored_at_break_J: float = math.nan  # the knit's stored energy when it broke
     ladder: LadderResult | None = None
+    fx_ini: float = math.nan  # the stretched knit's f_x before the snag
     wall_s: float = 0.0
     energy_pull: dict = field(default_factory=dict)  # the ledger at the break (EnergyLedger.as_dict) [J]
 
@@ -110,7 +111,8 @@ class SnagResult:
             "pin_work_J": self.pin_work_J, "friction_before_break_J": self.friction_before_break_J,
         }
         ladder = self.ladder
-        for key in ("fx_ini", "n_lad_over_ny", "v_lad_over_cb", "fx_fin", "reached_edge"):
+        out["fx_ini"] = self.fx_ini
+        for key in ("n_lad_over_ny", "v_lad_over_cb", "fx_fin", "reached_edge"):
             out[key] = getattr(ladder, key) if ladder is not None else (math.nan if key != "reached_edge" else False)
         if ladder is not None:
             record = ladder.energy_record()
@@ -204,7 +206,7 @@ def snag(knit: StretchedKnit, dynamics: DynamicsSettings, settings: SnagSettings
     ledger = sim.ledger()
     result = SnagResult(settings, row, column, np.array(pull), np.array(force), sim.breaks,
                         pin_work_J=ledger.obstacle_work, friction_before_break_J=ledger.friction,
-                        energy_pull=ledger.as_dict())
+                        energy_pull=ledger.as_dict(), fx_ini=knit.fx_ini)
     sim.release_obstacle(0)
     if sim.breaks:
         first = sim.breaks[0]
