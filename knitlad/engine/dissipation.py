@@ -136,7 +136,7 @@ class EnergyLedger:
     :mod:`knitlad.engine.fracture`). ``start``: the stored energy at the reset. ``residual``: the
     change of the stored energy plus what was taken out less what was put in, which would be zero for an
     exact integrator and a conservative contact (the default union counting is not: where edges are shorter
-    than d, 96 nodes per stitch and finer, its owner changes leave 1 to 6 % of the turnover here, and
+    than d, 96 nodes per stitch and finer, its owner changes leave 1 to 8 % of the turnover here, and
     ``counting="all_pairs"`` closes to 0.3 %; docs/dissipation.md); ``turnover``: what was put in or taken out, the scale the residual is judged against.
     """
 
