@@ -406,14 +406,8 @@ def cycle(
                             f"knitlad cycle ... --out {out_dir} --resume goes on from the last leg")
     progress.close(finished=True)
     l0 = cfg.settings().material.stitch_length
-    try:
-        h5, csv, png = _write_cycle_outputs(out_dir, cfg, result, ladder)
-    except OSError as e:  # a full disk: the results said on stdout, the failure in one line
-        typer.echo(_json({**result.summary(), **({f"cut_{k}": v for k, v in ladder.summary().items()}
-                                                 if ladder else {})}))
-        typer.echo(f"knitlad: run finished but its files could not be written ({e}); the summary is printed above",
-                   err=True)
-        raise typer.Exit(1)
+    h5, csv, png = _files_or_exit(lambda: _write_cycle_outputs(out_dir, cfg, result, ladder), {
+        **result.summary(), **({f"cut_{k}": v for k, v in ladder.summary().items()} if ladder else {})})
     (out_dir / CYCLE_CHECKPOINT).unlink(missing_ok=True)  # finished: nothing to resume, nor to re-stretch
     shutil.rmtree(out_dir / "stretched", ignore_errors=True)
     typer.echo(
@@ -499,15 +493,12 @@ def tensile(
                             progress), progress)
     progress.close(finished=True)
     summary = result.summary()
-    try:
+    def write() -> None:
         _write_table(out_dir / "tensile.csv", result.readings, COLUMNS)
         write_tensile_result(out_dir / "tensile.h5", result, cfg.model_dump())
         tensile_curve_plot(result.readings, out_dir / "tensile.png")
-    except OSError as e:  # a full disk: the results said on stdout, the failure in one line
-        typer.echo(_json(summary))
-        typer.echo(f"knitlad: run finished but its files could not be written ({e}); the summary is printed above",
-                   err=True)
-        raise typer.Exit(1)
+
+    _files_or_exit(write, summary)
     if json_out:
         typer.echo(_json(summary))
         return
@@ -554,17 +545,14 @@ def snag(
                          progress), progress)
     progress.close(finished=True)
     summary = result.summary()
-    try:
+    def write() -> None:
         _write_table(out_dir / "snag.csv", np.column_stack([result.pull_m * 1e3, result.force_N]),
                      ("pull_mm", "force_N"))
         snag_curve_plot(result.pull_m, result.force_N, out_dir / "snag.png", result.broke)
         if result.ladder is not None:
             _write_run_outputs(out_dir, result.ladder)
-    except OSError as e:
-        typer.echo(_json(summary))
-        typer.echo(f"knitlad: run finished but its files could not be written ({e}); the summary is printed above",
-                   err=True)
-        raise typer.Exit(1)
+
+    _files_or_exit(write, summary)
     if json_out:
         typer.echo(_json(summary))
         return
@@ -586,6 +574,17 @@ def snag(
         f"  ladder: n_lad/n_y = {summary['n_lad_over_ny']:.3f}, v_lad/c_b = {summary['v_lad_over_cb']:.3f}, "
         f"f_x^fin = {summary['fx_fin']:.3f}{' (reached an edge course)' if summary['reached_edge'] else ''}\n"
         f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/snag.csv, snag.png, ladder.h5, spatio_temporal.png")
+
+
+def _files_or_exit(write, summary: dict):
+    """``write()``'s result; on an OSError (a full disk) the summary on stdout, the failure in one line, exit 1."""
+    try:
+        return write()
+    except OSError as e:
+        typer.echo(_json(summary))
+        typer.echo(f"knitlad: run finished but its files could not be written ({e}); the summary is printed above",
+                   err=True)
+        raise typer.Exit(1)
 
 
 def _write_table(path, rows, columns) -> None:
