@@ -17,6 +17,8 @@ import numpy as np
 # the model's arrays a run changes (hold, release, move_held's velocities, loads); the rest is built
 MODEL_CHANGES = ("held", "v_prescribed", "f_ext", "theta_held")
 CONTACT_SKIPPED = ("params", "list_scratch", "union")  # settings (mu is kept on its own), and a rebuild's scratch
+# arrays that gained columns (the ledger's owner_changes, a pair's union verdict): an older checkpoint's are padded
+WIDENED = ("work/ledger", "contacts/slip", "contacts/pair_results")
 
 
 class Checkpointing:
@@ -48,6 +50,9 @@ class Checkpointing:
             if name not in checkpoint:
                 raise ValueError(f"the checkpoint has no {name}: it was made by another kind of simulation")
             value = np.asarray(checkpoint[name])
+            if name in WIDENED and value.ndim == 2 and value.shape[1] < np.shape(like)[1]:
+                # written before the array had its last columns (those start at 0)
+                value = np.pad(value, ((0, 0), (0, np.shape(like)[1] - value.shape[1])))
             if value.shape != np.shape(like):
                 raise ValueError(f"the checkpoint's {name} has shape {value.shape}, this simulation's "
                                  f"{np.shape(like)}: it was made from another scene or resolution")

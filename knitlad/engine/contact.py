@@ -20,6 +20,7 @@ from knitlad.engine import units
 from knitlad.engine.deprecation import renamed_field
 from knitlad.engine.kernels.contact import (
     GAPS_KNOWN,
+    HISTORY_COLUMNS,
     MAX_OVERLAP,
     N_STATS,
     NORMAL_FORCE_SUM,
@@ -192,7 +193,7 @@ class Contacts(NamedTuple):
 
     pairs: np.ndarray  # (cap, 2) candidate edge pairs, i < j, sorted
     keys: np.ndarray  # (cap,) i * ne + j
-    slip: np.ndarray  # (cap, 3) tangential spring elongation u_t per pair
+    slip: np.ndarray  # (cap, HISTORY_COLUMNS) per pair: tangential spring elongation u_t, the union rule's verdict
     n_pairs: np.ndarray  # (1,) valid pairs
     status: np.ndarray  # (N_STATUS,) slots STALE (the list must be rebuilt), PAIRS_NEEDED (at the last overflow), ...
     x_ref: np.ndarray  # (n, 3) positions at the last rebuild
@@ -353,7 +354,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
     contacts = Contacts(
         pairs=np.zeros((cap, 2), dtype=np.int64),
         keys=np.zeros(cap, dtype=np.int64),
-        slip=np.zeros((cap, 3)),
+        slip=np.zeros((cap, HISTORY_COLUMNS)),
         n_pairs=np.zeros(1, dtype=np.int64),
         status=np.array([1, 0, 0, 0], dtype=np.int64),  # STALE, PAIRS_NEEDED, GAPS_KNOWN, REBUILDS
         x_ref=rods.state.x.copy(),

@@ -128,16 +128,17 @@ class EnergyLedger:
     Stored now: ``stretching``, ``bending``, ``twisting`` (elastic), ``branches`` (the viscoelastic
     branches), ``contact`` (the contacts' normal and tangential springs), ``kinetic``, ``external`` (the
     potential -f.x of constant external forces such as gravity). Put in: ``support_work`` (held nodes that
-    move), ``obstacle_work`` (the obstacles' forces, their springs, dashpots and friction together). Taken
+    move), ``obstacle_work`` (the obstacles' forces, their springs, dashpots and friction together),
+    ``owner_changes`` (the jumps of the contact energy where the union counting passes a contact from one edge
+    to its neighbour, either sign: :func:`knitlad.engine.kernels.contact.pair_contact_forces`; 0 when counting
+    all pairs). Taken
     out (each >= 0 up to round-off): ``axial_dashpot`` (the numerical dashpot of the axial springs, and with
     implicit axial springs the scheme's own damping of axial waves), ``contact_dashpot``, ``friction``
     (sliding at the Coulomb limit, the tangential dashpot, springs lost when pairs separate),
     ``global_drag``, ``material``, ``air``, ``fracture`` (the energy stored in what a break cut away:
     :mod:`knitlad.engine.fracture`). ``start``: the stored energy at the reset. ``residual``: the
-    change of the stored energy plus what was taken out less what was put in, which would be zero for an
-    exact integrator and a conservative contact (the default union counting is not: where edges are shorter
-    than d, 96 nodes per stitch and finer, its owner changes leave 1 to 8 % of the turnover here, and
-    ``counting="all_pairs"`` closes to 0.3 %; docs/dissipation.md); ``turnover``: what was put in or taken out, the scale the residual is judged against.
+    change of the stored energy plus what was taken out less what was put in: the integrator's error
+    (docs/dissipation.md). ``turnover``: what was put in or taken out, the scale the residual is judged against.
     """
 
     stretching: float
@@ -158,6 +159,7 @@ class EnergyLedger:
     start: float
     time_s: float
     fracture: float = 0.0
+    owner_changes: float = 0.0
 
     DISSIPATED = ("axial_dashpot", "contact_dashpot", "friction", "global_drag", "material", "air", "fracture")
     STORED = ("stretching", "bending", "twisting", "branches", "contact", "kinetic", "external")
@@ -172,7 +174,7 @@ class EnergyLedger:
 
     @property
     def work_in(self) -> float:
-        return self.support_work + self.obstacle_work
+        return self.support_work + self.obstacle_work + self.owner_changes
 
     @property
     def residual(self) -> float:

@@ -407,6 +407,7 @@ class LadderResult:
         last = {k: float(v[-1]) for k, v in self.energy_series.items()}
         out = {"energy_start_J": last["start"], "energy_end_J": last["stored"]}
         out.update({f"dissipated_{k}_J": last[k] for k in EnergyLedger.DISSIPATED})
+        out["owner_changes_J"] = last.get("owner_changes", 0.0)
         out["ledger_residual"] = last["residual"] / last["turnover"] if last["turnover"] > 0 else 0.0
         return out
 

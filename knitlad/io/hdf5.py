@@ -18,7 +18,7 @@ A laddering run (``ladder.h5``, a sweep's ``jobs/<id>.h5``)::
     /series/laddering_column_cells  (n_obs, n_y) bool
     /ledger/<name>      (n_obs,) [J] the energy ledger at each observation (knitlad.engine.dissipation.EnergyLedger):
                         stored (stretching, bending, twisting, branches, contact, kinetic, external), put in
-                        (support_work, obstacle_work), taken out (axial_dashpot, contact_dashpot, friction,
+                        (support_work, obstacle_work, owner_changes), taken out (axial_dashpot, contact_dashpot, friction,
                         global_drag, material, air), start, residual, turnover; time_s [s]
     /stretch/relax_steps, box_lx_over_l0, fx   the stretch's tension readings (FIRE steps so far, box, f_x)
     /final/laddered     (n_y, n_x) bool
@@ -253,7 +253,7 @@ RUN_UNITS = {
                          "l_y), f0 (f_x per course, f_y per column)"),
     # the energy ledger at each observation (knitlad.engine.dissipation.EnergyLedger)
     **{f"ledger/{name}": "J" for name in (*EnergyLedger.STORED, *EnergyLedger.DISSIPATED, "support_work",
-                                          "obstacle_work", "start", "stored", "dissipated", "work_in", "residual",
+                                          "obstacle_work", "owner_changes", "start", "stored", "dissipated", "work_in", "residual",
                                           "turnover")},
     "ledger/time_s": "s",
 }

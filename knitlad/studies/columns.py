@@ -68,6 +68,8 @@ LADDER = {
     "dissipated_air_J": ("J", "energy the air took out (air_drag)"),
     "dissipated_global_drag_J": ("J", "energy the global drag took out (drag_per_s > 0)"),
     "dissipated_fracture_J": ("J", "elastic energy stored in the segments a break cut away (0: no yarn broke)"),
+    "owner_changes_J": ("J", "energy the union contact counting created (or, < 0, destroyed) where a contact passed "
+                             "from one edge to its neighbour: booked so the ledger closes; 0 counting all pairs"),
     "ledger_residual": ("1", "the energy ledger's residual over the energy turned over: the integrator's error "
                              "(docs/dissipation.md)"),
     "nan_reasons": ("-", "why each result that is NaN is NaN: 'column: reason; ...' (empty: none is)"),

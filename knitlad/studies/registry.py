@@ -164,7 +164,7 @@ SCENES: dict[str, SweepScene] = {
         "box_lx_over_l0", "fx_within_tolerance", "peak_overlap_over_d", "reached_edge", "stop_reason",
         "laddering_column", "v_fit_stitches", "v_fit_first", "v_fit_last", "energy_start_J", "energy_end_J", "dissipated_friction_J",
         "dissipated_contact_dashpot_J", "dissipated_axial_dashpot_J", "dissipated_material_J", "dissipated_air_J",
-        "dissipated_global_drag_J", "dissipated_fracture_J", "ledger_residual", "nan_reasons", "nodes", "steps", "relax_steps", "stretch_reused", "wall_s",
+        "dissipated_global_drag_J", "dissipated_fracture_J", "owner_changes_J", "ledger_residual", "nan_reasons", "nodes", "steps", "relax_steps", "stretch_reused", "wall_s",
         "wall_stretch_s", "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment", stretch_of),
     "cycle": SweepScene(CycleConfig, run_cycle_job, (
         "fx_ini", "lx_over_l0", "ly_over_l0", "lx_max", "fx_thr", "delta_l_over_l0", "predicted_damage",

@@ -7,7 +7,8 @@ import pytest
 
 import knitlad as kl
 from knitlad.engine.contact import ContactModel, contact_time_step, make_contacts
-from knitlad.engine.kernels.contact import NORMAL_FORCE_SUM, TOUCHING, segment_closest_points
+from knitlad.engine.kernels.contact import HISTORY_COLUMNS, NORMAL_FORCE_SUM, TOUCHING, segment_closest_points
+from knitlad.engine.kernels.dissipation import N_LEDGER
 from knitlad.fabric.scenes.weave import plain_weave
 
 D = kl.NYLON.diameter
@@ -210,6 +211,61 @@ def test_union_counts_a_crossing_at_a_node_once_all_pairs_once_per_edge_of_the_n
     np.testing.assert_allclose(f_mid, f_mid_union, rtol=0, atol=1e-12 * np.abs(f_mid).max())
 
 
+def arc(radius: float, n: int, half_angle: float, axis: int) -> np.ndarray:
+    """n nodes on a circular arc in the plane of ``axis`` and z, its lowest point at the origin."""
+    phi = np.linspace(-half_angle, half_angle, n)
+    points = np.zeros((n, 3))
+    points[:, axis] = radius * np.sin(phi)
+    points[:, 2] = radius - radius * np.cos(phi)
+    return points
+
+
+def slide_through_a_trough(counting: str, substeps: int = 2000) -> tuple[float, float, float]:
+    """A yarn bent down (a saddle's upper half) slid diagonally through a trough: a rail bent up, both of edges
+    0.4 d on arcs of radius 1.5 d, frictionless and undamped, moved by hand. Returns the change of the contact
+    energy, the work of the contact forces on the moving yarn (trapezoid over the substeps) and the energy the
+    ledger booked to owner changes [J]."""
+    from knitlad.engine import units
+    from knitlad.engine.kernels.dissipation import OWNER_CHANGES
+
+    rail = arc(1.5 * D, 19, 1.2, 0)
+    above = arc(1.5 * D, 19, 1.2, 1)
+    above[:, 2] = 0.9 * D - above[:, 2]
+    above += np.array([-0.5, -0.37, 0.0]) * D
+    scene = kl.Scene()
+    scene.add_yarn(rail)
+    scene.add_yarn(above)
+    sim = kl.Simulation(scene.build(), contact=ContactModel(stiffness=1e3, counting=counting, mu=0.0,
+                                                            damping_ratio=0.0))
+    moving = np.arange(19, 38)
+    step = np.array([1.0, 0.63, 0.0]) * D / substeps
+    sim.compute_forces()
+    sim.work.ledger[:] = 0.0
+    e0 = sim.energies_J()["contact"]
+    force = sim.forces_N()[moving].sum(axis=0) @ step
+    work = 0.0
+    for _ in range(substeps):
+        sim.state.x[moving] += step / units.LENGTH
+        sim.compute_forces()
+        now = sim.forces_N()[moving].sum(axis=0) @ step
+        work += 0.5 * (force + now)
+        force = now
+    booked = float(sim.work.ledger[:, OWNER_CHANGES].sum()) * units.ENERGY
+    return sim.energies_J()["contact"] - e0, work, booked
+
+
+def test_the_union_rules_owner_changes_are_booked_and_close_the_contact_energy():
+    """In a trough (a yarn between two edges of a bent rail, edges shorter than d) the union rule passes the
+    contact from edge to edge, and the counted energy jumps where the closest point reaches a node. The jumps
+    are booked (OWNER_CHANGES) at the mean of their two ends: the contact energy's change is then the work of
+    its forces plus the jumps, to second order in the substep (all pairs: no jumps, a conservative potential)."""
+    change, work, booked = slide_through_a_trough("union")
+    assert abs(change + work) > 0.1 * abs(change)  # the counted energy is not a potential alone ...
+    assert abs(change + work - booked) < 1e-4 * abs(booked)  # ... the booked jumps are what is missing
+    change, work, booked = slide_through_a_trough("all_pairs")
+    assert booked == 0.0 and abs(change + work) < 1e-4 * abs(change)
+
+
 def test_counting_every_pair_halves_the_stable_contact_step():
     """all_pairs may put four pairs' stiffness on one node (a crossing at a node of both
     yarns), so its contact time-step limit is half that of union counting."""
@@ -299,7 +355,7 @@ def test_the_contact_sum_rod_by_rod_is_the_serial_sum_over_the_pairs_to_the_bit(
     for evaluation in range(2):  # the list's first evaluation, then one that skips pairs by their gaps
         force, torque = base.copy(), base_torque.copy()
         kc.contact_forces(x, v, omega, spin, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, 1e-5, force, torque, v,
-                          omega, False, np.zeros((4, 8)))
+                          omega, False, np.zeros((4, N_LEDGER)))
         n = int(c.n_pairs[0])
         assert n >= 2 * kc.MIN_PAIRS_PER_THREAD  # the rods run in parallel where there are two threads
         expected, expected_torque = base.copy(), base_torque.copy()
@@ -503,7 +559,7 @@ def test_a_pair_that_parts_while_skipped_loses_its_tangential_spring():
         assert refresh_contacts(x, m.edge_a, m.edge_b, m.edge_shift, c)
         force[:] = 0.0
         contact_forces(x, v, omega, 0, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, 1e-5, force, torque, v, omega,
-                       False, np.zeros((4, 8)))
+                       False, np.zeros((4, N_LEDGER)))
         n = int(c.n_pairs[0])
         return c.pair_results[:n, OVERLAP].copy(), np.abs(c.slip[:n]).sum(axis=1)
 
@@ -521,18 +577,18 @@ def test_a_pair_that_parts_while_skipped_loses_its_tangential_spring():
 
 @pytest.mark.parametrize("n_blocks", [1, 2, 3, 7])
 def test_the_slip_history_carried_across_a_rebuild_is_the_same_in_any_number_of_blocks(n_blocks):
-    """A pair in both lists keeps its slip, a new pair starts from none (the merge in blocks, each starting
+    """A pair in both lists keeps its history (slip, union verdict), a new pair starts from none (the merge in blocks, each starting
     at its first key by a binary search)."""
     from knitlad.engine.kernels.contact import carry_history
 
     rng = np.random.default_rng(n_blocks)
     old_keys = np.unique(rng.integers(0, 400, 150))
     new_keys = np.unique(np.concatenate([rng.choice(old_keys, 60, replace=False), rng.integers(0, 400, 80)]))
-    old_slip = rng.normal(size=(old_keys.size + 5, 3))  # rows past n_old are not the list's
-    new_slip = np.full((new_keys.size, 3), np.nan)
+    old_slip = rng.normal(size=(old_keys.size + 5, HISTORY_COLUMNS))  # rows past n_old are not the list's
+    new_slip = np.full((new_keys.size, HISTORY_COLUMNS), np.nan)
     carry_history(old_keys, old_slip, old_keys.size, new_keys, new_slip, new_keys.size, n_blocks)
     row_of = {int(k): i for i, k in enumerate(old_keys)}
-    expected = np.array([old_slip[row_of[int(k)]] if int(k) in row_of else np.zeros(3) for k in new_keys])
+    expected = np.array([old_slip[row_of[int(k)]] if int(k) in row_of else np.zeros(HISTORY_COLUMNS) for k in new_keys])
     assert np.array_equal(new_slip, expected)
     assert 0 < np.isin(new_keys, old_keys).sum() < new_keys.size  # both kinds of pair were there
 

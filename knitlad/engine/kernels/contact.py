@@ -35,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from knitlad.engine.kernels.dissipation import CONTACT_DASHPOT, FRICTION
+from knitlad.engine.kernels.dissipation import CONTACT_DASHPOT, FRICTION, OWNER_CHANGES
 from knitlad.engine.kernels.options import INLINE_OPTS, NUMBA_OPTS, PARALLEL_OPTS
 from knitlad.engine.kernels.vec import cross, dot
 
@@ -63,7 +63,7 @@ class ListScratch(NamedTuple):
 
     old_pairs: np.ndarray  # (cap, 2) the list before the rebuild (its slip is carried over)
     old_keys: np.ndarray  # (cap,)
-    old_slip: np.ndarray  # (cap, 3)
+    old_slip: np.ndarray  # (cap, HISTORY_COLUMNS)
     mid: np.ndarray  # (ne, 3) edge midpoints
     reach: np.ndarray  # (ne,) bounding-sphere radius of each capsule plus half the skin
     cells: np.ndarray  # (ne, 3) int64 grid cell of each midpoint
@@ -78,7 +78,8 @@ def list_scratch(n_edges, capacity):
     """The work arrays of a rebuild of a list of ``capacity`` pairs over ``n_edges`` edges (:class:`ListScratch`)."""
     max_cells = MAX_CELLS_PER_EDGE * n_edges + 64
     return ListScratch(
-        np.empty((capacity, 2), dtype=np.int64), np.empty(capacity, dtype=np.int64), np.empty((capacity, 3)),
+        np.empty((capacity, 2), dtype=np.int64), np.empty(capacity, dtype=np.int64),
+        np.empty((capacity, HISTORY_COLUMNS)),
         np.empty((n_edges, 3)), np.empty(n_edges), np.empty((n_edges, 3), dtype=np.int64),
         np.empty(n_edges, dtype=np.int64), np.empty(n_edges, dtype=np.int64),
         np.empty(max_cells + 1, dtype=np.int64), np.empty(max_cells, dtype=np.int64),
@@ -99,8 +100,15 @@ ALL_PAIRS_PLAIN, ALL_PAIRS_RECORD_GAPS, SKIP_BY_GAPS = range(3)
 # a pair is skipped only when its gap exceeds its edges' displacements by more than this [mm], far above round-off
 GAP_MARGIN = 1e-9
 # columns of the per-pair results of :func:`pair_contact_forces`
-FORCE_X, FORCE_Y, FORCE_Z, S_PAIR, T_PAIR, OVERLAP, NORMAL, SLIDING, TORQUE_I, TORQUE_J = range(10)
-PAIR_RESULTS = 10
+FORCE_X, FORCE_Y, FORCE_Z, S_PAIR, T_PAIR, OVERLAP, NORMAL, SLIDING, TORQUE_I, TORQUE_J, CEDED = range(11)
+PAIR_RESULTS = 11
+
+# columns of a pair's history (Contacts.slip): the tangential spring u_t, the union rule's last verdict on the
+# pair, COUNTED (+1), CEDED_TO_NEIGHBOUR (-1: touching, but the contact is a neighbouring edge's) or 0 (apart,
+# or new), and its overlap then (counted or ceded)
+SLIP_X, SLIP_Y, SLIP_Z, VERDICT, DEPTH = range(5)
+HISTORY_COLUMNS = 5
+COUNTED, CEDED_TO_NEIGHBOUR = 1.0, -1.0
 # columns of a touching pair's share on one of its edges (Contacts.shares: one 64-byte row): the pair's force on
 # its first edge, that edge's lever parameter (s, or t on the second edge), its friction couple, and for the
 # statistics the normal force, the overlap and 1 if sliding
@@ -168,7 +176,8 @@ def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge
                      mode, gap_ref, edge_moved):
     """Narrow phase of the pairs p in [lo, hi): overlap, s, t into ``out[p, OVERLAP]``, ``out[p, S_PAIR]``,
     ``out[p, T_PAIR]``. The overlap is 0 when apart or, with ``union`` counting, when the contact
-    belongs to a neighbouring edge (else every touching pair counts: ``all_pairs``).
+    belongs to a neighbouring edge (else every touching pair counts: ``all_pairs``); the overlap such a pair
+    cedes goes to ``out[p, CEDED]`` (0 for the others).
 
     The union rule: at an interior node the capsules of edges i and i' (its neighbour) overlap.
     A closest point clamped at the start node (s = 0) belongs to the predecessor; one clamped at
@@ -188,6 +197,7 @@ def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge
     for p in range(lo, hi):
         i = pairs[p, 0]
         j = pairs[p, 1]
+        out[p, CEDED] = 0.0
         if mode == SKIP_BY_GAPS and gap_ref[p] > edge_moved[i] + edge_moved[j] + GAP_MARGIN:
             out[p, OVERLAP] = 0.0
             continue
@@ -210,6 +220,7 @@ def counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge
                     _, t_next, _ = segment_distance(x, edge_a, edge_b, edge_shift, edge_next[j], i)
                     owned = t_next <= 0.0
             if not owned:
+                out[p, CEDED] = overlap
                 overlap = 0.0
         out[p, OVERLAP] = max(overlap, 0.0)
         out[p, S_PAIR] = s
@@ -545,8 +556,9 @@ def _candidates_of_block(
 
 @njit(**PARALLEL_OPTS)
 def carry_history(old_keys, old_slip, n_old, new_keys, new_slip, n_new, n_blocks=1):
-    """Copy the tangential slip of pairs present in both sorted lists; zero the new ones. The new list in
-    ``n_blocks`` blocks in parallel, each merging from the first old key not below its own first key."""
+    """Copy the history (tangential slip, union verdict) of pairs present in both sorted lists; zero the new
+    ones. The new list in ``n_blocks`` blocks in parallel, each merging from the first old key not below its own
+    first key."""
     for blk in prange(n_blocks):
         q0 = blk * n_new // n_blocks
         q1 = (blk + 1) * n_new // n_blocks
@@ -556,14 +568,9 @@ def carry_history(old_keys, old_slip, n_old, new_keys, new_slip, n_new, n_blocks
         for q in range(q0, q1):
             while p < n_old and old_keys[p] < new_keys[q]:
                 p += 1
-            if p < n_old and old_keys[p] == new_keys[q]:
-                new_slip[q, 0] = old_slip[p, 0]
-                new_slip[q, 1] = old_slip[p, 1]
-                new_slip[q, 2] = old_slip[p, 2]
-            else:
-                new_slip[q, 0] = 0.0
-                new_slip[q, 1] = 0.0
-                new_slip[q, 2] = 0.0
+            found = p < n_old and old_keys[p] == new_keys[q]
+            for k in range(HISTORY_COLUMNS):
+                new_slip[q, k] = old_slip[p, k] if found else 0.0
 
 
 @njit(**PARALLEL_OPTS)
@@ -673,16 +680,30 @@ def pair_contact_forces(
     force's excess over the spring's, (f_n - k_n delta) d(delta)/dt dt (the dashpot, and a spring cut off when the
     force would pull); at FRICTION the tangential force's work on the slip less the change of its spring's
     energy, -f_t.s dt - k_t (|u'|^2 - |u|^2)/2 (sliding at the Coulomb limit and the tangential dashpot), and
-    the spring's energy k_t |u|^2/2 when a pair separates (its history is reset).
+    the spring's energy k_t |u|^2/2 when a pair separates (its history is reset); at OWNER_CHANGES the energy
+    the union rule puts in when a touching pair's contact passes to a neighbouring edge or back (the counted
+    energy jumps by k_n delta^2/2 there, with no force doing work): +k_n delta^2/2 for a pair that takes a contact,
+    -k_n delta^2/2 for one that cedes it, delta^2 the mean of its values at the step's two ends.
     """
     counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out,
                      mode, gap_ref, edge_moved)
     friction = 0.0
     dashpot = 0.0
+    switched = 0.0
     for p in range(lo, hi):
         i = pairs[p, 0]
         j = pairs[p, 1]
         overlap = out[p, OVERLAP]
+        ceded = out[p, CEDED]
+        verdict = COUNTED if overlap > 0.0 else (CEDED_TO_NEIGHBOUR if ceded > 0.0 else 0.0)
+        depth = overlap if verdict == COUNTED else ceded
+        if verdict != 0.0 and slip[p, VERDICT] == -verdict:  # the contact changed owner: its energy jumps
+            # by k delta^2/2 somewhere in the step: booked at the mean of its two ends (the step's work is a
+            # trapezoid of the forces at its two ends, so this leaves an error of second order in the step)
+            switched += verdict * 0.25 * stiffness[edge_class[i], edge_class[j], 0] * (
+                depth * depth + slip[p, DEPTH] * slip[p, DEPTH])
+        slip[p, VERDICT] = verdict
+        slip[p, DEPTH] = depth
         if overlap <= 0.0:
             stored = slip[p, 0] * slip[p, 0] + slip[p, 1] * slip[p, 1] + slip[p, 2] * slip[p, 2]
             if stored > 0.0:
@@ -797,6 +818,7 @@ def pair_contact_forces(
             shares[q, SHARE_SLIDING] = sliding
     ledger[blk, FRICTION] += friction
     ledger[blk, CONTACT_DASHPOT] += dashpot
+    ledger[blk, OWNER_CHANGES] += switched
 
 
 @njit(**PARALLEL_OPTS)

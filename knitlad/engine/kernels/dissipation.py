@@ -30,7 +30,9 @@ returns the energy it took out over the step [uJ]:
 
 The ledger (``Workspace.ledger``, rows x :data:`N_LEDGER` channels) accumulates, per yarn (kernels run yarn
 by yarn) or per block of contact pairs, the energy each mechanism took out since it was zeroed, and the
-work done on the rods by the held nodes (supports that move) and by the obstacles.
+work done on the rods by the held nodes (supports that move) and by the obstacles, and the energy the union
+contact counting creates or destroys when a contact changes owner
+(:func:`knitlad.engine.kernels.contact.pair_contact_forces`).
 """
 
 import math
@@ -42,11 +44,12 @@ from knitlad.engine.kernels.elastic import add_hinge_forces, isotropic_bending_g
 from knitlad.engine.kernels.options import NUMBA_OPTS, PARALLEL_OPTS
 from knitlad.engine.kernels.vec import cross, dot
 
-# channels of the ledger: energy dissipated [uJ] (or, for the last two, work done on the rods)
-AXIAL_DASHPOT, CONTACT_DASHPOT, FRICTION, GLOBAL_DRAG, MATERIAL, AIR, SUPPORT_WORK, OBSTACLE_WORK = range(8)
-N_LEDGER = 8
+# channels of the ledger: energy dissipated [uJ] (or, for the last three, energy put into the rods)
+AXIAL_DASHPOT, CONTACT_DASHPOT, FRICTION, GLOBAL_DRAG, MATERIAL, AIR, SUPPORT_WORK, OBSTACLE_WORK, OWNER_CHANGES = (
+    range(9))
+N_LEDGER = 9
 LEDGER_NAMES = ("axial_dashpot", "contact_dashpot", "friction", "global_drag", "material", "air", "support_work",
-                "obstacle_work")
+                "obstacle_work", "owner_changes")
 
 # below this |kb|, a hinge is straight: its bending branch has no direction to act along
 STRAIGHT_KB = 1e-12
