@@ -193,7 +193,7 @@ class Contacts(NamedTuple):
 
     pairs: np.ndarray  # (cap, 2) candidate edge pairs, i < j, sorted
     keys: np.ndarray  # (cap,) i * ne + j
-    slip: np.ndarray  # (cap, HISTORY_COLUMNS) per pair: tangential spring elongation u_t, the union rule's verdict
+    slip: np.ndarray  # (cap, HISTORY_COLUMNS) per pair: tangential spring u_t, the union rule's verdict, overlap
     n_pairs: np.ndarray  # (1,) valid pairs
     status: np.ndarray  # (N_STATUS,) slots STALE (the list must be rebuilt), PAIRS_NEEDED (at the last overflow), ...
     x_ref: np.ndarray  # (n, 3) positions at the last rebuild

@@ -103,10 +103,10 @@ GAP_MARGIN = 1e-9
 FORCE_X, FORCE_Y, FORCE_Z, S_PAIR, T_PAIR, OVERLAP, NORMAL, SLIDING, TORQUE_I, TORQUE_J, CEDED = range(11)
 PAIR_RESULTS = 11
 
-# columns of a pair's history (Contacts.slip): the tangential spring u_t, the union rule's last verdict on the
-# pair, COUNTED (+1), CEDED_TO_NEIGHBOUR (-1: touching, but the contact is a neighbouring edge's) or 0 (apart,
-# or new), and its overlap then (counted or ceded)
-SLIP_X, SLIP_Y, SLIP_Z, VERDICT, DEPTH = range(5)
+# columns of a pair's history (Contacts.slip): the tangential spring u_t in 0..2, then the union rule's last
+# verdict on the pair, COUNTED (+1), CEDED_TO_NEIGHBOUR (-1: touching, but the contact is a neighbouring edge's)
+# or 0 (apart, or new), and its overlap then (counted or ceded)
+VERDICT, DEPTH = 3, 4
 HISTORY_COLUMNS = 5
 COUNTED, CEDED_TO_NEIGHBOUR = 1.0, -1.0
 # columns of a touching pair's share on one of its edges (Contacts.shares: one 64-byte row): the pair's force on
