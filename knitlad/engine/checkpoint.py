@@ -16,7 +16,10 @@ import numpy as np
 
 # the model's arrays a run changes (hold, release, move_held's velocities, loads); the rest is built
 MODEL_CHANGES = ("held", "v_prescribed", "f_ext", "theta_held")
-CONTACT_SKIPPED = ("params", "list_scratch", "union")  # settings (mu is kept on its own), and a rebuild's scratch
+# settings (mu is kept on its own; a checkpoint written before the law table has a "stiffness" nobody reads),
+# and a rebuild's scratch
+CONTACT_SKIPPED = ("params", "list_scratch", "union", "pair_law")
+OBSTACLE_SKIPPED = ("law", "reference_overlap")  # settings no run changes (release zeroes the stiffnesses)
 # arrays that gained columns (the ledger's owner_changes, a pair's union verdict): an older checkpoint's are padded
 WIDENED = ("work/ledger", "contacts/slip", "contacts/pair_results")
 
@@ -35,7 +38,8 @@ class Checkpointing:
                     if k not in CONTACT_SKIPPED}
             out["contacts/mu"] = np.array(self.contacts.params.mu)
         if self.obstacles is not None:
-            out |= {f"obstacles/{k}": np.array(v) for k, v in self.obstacles._asdict().items()}
+            out |= {f"obstacles/{k}": np.array(v) for k, v in self.obstacles._asdict().items()
+                    if k not in OBSTACLE_SKIPPED}
         out["clock"] = np.array([self.time, self.steps, self.drag, *self._ledger_start, self._shift_drift,
                                  self._fracture_J],
                                 dtype=np.float64)
@@ -73,7 +77,8 @@ class Checkpointing:
             self.set_friction(float(fit("contacts/mu", np.zeros(()))))
         if self.obstacles is not None:
             for k, a in self.obstacles._asdict().items():
-                a[...] = fit(f"obstacles/{k}", a)
+                if k not in OBSTACLE_SKIPPED:
+                    a[...] = fit(f"obstacles/{k}", a)
         older = np.shape(checkpoint.get("clock")) == (6,)  # written before breaks were booked: none were
         clock = np.append(fit("clock", np.zeros(6)), 0.0) if older else fit("clock", np.zeros(7))
         time, steps, drag, ledger_stored, ledger_time, drift, fracture = clock

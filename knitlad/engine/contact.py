@@ -34,6 +34,15 @@ from knitlad.engine.kernels.contact import (
     ListScratch,
     list_scratch,
 )
+from knitlad.engine.kernels.contact_law import (
+    K_NORMAL,
+    K_TANGENT,
+    LAW,
+    LAW_COLUMNS,
+    REFERENCE_OVERLAP,
+    largest_slope_factor,
+    law_mode,
+)
 from knitlad.engine.state import RodModel, Rods
 from knitlad.engine.timestep import damped_limit_factor
 
@@ -61,6 +70,16 @@ LIST_LOOKAHEAD_STEPS = 80
 # the accurate 42 x 42 ladder's steps, 0.86 x at the fast preset, paired; any skin gives the same bits:
 # docs/performance.md)
 DEFAULT_SKIN_DIAMETERS = 0.75
+
+
+def check_contact_law(law: str, reference_overlap: float | None) -> None:
+    """The one check of a contact law and its reference overlap [m] (yarn contact and obstacles)."""
+    law_mode(law)
+    if reference_overlap is not None and not (reference_overlap > 0 and math.isfinite(reference_overlap)):
+        raise ValueError(f"reference_overlap must be > 0 m or None, got {reference_overlap!r}")
+    if law != "linear" and reference_overlap is None:
+        raise ValueError(f"the {law} contact law needs reference_overlap, the overlap [m] where it gives "
+                         "stiffness x reference_overlap (ContactModel.for_force sets it)")
 
 
 def check_friction_coefficient(mu: float) -> None:
@@ -97,6 +116,11 @@ class ContactModel:
     sagitta_radius  R_s [m]     the capsule chain's sagitta correction: each edge's contact radius
                                 is r - l^2/(12 R_s), l its rest length (:func:`sagitta_corrected_radius`);
                                 None: capsules of the yarn's radius
+    law                         the normal spring f(delta): "linear" (default, f = k_n delta) or "hertz"
+                                (f = k_n delta_ref (delta/delta_ref)^(3/2), crossed elastic cylinders;
+                                :mod:`knitlad.engine.kernels.contact_law`)
+    reference_overlap  delta_ref [m]  the overlap where every law gives k_n delta_ref (set by :meth:`for_force`;
+                                needed by a nonlinear law)
     pair_stiffness  [N/m]       ``((material_a, material_b, k_n), ...)``: the normal stiffness of contacts
                                 between a yarn of material a and one of material b (either order; the
                                 tangential spring keeps its ratio); every other pair has ``stiffness``.
@@ -117,6 +141,8 @@ class ContactModel:
     counting: Counting = Counting.UNION
     sagitta_radius: float | None = None
     pair_stiffness: tuple = ()
+    law: str = "linear"
+    reference_overlap: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "pair_stiffness", tuple(tuple(entry) for entry in self.pair_stiffness))
@@ -141,21 +167,26 @@ class ContactModel:
             raise ValueError(f"skin must be > 0 m, got {self.skin!r}")
         if self.sagitta_radius is not None and not (self.sagitta_radius > 0 and math.isfinite(self.sagitta_radius)):
             raise ValueError(f"sagitta_radius must be > 0 m or None, got {self.sagitta_radius!r}")
+        check_contact_law(self.law, self.reference_overlap)
 
     @staticmethod
     def for_force(force_N: float, diameter_m: float, overlap_fraction: float = 0.05, **kwargs) -> "ContactModel":
-        """k_n such that a contact carrying ``force_N`` overlaps by ``overlap_fraction`` x d."""
+        """k_n such that a contact carrying ``force_N`` overlaps by ``overlap_fraction`` x d (that overlap is the
+        law's reference: a contact carries ``force_N`` there whatever the law)."""
         if not 0 < overlap_fraction < 1:
             raise ValueError("overlap_fraction must lie in (0, 1)")
-        return ContactModel(stiffness=force_N / (overlap_fraction * diameter_m), **kwargs)
+        return ContactModel(stiffness=force_N / (overlap_fraction * diameter_m),
+                            reference_overlap=overlap_fraction * diameter_m, **kwargs)
 
     @staticmethod
     def of_settings(settings, **kwargs) -> "ContactModel":
         """The contact of an experiment's settings (:meth:`for_knit`): any object naming ``material``,
-        ``contact_force_f0``, ``overlap_fraction`` and, if it has one, ``sagitta_radius_d`` (the laddering's,
-        the stitch's and the single loops' settings); ``kwargs`` as :meth:`for_knit`'s (``mu``, dashpots)."""
+        ``contact_force_f0``, ``overlap_fraction`` and, if it has them, ``sagitta_radius_d`` and ``contact_law``
+        (the laddering's, the stitch's and the single loops' settings); ``kwargs`` as :meth:`for_knit`'s (``mu``,
+        dashpots)."""
         return ContactModel.for_knit(settings.material, settings.contact_force_f0, settings.overlap_fraction,
-                                     getattr(settings, "sagitta_radius_d", 0.0), **kwargs)
+                                     getattr(settings, "sagitta_radius_d", 0.0),
+                                     **{"law": getattr(settings, "contact_law", "linear"), **kwargs})
 
     @staticmethod
     def for_knit(material, contact_force_f0: float = KNIT_CONTACT_FORCE_F0, overlap_fraction: float = KNIT_OVERLAP,
@@ -214,7 +245,7 @@ class Contacts(NamedTuple):
     gap_ref: np.ndarray  # (cap,) each pair's gap at the list's first evaluation (a lower bound at its rebuild)
     edge_moved: np.ndarray  # (ne,) each edge's largest end displacement since the rebuild (scratch)
     edge_class: np.ndarray  # (ne,) int64 row of ``stiffness`` for each edge's material (0: the default)
-    stiffness: np.ndarray  # (c, c, 2) k_n and k_t of a pair of edge classes [mN/mm]
+    pair_law: np.ndarray  # (c, c, LAW_COLUMNS) k_n, k_t [mN/mm], law, delta_ref [mm] of a pair of edge classes
     edge_allowance: np.ndarray  # (ne,) how far each edge may move before the list is stale (half the skin, more if fast)
     list_scratch: ListScratch  # work arrays of a rebuild, kept between rebuilds
     edge_rod: np.ndarray  # (ne,) int64 the yarn of the state (RodModel.yarn_start) whose nodes each edge moves
@@ -374,7 +405,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         pair_results=np.zeros((cap, PAIR_RESULTS)),
         gap_ref=np.zeros(cap),
         edge_moved=np.zeros(ne),
-        **pair_stiffness_table(m, model, params),
+        **pair_law_table(m, model, params),
         edge_allowance=np.full(ne, 0.5 * params.skin),
         list_scratch=list_scratch(ne, cap),
         **share_buffers(m, cap),
@@ -426,15 +457,19 @@ def share_buffers(m: RodModel, cap: int) -> dict:
     )
 
 
-def pair_stiffness_table(m: RodModel, model: ContactModel | None, params: ContactParams) -> dict:
-    """``edge_class`` and ``stiffness`` of :class:`Contacts`: class 0 has the model's k_n and k_t
-    (``params``), class c > 0 the edges of the c-th material named in ``model.pair_stiffness``."""
+def pair_law_table(m: RodModel, model: ContactModel | None, params: ContactParams) -> dict:
+    """``edge_class`` and ``pair_law`` of :class:`Contacts`: class 0 has the model's k_n and k_t
+    (``params``), class c > 0 the edges of the c-th material named in ``model.pair_stiffness``; every pair
+    has the model's law and reference overlap (:mod:`knitlad.engine.kernels.contact_law`)."""
     edge_class = np.zeros(m.edge_a.shape[0], dtype=np.int64)
     materials = []
     for entry in () if model is None else model.pair_stiffness:
         materials += [mat for mat in entry[:2] if mat not in materials]
-    table = np.empty((len(materials) + 1, len(materials) + 1, 2))
-    table[:, :, 0], table[:, :, 1] = params.k_n, params.k_t
+    table = np.empty((len(materials) + 1, len(materials) + 1, LAW_COLUMNS))
+    table[:, :, K_NORMAL], table[:, :, K_TANGENT] = params.k_n, params.k_t
+    table[:, :, LAW] = law_mode(model.law) if model is not None else law_mode("linear")
+    reference = None if model is None else model.reference_overlap
+    table[:, :, REFERENCE_OVERLAP] = reference / units.LENGTH if reference is not None else 0.0
     radius = 0.5 * (m.radius[m.edge_a] + m.radius[m.edge_b])
     for c, mat in enumerate(materials, start=1):
         same = (np.isclose(radius, 0.5 * mat.diameter / units.LENGTH, rtol=1e-9, atol=0.0)
@@ -447,8 +482,9 @@ def pair_stiffness_table(m: RodModel, model: ContactModel | None, params: Contac
     for mat_a, mat_b, k in () if model is None else model.pair_stiffness:
         a, b = materials.index(mat_a) + 1, materials.index(mat_b) + 1
         k_n = k * units.LENGTH / units.FORCE
-        table[a, b] = table[b, a] = (k_n, k * model.tangential_stiffness_ratio * units.LENGTH / units.FORCE)
-    return dict(edge_class=edge_class, stiffness=table)
+        for row in (table[a, b], table[b, a]):
+            row[K_NORMAL], row[K_TANGENT] = k_n, k * model.tangential_stiffness_ratio * units.LENGTH / units.FORCE
+    return dict(edge_class=edge_class, pair_law=table)
 
 
 class ContactStats(NamedTuple):
@@ -517,7 +553,8 @@ class ContactPairs(NamedTuple):
 
 
 def contact_time_step(m: RodModel, model: ContactModel | None, spin: bool = False, predicted: bool = False) -> float:
-    """Critical time step [ms] of the contact springs: 2/omega with omega^2 = 2 z (k_n + k_t) / m_min.
+    """Critical time step [ms] of the contact springs: 2/omega with omega^2 = 2 z (k_n' + k_t) / m_min, k_n' the
+    law's largest slope up to the overlaps it allows (:data:`knitlad.engine.kernels.contact_law.LAWS`).
 
     ``spin``: the yarns carry twist, so the tangential spring also turns each edge about
     its axis: omega^2 gains 2 z k_t max(r^2 / I) over edges free to twist (for a solid
@@ -528,6 +565,7 @@ def contact_time_step(m: RodModel, model: ContactModel | None, spin: bool = Fals
         return math.inf
     k_n = max([model.stiffness] + [entry[2] for entry in model.pair_stiffness]) * units.LENGTH / units.FORCE
     k_t = k_n * model.tangential_stiffness_ratio
+    k_n *= largest_slope_factor(model.law)
     # counting every pair, a contact at a node shared by two edges of each yarn is four pairs,
     # each with its full lever weight on that node: four times the stiffness union counting puts there
     z = model.contacts_per_node * (4 if model.counting == Counting.ALL_PAIRS else 1)

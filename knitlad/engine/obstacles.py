@@ -1,9 +1,9 @@
 """Rigid obstacles in SI: planes and cylinders a yarn rests on, is pressed by or slides over.
 
 ``Simulation(rods, obstacles=[Plane(...), Cylinder(...)])``. Each has its own contact stiffness,
-dashpots and friction coefficient, with the yarn-yarn contact law (:mod:`knitlad.engine.kernels.obstacles`),
-and may translate at a constant velocity (a plate pressing, a bar pulled). The time step accounts
-for their stiffness. The force the yarns exert on each: ``Simulation.obstacle_reactions_N()``.
+dashpots, friction coefficient and normal law, in the yarn-yarn contact's forms
+(:mod:`knitlad.engine.kernels.obstacles`, :mod:`knitlad.engine.kernels.contact_law`), and may translate at a
+constant velocity (a plate pressing, a bar pulled). The time step accounts for their stiffness. The force the yarns exert on each: ``Simulation.obstacle_reactions_N()``.
 """
 
 from __future__ import annotations
@@ -15,8 +15,9 @@ from typing import Sequence
 import numpy as np
 
 from knitlad.engine import units
-from knitlad.engine.contact import check_friction_coefficient
+from knitlad.engine.contact import check_contact_law, check_friction_coefficient
 from knitlad.engine.deprecation import renamed_field
+from knitlad.engine.kernels.contact_law import largest_slope_factor, law_mode
 from knitlad.engine.kernels.obstacles import CYLINDER, PLANE, ObstacleState
 from knitlad.engine.state import RodModel
 from knitlad.engine.timestep import damped_limit_factor
@@ -41,11 +42,14 @@ class _Contact:
     tangential_stiffness_ratio: float = 0.5  # k_t / k_n [-]
     tangential_damping_ratio: float = 0.3  # [-]
     velocity_m_s: tuple = (0.0, 0.0, 0.0)  # translation [m/s]
+    law: str = "linear"  # the normal spring: "linear" or "hertz" (knitlad.engine.kernels.contact_law)
+    reference_overlap: float | None = None  # delta_ref [m], where every law gives stiffness x delta_ref
 
     def _check(self) -> None:
         if not (self.stiffness > 0 and math.isfinite(self.stiffness)):
             raise ValueError(f"stiffness must be a positive number of N/m, got {self.stiffness!r}")
         check_friction_coefficient(self.mu)
+        check_contact_law(self.law, self.reference_overlap)
         for name in ("damping_ratio", "tangential_stiffness_ratio", "tangential_damping_ratio"):
             value = getattr(self, name)
             if not (value >= 0 and math.isfinite(value)):
@@ -110,16 +114,20 @@ def obstacle_state(obstacles: Sequence[Obstacle], n_nodes: int) -> ObstacleState
         np.array([o.tangential_damping_ratio for o in obstacles], dtype=float),
         np.array([o.mu for o in obstacles], dtype=float), np.zeros((n_nodes, k, 3)),
         np.zeros((n_nodes, k), dtype=np.uint8), np.zeros((k, 3)),
+        np.array([law_mode(o.law) for o in obstacles], dtype=np.int64),
+        np.array([0.0 if o.reference_overlap is None else o.reference_overlap / units.LENGTH for o in obstacles]),
     )
 
 
 def obstacle_time_step(model: RodModel, obstacles: Sequence[Obstacle], predicted: bool = False) -> float:
     """Critical time step [internal ms] of the obstacles' contact springs on the lightest free node,
-    2/omega with omega^2 = (k_n + k_t)/m summed over the obstacles (a node may touch all of them)."""
+    2/omega with omega^2 = (k_n' + k_t)/m summed over the obstacles (a node may touch all of them), k_n' the
+    law's largest slope up to the overlaps it allows (:data:`knitlad.engine.kernels.contact_law.LAWS`)."""
     free = ~model.held
     if not obstacles or not np.any(free):
         return math.inf
-    stiffness = sum(o.stiffness * (1 + o.tangential_stiffness_ratio) for o in obstacles) * STIFFNESS_INTERNAL
+    stiffness = sum(o.stiffness * (largest_slope_factor(o.law) + o.tangential_stiffness_ratio)
+                    for o in obstacles) * STIFFNESS_INTERNAL
     zeta = max(max(o.damping_ratio, o.tangential_damping_ratio) for o in obstacles)
     return 2.0 / math.sqrt(stiffness / float(model.mass[free].min())) * damped_limit_factor(zeta, predicted)
 

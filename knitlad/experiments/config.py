@@ -7,11 +7,12 @@ from __future__ import annotations
 
 import math
 import re
-from typing import ClassVar, Literal, get_args, get_origin
+from typing import Annotated, ClassVar, Literal, get_args, get_origin
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP
+from knitlad.engine.kernels.contact_law import LAWS, law_mode
 from knitlad.fabric.observers import AUTO_FRAMES
 from knitlad.fabric.presets import LADDER_PRESETS, LOOP_PRESETS, PRESET_HELP, STITCH_PRESETS
 
@@ -70,6 +71,22 @@ class _WithPreset(BaseModel):
         return data
 
 
+def _known_law(name: str) -> str:
+    law_mode(name)
+    return name
+
+
+# a law's name, checked against the kernels' table (a new law is known here without an edit)
+ContactLawName = Annotated[str, AfterValidator(_known_law)]
+
+
+def _contact_law():
+    return Field("linear", description=(
+        f"the contact's normal spring through its working point (contact_force_f0 at overlap_fraction d): "
+        f"{' or '.join(LAWS)}; linear is a penalty, f ~ delta, hertz crossed elastic cylinders, f ~ delta^3/2 "
+        "(knitlad.engine.kernels.contact_law) [-]"))
+
+
 class CutConfig(_WithPreset):
     """One laddering run (``knitlad cut``, sweep scene ``ladder``): the one declaration of each of its settings.
 
@@ -84,7 +101,7 @@ class CutConfig(_WithPreset):
         "contact_damping_ratio", "stretch_damping_ratio", "stretch_increment", "steps_per_increment",
         "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor",
         "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
-        "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches")
+        "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches", "contact_law")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -127,6 +144,7 @@ class CutConfig(_WithPreset):
         "the contact's sagitta correction: each segment's contact radius is r - l^2/(12 R), R this many yarn "
         "diameters (the stitch's contacts' radius of curvature), l the segment; 0: capsules of the yarn's "
         "radius [d]; default: the preset's"))
+    contact_law: ContactLawName = _contact_law()
     contact_counting: Literal["union", "all_pairs"] = Field("union", description=(
         "contact counting of the laddering dynamics: union (exact friction) or all_pairs (conserves energy) [-]"))
     edge: Literal["clamped", "tail"] = Field("clamped", description=(
@@ -233,6 +251,7 @@ class CutConfig(_WithPreset):
             steps_per_increment=self.steps_per_increment, fx_tolerance=self.fx_tolerance, start=self.stretch_start,
             natural_curvature=self.natural_curvature, memory_peak_ratio=self.memory_peak_ratio,
             material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
+            contact_law=self.contact_law,
         )
 
     def dynamics_settings(self):
@@ -290,7 +309,7 @@ class CycleConfig(CutConfig):
     (``lx_max``) and back; a copy is cut at Delta x_max of the last cycle, the uncut twin unloads.
     The laddering's settings are those of ``knitlad cut``."""
 
-    ADDED_LATER: ClassVar[tuple[str, ...]] = ()
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law",)
     fx: float | None = Field(None, gt=0, le=40, description=(
         "tension per thread f_x at Delta x_min, where the knit is stretched at mu = 0 [-] (force control; the "
         "experiments' 0.68)"))
@@ -330,7 +349,7 @@ class TensileConfig(CutConfig):
     knit stretched at mu = 0 (``fx`` or ``lx``, and ``ly``), then with friction on its box pulled to
     (``lx_max``, ``ly_max``), held, and brought back; f_x and f_y read after every ramp."""
 
-    ADDED_LATER: ClassVar[tuple[str, ...]] = ()
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law",)
     mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient while pulled [-]")
     lx_max: float | None = Field(None, gt=0.2, lt=1.0, description="the box's l_x/l0 at the top [-] (none: l_x stays)")
     ly_max: float | None = Field(None, gt=0.2, lt=0.5, description="the box's l_y/l0 at the top [-] (none: l_y stays)")
@@ -363,7 +382,7 @@ class SnagConfig(CutConfig):
     ``ly``), then with friction on a pin behind one loop's head pulls it out of the fabric until the yarn
     breaks; the ladder follows from the break as from the paper's cut."""
 
-    ADDED_LATER: ClassVar[tuple[str, ...]] = ()
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law",)
     snag_speed: float = Field(1.0, gt=0, le=30, description="the pin's pull speed, out of the fabric's plane [m/s]")
     pin_radius_mm: float = Field(0.2, gt=0, le=2, description="the pin's radius [mm]")
     max_pull_mm: float = Field(10.0, gt=0, le=100, description="the pin lets go after this travel without a break [mm]")
@@ -441,6 +460,7 @@ class StitchConfig(_WithPreset):
     """One periodised stitch (``knitlad stitch``): tensions at imposed (l_x, l_y)."""
 
     PRESETS: ClassVar[dict[str, dict]] = STITCH_PRESETS
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law",)
 
     lx: float = Field(0.35, gt=0.2, lt=0.6, description="cell width l_x/l0 [-]")
     ly: float = Field(0.25, gt=0.15, lt=0.4, description="cell height l_y/l0 [-]")
@@ -450,6 +470,7 @@ class StitchConfig(_WithPreset):
     d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description=(
         "yarn diameter over stitch length d/l0 [-]; 1/70, the paper's rounded value and the default, means its "
         "Nylon itself: d = 0.14 mm with l0 = 9.74 mm, d/l0 = 0.01437 (knitlad.experiments.config.material_for)"))
+    contact_law: ContactLawName = _contact_law()
 
     @model_validator(mode="after")
     def sagitta_within_reach(self) -> "StitchConfig":
@@ -462,7 +483,7 @@ class StitchConfig(_WithPreset):
 
         return StitchSettings(lx_over_l0=self.lx, ly_over_l0=self.ly, nodes_per_stitch=self.resolution,
                               material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
-                              **model_choices)
+                              contact_law=self.contact_law, **model_choices)
 
 
 # the longest segment, over the correction's radius of curvature R, at which the sagitta correction

@@ -94,6 +94,7 @@ class StretchSettings:
     natural_curvature: float  # K = mean (kappa_bar/kappa0)^2 the yarn remembers (0: straight at rest)
     material: Material
     sagitta_radius_d: float = 0.0  # the contact's sagitta correction, in d (0: none; knitlad.engine.contact)
+    contact_law: str = "linear"  # the contact's normal law (knitlad.engine.kernels.contact_law)
     memory_peak_ratio: float | None = None  # max/mean of (kappa_bar/kappa0)^2 (None: the scaled copy's own)
 
     def __post_init__(self) -> None:
@@ -332,7 +333,7 @@ def check_whole(knit: StretchedKnit) -> None:
     if knit.fx_ini > 0 or s.lx_over_l0 is None:
         return
     try:
-        unloaded = unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material, s.sagitta_radius_d)
+        unloaded = unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material, s.sagitta_radius_d, s.contact_law)
     except ValueError:  # no f_x = 0 point on the stitch's range: nothing to hold it against
         return
     if knit.lx_over_l0 > unloaded + 0.02:
@@ -347,7 +348,7 @@ def stitch_of(s: StretchSettings, lx_over_l0: float) -> StitchRun:
     cell = StitchRun(StitchSettings(
         lx_over_l0=lx_over_l0, ly_over_l0=s.ly_over_l0, nodes_per_stitch=s.nodes_per_stitch,
         material=s.material, contact_force_f0=s.contact_force_f0, overlap_fraction=s.overlap_fraction,
-        sagitta_radius_d=s.sagitta_radius_d, stretch_increment=s.stretch_increment))
+        sagitta_radius_d=s.sagitta_radius_d, stretch_increment=s.stretch_increment, contact_law=s.contact_law))
     cell.relax()
     return cell
 
@@ -418,17 +419,18 @@ def check_stitch_held(box: KnitBox, cell: StitchRun) -> None:
 
 
 @functools.lru_cache(maxsize=16)
-def unloaded_width(ly_over_l0: float, nodes_per_stitch: int, material: Material, sagitta_radius_d: float = 0.0) -> float:
+def unloaded_width(ly_over_l0: float, nodes_per_stitch: int, material: Material, sagitta_radius_d: float = 0.0,
+                   contact_law: str = "linear") -> float:
     """l_x/l0 of the periodised stitch on the f_x = 0 curve at this l_y (cached: a sweep asks it often)."""
     return zero_tension_lx(ly_over_l0, material=material, nodes_per_stitch=nodes_per_stitch,
-                           sagitta_radius_d=sagitta_radius_d)
+                           sagitta_radius_d=sagitta_radius_d, contact_law=contact_law)
 
 
 def remember_unloaded_shape(cell: StitchRun, s: StretchSettings) -> None:
     """The stitch is taken to the f_x = 0 curve (the unloaded fabric), relaxed, and remembers that shape
     with mean (kappa_bar/kappa0)^2 = K (:mod:`knitlad.fabric.shape_memory`); relaxed again, twist on."""
-    stretch_to(cell, unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material, s.sagitta_radius_d), s.ly_over_l0,
-               s.stretch_increment, min_increments=0)
+    stretch_to(cell, unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material, s.sagitta_radius_d, s.contact_law),
+               s.ly_over_l0, s.stretch_increment, min_increments=0)
     cell.settle()
     try:
         cell.remember_shape(s.natural_curvature, s.memory_peak_ratio)

@@ -55,6 +55,7 @@ class StitchSettings:
     contact_force_f0: float = KNIT_CONTACT_FORCE_F0
     overlap_fraction: float = KNIT_OVERLAP
     sagitta_radius_d: float = 0.0  # the contact's sagitta correction (knitlad.engine.contact.sagitta_corrected_radius), in d; 0: none
+    contact_law: str = "linear"  # the contact's normal law (knitlad.engine.kernels.contact_law)
     stretch_increment: float = 0.005
     relax_steps: int = 20_000  # per increment
     force_tol_f0: float = 1e-4  # final relaxation: max |F| on a node, in f0
@@ -153,7 +154,8 @@ class StitchRun:
 
 
 def stitch_tensions(lx_over_l0: float, ly_over_l0: float, nodes_per_stitch: int | None = None,
-                    material: Material = NYLON, sagitta_radius_d: float | None = None) -> StitchResult:
+                    material: Material = NYLON, sagitta_radius_d: float | None = None,
+                    contact_law: str = "linear") -> StitchResult:
     """The stitch at (l_x, l_y) [l/l0]; the resolution and the sagitta correction default to the
     default preset's (:mod:`knitlad.fabric.presets`)."""
     preset = STITCH_PRESETS["default"]
@@ -162,7 +164,7 @@ def stitch_tensions(lx_over_l0: float, ly_over_l0: float, nodes_per_stitch: int 
     if sagitta_radius_d is None:
         sagitta_radius_d = preset["sagitta_radius"]
     return StitchRun(StitchSettings(lx_over_l0, ly_over_l0, nodes_per_stitch, material,
-                                    sagitta_radius_d=sagitta_radius_d)).run()
+                                    sagitta_radius_d=sagitta_radius_d, contact_law=contact_law)).run()
 
 
 def zero_tension_lx(ly_over_l0: float, lo: float = 0.22, hi: float = 0.40, tol: float = 1e-3, **kwargs) -> float:

@@ -448,6 +448,7 @@ def read_stretched_knit(path: str | Path):
         settings.setdefault("start", "affine")  # knits stretched before the tiled start were affine
         settings.setdefault("natural_curvature", 0.0)
         settings.setdefault("sagitta_radius_d", 0.0)  # knits stretched before the sagitta correction had none
+        settings.setdefault("contact_law", "linear")  # and before the contact laws, the linear one
         geometry = json.loads(f.attrs["geometry_json"])
         geometry["material"] = material
         stored = {name: f["model"][name][()] for name in RodModel._fields if name in f["model"]}

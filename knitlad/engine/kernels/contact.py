@@ -13,11 +13,12 @@ Every edge is a capsule (a cylinder of its yarn's radius with spherical caps).
   by its allowance: skin / 2, or for an edge that moves faster than that in a few
   dozen steps (a cut yarn's flying end), the reach of its speed, its pairs listed
   to the sum of the two allowances (:func:`refresh_contacts`).
-* Normal force (overlap delta = r_a + r_b - |P - Q|): f_n = k_n delta + gamma_n d(delta)/dt,
-  never pulling. Tangential force (Cundall & Strack 1979): a spring stretched by
-  the tangential slip u_t accumulated per persistent pair, plus a dashpot,
-  capped by Coulomb |f_t| <= mu f_n; when capped, u_t is reset to the slipping
-  value. u_t is reset when the pair separates and carried across rebuilds.
+* Normal force (overlap delta = r_a + r_b - |P - Q|): f_n = f(delta) + gamma_n d(delta)/dt,
+  never pulling; f the contact's law (:mod:`knitlad.engine.kernels.contact_law`: k_n delta, or
+  Hertz's). Tangential force (Cundall & Strack 1979): a spring stretched by the tangential slip
+  u_t accumulated per persistent pair, plus a dashpot, capped by Coulomb |f_t| <= mu f_n; when
+  capped, u_t is reset to the slipping value. u_t is reset when the pair separates and carried
+  across rebuilds.
 * A yarn is the *union* of its capsules, so a contact at a node shared by two
   edges of a yarn is counted once (:func:`counted_overlaps`): without this, a yarn
   sliding over a chain of capsules feels a bump at every node (two pairs share
@@ -35,6 +36,14 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
+from knitlad.engine.kernels.contact_law import (
+    K_NORMAL,
+    K_TANGENT,
+    LAW,
+    REFERENCE_OVERLAP,
+    normal_spring,
+    normal_spring_energy,
+)
 from knitlad.engine.kernels.dissipation import CONTACT_DASHPOT, FRICTION, OWNER_CHANGES
 from knitlad.engine.kernels.options import INLINE_OPTS, NUMBA_OPTS, PARALLEL_OPTS
 from knitlad.engine.kernels.vec import cross, dot
@@ -648,7 +657,7 @@ def coulomb_spring(ux, uy, uz, nx, ny, nz, vtx, vty, vtz, sx, sy, sz, dt, k_t, g
 @njit(**NUMBA_OPTS)
 def pair_contact_forces(
     lo, hi, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
-    edge_prev, edge_next, union, pairs, slip, edge_class, stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref,
+    edge_prev, edge_next, union, pairs, slip, edge_class, pair_law, damping_n, damping_t, mu, dt, out, mode, gap_ref,
     edge_moved, blk, edge_rod, bucket_fill, shares, share_edge, ledger,
 ):
     """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``
@@ -676,14 +685,17 @@ def pair_contact_forces(
     bucket of this block ``blk`` and that edge's rod (``bucket_fill[blk, rod]``, the next free slot of
     ``shares`` and ``share_edge``), for :func:`contact_sums_by_rod`.
 
+    ``pair_law``: the law table (c, c, LAW_COLUMNS) of :mod:`knitlad.engine.kernels.contact_law`, the row of
+    each pair's two edge classes: its k_n, k_t and normal law f(delta) with energy U(delta).
+
     The energy the contacts take out over the step goes to ``ledger[blk]``: at CONTACT_DASHPOT the normal
-    force's excess over the spring's, (f_n - k_n delta) d(delta)/dt dt (the dashpot, and a spring cut off when the
+    force's excess over the spring's, (f_n - f(delta)) d(delta)/dt dt (the dashpot, and a spring cut off when the
     force would pull); at FRICTION the tangential force's work on the slip less the change of its spring's
     energy, -f_t.s dt - k_t (|u'|^2 - |u|^2)/2 (sliding at the Coulomb limit and the tangential dashpot), and
     the spring's energy k_t |u|^2/2 when a pair separates (its history is reset); at OWNER_CHANGES the energy
     the union rule puts in when a touching pair's contact passes to a neighbouring edge or back (the counted
-    energy jumps by k_n delta^2/2 there, with no force doing work): +k_n delta^2/2 for a pair that takes a contact,
-    -k_n delta^2/2 for one that cedes it, delta^2 the mean of its values at the step's two ends.
+    energy jumps by U(delta) there, with no force doing work): +U(delta) for a pair that takes a contact,
+    -U(delta) for one that cedes it, U the mean of its values at the step's two ends.
     """
     counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out,
                      mode, gap_ref, edge_moved)
@@ -697,17 +709,22 @@ def pair_contact_forces(
         ceded = out[p, CEDED]
         verdict = COUNTED if overlap > 0.0 else (CEDED_TO_NEIGHBOUR if ceded > 0.0 else 0.0)
         depth = overlap if verdict == COUNTED else ceded
+        ci = edge_class[i]
+        cj = edge_class[j]
         if verdict != 0.0 and slip[p, VERDICT] == -verdict:  # the contact changed owner: its energy jumps
-            # by k delta^2/2 somewhere in the step: booked at the mean of its two ends (the step's work is a
+            # by U(delta) somewhere in the step: booked at the mean of its two ends (the step's work is a
             # trapezoid of the forces at its two ends, so this leaves an error of second order in the step)
-            switched += verdict * 0.25 * stiffness[edge_class[i], edge_class[j], 0] * (
-                depth * depth + slip[p, DEPTH] * slip[p, DEPTH])
+            law = pair_law[ci, cj, LAW]
+            k_n = pair_law[ci, cj, K_NORMAL]
+            reference = pair_law[ci, cj, REFERENCE_OVERLAP]
+            switched += verdict * 0.5 * (normal_spring_energy(law, k_n, reference, depth)
+                                         + normal_spring_energy(law, k_n, reference, slip[p, DEPTH]))
         slip[p, VERDICT] = verdict
         slip[p, DEPTH] = depth
         if overlap <= 0.0:
             stored = slip[p, 0] * slip[p, 0] + slip[p, 1] * slip[p, 1] + slip[p, 2] * slip[p, 2]
             if stored > 0.0:
-                friction += 0.5 * stiffness[edge_class[i], edge_class[j], 1] * stored
+                friction += 0.5 * pair_law[ci, cj, K_TANGENT] * stored
             slip[p, 0] = 0.0
             slip[p, 1] = 0.0
             slip[p, 2] = 0.0
@@ -768,9 +785,10 @@ def pair_contact_forces(
         m_a = (1 - s) * mass[a0] + s * mass[a1]
         m_b = (1 - t) * mass[b0] + t * mass[b1]
         m_eff = m_a * m_b / (m_a + m_b)
-        k_n = stiffness[edge_class[i], edge_class[j], 0]
-        k_t = stiffness[edge_class[i], edge_class[j], 1]
-        fn = k_n * overlap - 2.0 * damping_n * math.sqrt(k_n * m_eff) * vn
+        k_n = pair_law[ci, cj, K_NORMAL]
+        k_t = pair_law[ci, cj, K_TANGENT]
+        spring = normal_spring(pair_law[ci, cj, LAW], k_n, pair_law[ci, cj, REFERENCE_OVERLAP], overlap)
+        fn = spring - 2.0 * damping_n * math.sqrt(k_n * m_eff) * vn
         if fn < 0.0:
             fn = 0.0
         vtx = dvx - vn * nx  # of the dashpot
@@ -785,7 +803,7 @@ def pair_contact_forces(
         ftx, fty, ftz, ux, uy, uz, slides = coulomb_spring(slip[p, 0], slip[p, 1], slip[p, 2], nx, ny, nz, vtx, vty,
                                                            vtz, sx, sy, sz, dt, k_t, gamma_t, mu * fn)
         sliding = 1.0 if slides else 0.0
-        dashpot -= (fn - k_n * overlap) * vn * dt
+        dashpot -= (fn - spring) * vn * dt
         friction -= (ftx * sx + fty * sy + ftz * sz) * dt + 0.5 * k_t * (
             ux * ux + uy * uy + uz * uz - slip[p, 0] * slip[p, 0] - slip[p, 1] * slip[p, 1] - slip[p, 2] * slip[p, 2])
         slip[p, 0] = ux
@@ -824,14 +842,14 @@ def pair_contact_forces(
 @njit(**PARALLEL_OPTS)
 def _pair_contact_forces_in_blocks(
     n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
-    edge_prev, edge_next, union, pairs, slip, edge_class, stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref,
+    edge_prev, edge_next, union, pairs, slip, edge_class, pair_law, damping_n, damping_t, mu, dt, out, mode, gap_ref,
     edge_moved, edge_rod, bucket_fill, shares, share_edge, ledger,
 ):
     for blk in prange(n_blocks):
         pair_contact_forces(
             blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, omega, v_damp, omega_damp, predicted,
             spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, slip, edge_class,
-            stiffness, damping_n, damping_t, mu, dt, out, mode, gap_ref, edge_moved, blk, edge_rod, bucket_fill, shares,
+            pair_law, damping_n, damping_t, mu, dt, out, mode, gap_ref, edge_moved, blk, edge_rod, bucket_fill, shares,
             share_edge, ledger,
         )
 
@@ -978,7 +996,7 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
     if n_blocks > 1:
         _pair_contact_forces_in_blocks(
             n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
-            c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.stiffness, p.damping_n,
+            c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.pair_law, p.damping_n,
             p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, c.edge_rod, c.bucket_fill, c.shares,
             c.share_edge, ledger,
         )
@@ -987,7 +1005,7 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
     else:
         pair_contact_forces(
             0, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
-            c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.stiffness, p.damping_n,
+            c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.pair_law, p.damping_n,
             p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, 0, c.edge_rod, c.bucket_fill,
             c.shares, c.share_edge, ledger,
         )
@@ -1017,7 +1035,7 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
 
 @njit(**NUMBA_OPTS)
 def contact_energy(x, edge_a, edge_b, edge_shift, c, pairs, slip):
-    """Stored contact energy: sum of k_n delta^2 / 2 + k_t |u_t|^2 / 2 over the counted touching
+    """Stored contact energy: sum of U(delta) + k_t |u_t|^2 / 2 over the counted touching
     ``pairs`` (m, 2) with their ``slip`` (m, 3) (``c.pairs[:n]``, ``c.slip[:n]``, or a subset)."""
     n_pairs = pairs.shape[0]
     narrow = np.empty((n_pairs, PAIR_RESULTS))
@@ -1027,10 +1045,9 @@ def contact_energy(x, edge_a, edge_b, edge_shift, c, pairs, slip):
     for p in range(n_pairs):
         overlap = narrow[p, OVERLAP]
         if overlap > 0.0:
-            k_n = c.stiffness[c.edge_class[pairs[p, 0]], c.edge_class[pairs[p, 1]], 0]
-            k_t = c.stiffness[c.edge_class[pairs[p, 0]], c.edge_class[pairs[p, 1]], 1]
-            total += 0.5 * k_n * overlap * overlap
-            total += 0.5 * k_t * (slip[p, 0] ** 2 + slip[p, 1] ** 2 + slip[p, 2] ** 2)
+            law = c.pair_law[c.edge_class[pairs[p, 0]], c.edge_class[pairs[p, 1]]]
+            total += normal_spring_energy(law[LAW], law[K_NORMAL], law[REFERENCE_OVERLAP], overlap)
+            total += 0.5 * law[K_TANGENT] * (slip[p, 0] ** 2 + slip[p, 1] ** 2 + slip[p, 2] ** 2)
     return total
 
 

@@ -9,7 +9,8 @@ radius of curvature must exceed the edge length for the chain to feel it smoothl
   s = (x - p).a clamped to [-h, h] and rho = |(x - p) - s a|, overlap delta = R + r - rho, normal
   along (x - p) - s a. An endless cylinder has h = inf; a finite one has hemispherical caps (a pin).
 * The force, as :func:`knitlad.engine.kernels.contact.pair_contact_forces` gives a pair of yarns (Cundall
-  & Strack 1979): f_n = k_n delta - 2 zeta_n sqrt(k_n m) v_n, never pulling; a tangential spring
+  & Strack 1979): f_n = f(delta) - 2 zeta_n sqrt(k_n m) v_n, never pulling, f the obstacle's law
+  (:mod:`knitlad.engine.kernels.contact_law`); a tangential spring
   stretched by the slip u_t accumulated while the node touches, plus a dashpot, capped by Coulomb
   |f_t| <= mu f_n (then u_t is set to the slipping value), reset when the node leaves. m is the
   node's mass (the obstacle is rigid), v the node's velocity less the obstacle's.
@@ -23,6 +24,7 @@ import numpy as np
 from numba import njit
 
 from knitlad.engine.kernels.contact import coulomb_spring
+from knitlad.engine.kernels.contact_law import normal_spring
 from knitlad.engine.kernels.options import NUMBA_OPTS
 from knitlad.engine.kernels.vec import dot
 
@@ -46,6 +48,8 @@ class ObstacleState(NamedTuple):
     slip: np.ndarray  # (n, k, 3) tangential spring elongation of each node on each obstacle
     state: np.ndarray  # (n, k) uint8: 0 apart, 1 touching, 2 sliding (last evaluation)
     reaction: np.ndarray  # (k, 3) force the yarns exert on each obstacle (last evaluation)
+    law: np.ndarray  # (k,) int64 the normal law's mode (knitlad.engine.kernels.contact_law)
+    reference_overlap: np.ndarray  # (k,) the law's delta_ref
 
 
 @njit(**NUMBA_OPTS)
@@ -88,7 +92,8 @@ def obstacle_forces(x, v, mass, node_radius, held, o, dt, force):
             vy = v[i, 1] - o.velocity[b, 1]
             vz = v[i, 2] - o.velocity[b, 2]
             vn = dot(vx, vy, vz, nx, ny, nz)  # > 0: separating
-            fn = o.k_n[b] * overlap - 2.0 * o.damping_n[b] * math.sqrt(o.k_n[b] * mass[i]) * vn
+            fn = (normal_spring(o.law[b], o.k_n[b], o.reference_overlap[b], overlap)
+                  - 2.0 * o.damping_n[b] * math.sqrt(o.k_n[b] * mass[i]) * vn)
             if fn < 0.0:
                 fn = 0.0
             vtx = vx - vn * nx
