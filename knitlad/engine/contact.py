@@ -35,6 +35,7 @@ from knitlad.engine.kernels.contact import (
     list_scratch,
 )
 from knitlad.engine.kernels.contact_law import (
+    FRICTION_FACTOR,
     K_NORMAL,
     K_TANGENT,
     LAW,
@@ -121,6 +122,10 @@ class ContactModel:
                                 :mod:`knitlad.engine.kernels.contact_law`)
     reference_overlap  delta_ref [m]  the overlap where every law gives k_n delta_ref (set by :meth:`for_force`;
                                 needed by a nonlinear law)
+    yarn_friction   [-]         ``((yarn, factor), ...)``: a contact touching one of these yarns (its index as
+                                built: a cut's pieces keep it) has the Coulomb coefficient factor x mu; one between
+                                two of them the larger factor (the rougher surface sets the friction): a band of
+                                coated courses in a knit (a run-stop band)
     pair_stiffness  [N/m]       ``((material_a, material_b, k_n), ...)``: the normal stiffness of contacts
                                 between a yarn of material a and one of material b (either order; the
                                 tangential spring keeps its ratio); every other pair has ``stiffness``.
@@ -143,6 +148,7 @@ class ContactModel:
     pair_stiffness: tuple = ()
     law: str = "linear"
     reference_overlap: float | None = None
+    yarn_friction: tuple = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "pair_stiffness", tuple(tuple(entry) for entry in self.pair_stiffness))
@@ -168,6 +174,10 @@ class ContactModel:
         if self.sagitta_radius is not None and not (self.sagitta_radius > 0 and math.isfinite(self.sagitta_radius)):
             raise ValueError(f"sagitta_radius must be > 0 m or None, got {self.sagitta_radius!r}")
         check_contact_law(self.law, self.reference_overlap)
+        object.__setattr__(self, "yarn_friction", tuple((int(y), float(f)) for y, f in self.yarn_friction))
+        for yarn, factor in self.yarn_friction:
+            if yarn < 0 or not (factor >= 0 and math.isfinite(factor)):
+                raise ValueError(f"yarn_friction entries are (yarn index >= 0, factor >= 0), got {(yarn, factor)!r}")
 
     @staticmethod
     def for_force(force_N: float, diameter_m: float, overlap_fraction: float = 0.05, **kwargs) -> "ContactModel":
@@ -460,7 +470,9 @@ def share_buffers(m: RodModel, cap: int) -> dict:
 def pair_law_table(m: RodModel, model: ContactModel | None, params: ContactParams) -> dict:
     """``edge_class`` and ``pair_law`` of :class:`Contacts`: class 0 has the model's k_n and k_t
     (``params``), class c > 0 the edges of the c-th material named in ``model.pair_stiffness``; every pair
-    has the model's law and reference overlap (:mod:`knitlad.engine.kernels.contact_law`)."""
+    has the model's law and reference overlap (:mod:`knitlad.engine.kernels.contact_law`). With
+    ``model.yarn_friction`` each material's edges split further by their yarn's friction factor, a pair's
+    FRICTION_FACTOR the larger of its two (else 1)."""
     edge_class = np.zeros(m.edge_a.shape[0], dtype=np.int64)
     materials = []
     for entry in () if model is None else model.pair_stiffness:
@@ -484,7 +496,26 @@ def pair_law_table(m: RodModel, model: ContactModel | None, params: ContactParam
         k_n = k * units.LENGTH / units.FORCE
         for row in (table[a, b], table[b, a]):
             row[K_NORMAL], row[K_TANGENT] = k_n, k * model.tangential_stiffness_ratio * units.LENGTH / units.FORCE
-    return dict(edge_class=edge_class, pair_law=table)
+    table[:, :, FRICTION_FACTOR] = 1.0
+    if model is None or not model.yarn_friction:
+        return dict(edge_class=edge_class, pair_law=table)
+    return with_yarn_friction(m, model.yarn_friction, edge_class, table)
+
+
+def with_yarn_friction(m: RodModel, yarn_friction: tuple, edge_class: np.ndarray, table: np.ndarray) -> dict:
+    """The classes of :func:`pair_law_table` split by the friction factor of each edge's yarn (as built:
+    ``yarn_parent``), and their law table: a pair keeps its materials' row, with the larger factor."""
+    built_yarn = m.yarn_parent[m.edge_yarn]
+    factor = np.ones(edge_class.shape[0])
+    for yarn, f in yarn_friction:
+        if not np.any(built_yarn == yarn):
+            raise ValueError(f"yarn_friction: no yarn {yarn} in the rods (yarns as built: 0 to {built_yarn.max()})")
+        factor[built_yarn == yarn] = f
+    classes, edge_new = np.unique(np.column_stack([edge_class, factor]), axis=0, return_inverse=True)
+    material = classes[:, 0].astype(np.int64)
+    split = table[material[:, None], material[None, :]].copy()
+    split[:, :, FRICTION_FACTOR] = np.maximum(classes[:, 1][:, None], classes[:, 1][None, :])
+    return dict(edge_class=edge_new.reshape(-1).astype(np.int64), pair_law=split)
 
 
 class ContactStats(NamedTuple):

@@ -101,7 +101,8 @@ class CutConfig(_WithPreset):
         "contact_damping_ratio", "stretch_damping_ratio", "stretch_increment", "steps_per_increment",
         "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor",
         "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
-        "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches", "contact_law")
+        "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches", "contact_law",
+        "band_row", "band_courses", "band_friction_factor")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -133,6 +134,12 @@ class CutConfig(_WithPreset):
     twist: bool = Field(False, description=(
         "the yarns carry twist during the laddering, so friction also turns them (the friction couple) [-]; "
         "costs more (docs/performance.md)"))
+    band_row: int | None = Field(None, ge=0, le=199, description=(
+        "a run-stop band: its first course, counted from the bottom (the cut is at n_y // 2) [-]; none: no band"))
+    band_courses: int = Field(2, ge=1, le=200, description="courses of the run-stop band [-]")
+    band_friction_factor: float = Field(2.0, ge=0, le=10, description=(
+        "the band's yarn friction over the fabric's: a contact touching a band course has this factor x mu "
+        "during the laddering [-]"))
     # --- the model's choices
     d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description=(
         "yarn diameter over stitch length d/l0 [-]; 1/70, the paper's rounded value and the default, means its "
@@ -225,6 +232,11 @@ class CutConfig(_WithPreset):
         if self.memory_peak_ratio is not None and self.natural_curvature == 0:
             raise ValueError("memory_peak_ratio: shapes the memory of natural_curvature > 0; the yarn has none")
         check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
+        if self.band_row is not None and self.band_row + self.band_courses > self.n_y:
+            raise ValueError(f"band_row: a band of {self.band_courses} courses from course {self.band_row} ends "
+                             f"past the knit's {self.n_y} courses")
+        if self.band_row is not None and self.band_row <= self.n_y // 2 < self.band_row + self.band_courses:
+            raise ValueError(f"band_row: the band holds the cut course {self.n_y // 2}; put it above or below")
         if self.frame_every_us is not None and self.frame_every_us < self.observe_every_us:
             raise ValueError(f"frame_every_us: {self.frame_every_us:g} is shorter than observe_every_us "
                              f"({self.observe_every_us:g}): frames are taken at observations")
@@ -270,6 +282,8 @@ class CutConfig(_WithPreset):
             frame_every_s=None if self.frame_every_us is None else self.frame_every_us * 1e-6,
             stop_at_edge=self.stop_at_edge, loss_factor=self.loss_factor, loss_peak_hz=self.loss_peak_hz,
             air_drag=self.air_drag, stop_after_stitches=self.stop_after_stitches,
+            friction_band=None if self.band_row is None else (self.band_row, self.band_courses,
+                                                               self.band_friction_factor),
         )
 
     def settings(self):

@@ -93,6 +93,7 @@ class DynamicsSettings:
     loss_peak_hz: float = STITCH_BENDING_HZ  # ... at this frequency [Hz]
     air_drag: bool = False  # still air around the yarns
     stop_after_stitches: int | None = None  # stop once a front has run this many stitches (enough for v_lad)
+    friction_band: tuple[int, int, float] | None = None  # (first course, courses, factor on mu): a run-stop band
 
     @property
     def material_damping(self) -> MaterialDamping | None:
@@ -200,7 +201,7 @@ def dynamics_simulation(rods: Rods, knit: StretchedKnit, dynamics: DynamicsSetti
     ``obstacles`` (a snag's pin) if any."""
     contact = stretch_contact(knit.settings, mu=dynamics.mu, damping_ratio=dynamics.contact_damping_ratio,
                               tangential_damping_ratio=dynamics.contact_damping_ratio,
-                              counting=dynamics.contact_counting)
+                              counting=dynamics.contact_counting, yarn_friction=band_yarns(knit, dynamics))
     # a cut frees two end nodes: keep the smaller of the stretch's step (of a yarn as soft) and the new stable step
     stretch_step = math.inf if dynamics.implicit_axial else knit.dt_s / math.sqrt(dynamics.axial_stiffness_factor)
     sim = Simulation(rods, contact=contact, dt_s=min(stretch_step, laddering_time_step(rods, contact, dynamics)),
@@ -209,6 +210,15 @@ def dynamics_simulation(rods: Rods, knit: StretchedKnit, dynamics: DynamicsSetti
                      material_damping=dynamics.material_damping, air=dynamics.air, obstacles=obstacles)
     check_feasible(sim.dt_s, dynamics)
     return sim
+
+
+def band_yarns(knit: StretchedKnit, dynamics: DynamicsSettings) -> tuple:
+    """The ``ContactModel.yarn_friction`` of the dynamics' friction band: its courses' yarns (as built) with
+    their factor on mu; none without a band."""
+    if dynamics.friction_band is None:
+        return ()
+    first, courses, factor = dynamics.friction_band
+    return tuple((knit.knit.courses[row], factor) for row in range(first, first + courses))
 
 
 def cut(knit: StretchedKnit, dynamics: DynamicsSettings, rods_ready: bool = False) -> Laddering:

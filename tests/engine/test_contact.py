@@ -748,3 +748,33 @@ def test_where_most_edges_move_fast_every_edge_keeps_half_the_skin():
         c.status[STALE] = 1
         assert refresh_contacts(x, m.edge_a, m.edge_b, m.edge_shift, c, v, lookahead)
         assert (c.edge_allowance.max() > half) == widened and c.edge_allowance.min() == half
+
+
+@pytest.mark.parametrize("factor", [1.0, 2.5])
+def test_a_yarn_of_its_own_friction_slides_at_its_factor_times_mu(factor):
+    """A yarn dragged at 0.1 m/s across a held one it presses (both held, overlap 0.05 d), mu 0.2: once
+    sliding, the friction force is factor x mu x the normal force when the dragged yarn has
+    ``yarn_friction`` factor (ContactModel.yarn_friction: a coated course), mu x it otherwise."""
+    s = np.linspace(-0.002, 0.002, 10)
+    scene = kl.Scene(kl.NYLON)
+    scene.add_yarn(np.column_stack([s, 0 * s, 0 * s]))
+    scene.add_yarn(np.column_stack([0 * s, s, 0 * s + 0.95 * D]))
+    scene.add_yarn(np.column_stack([s, 0 * s, 0 * s - 5 * D]))  # touching nothing: it must not change the classes' rows
+    for yarn in range(3):
+        scene.hold(yarn, list(range(10)))
+    sim = kl.Simulation(scene.build(), contact=ContactModel(stiffness=1e3, mu=0.2, yarn_friction=((1, factor),)))
+    sim.hold(sim.nodes_of(1), velocity_m_s=(0.1, 0.0, 0.0))
+    sim.run(2e-5)
+    pairs = sim.contact_pairs()
+    assert len(pairs.edges) == 1 and pairs.sliding[0]
+    ratio = np.linalg.norm(pairs.friction_N[0]) / np.linalg.norm(pairs.normal_N[0])
+    assert ratio == pytest.approx(0.2 * factor, rel=1e-6)
+
+
+def test_a_yarn_friction_entry_must_name_a_yarn_of_the_rods_and_a_factor_of_zero_or_more():
+    with pytest.raises(ValueError, match="yarn_friction entries"):
+        ContactModel(stiffness=1e3, yarn_friction=((0, -1.0),))
+    scene = kl.Scene(kl.NYLON)
+    scene.add_yarn(np.column_stack([np.linspace(0, 0.002, 5), np.zeros(5), np.zeros(5)]))
+    with pytest.raises(ValueError, match="no yarn 3"):
+        kl.Simulation(scene.build(), contact=ContactModel(stiffness=1e3, yarn_friction=((3, 2.0),)))

@@ -210,3 +210,21 @@ def test_every_nan_of_a_ladders_summary_has_its_reason_beside_it():
     reasons = result.nan_reasons()
     assert set(reasons) == nan and all(f"{k}: " in summary["nan_reasons"] for k in nan)
     assert "the front ran" in reasons["v_lad_over_cb"] and "max_time_s reached" in reasons["v_lad_over_cb"]
+
+
+def test_a_run_stop_band_gives_its_courses_contacts_the_bands_friction_and_the_rest_the_fabrics():
+    """band_row/band_courses/band_friction_factor reach the laddering's contact: every contact touching a band
+    course (its yarn as built, above the cut) has factor x mu, every other contact mu; the stretch (mu = 0)
+    is the plain knit's."""
+    from knitlad.engine.kernels.contact_law import FRICTION_FACTOR
+
+    cfg = config(n_x=6, n_y=8, resolution=16, fx=4.0, band_row=5, band_courses=2, band_friction_factor=2.5)
+    knit = stretch(cfg.stretch_settings())
+    run = cut(knit, cfg.dynamics_settings())
+    c, m = run.sim.contacts, run.sim.model
+    factor = c.pair_law[c.edge_class, c.edge_class, FRICTION_FACTOR]  # each edge's own factor
+    band = np.isin(m.yarn_parent[m.edge_yarn], [knit.knit.courses[5], knit.knit.courses[6]])
+    assert band.any() and np.all(factor[band] == 2.5) and np.all(factor[~band] == 1.0)
+    assert c.pair_law[c.edge_class[band][0], c.edge_class[~band][0], FRICTION_FACTOR] == 2.5
+    with pytest.raises(ValueError, match="band_row"):
+        config(n_x=6, n_y=8, fx=4.0, band_row=3, band_courses=2)  # holds the cut course 4

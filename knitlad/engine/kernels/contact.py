@@ -37,6 +37,7 @@ import numpy as np
 from numba import njit, prange
 
 from knitlad.engine.kernels.contact_law import (
+    FRICTION_FACTOR,
     K_NORMAL,
     K_TANGENT,
     LAW,
@@ -686,7 +687,8 @@ def pair_contact_forces(
     ``shares`` and ``share_edge``), for :func:`contact_sums_by_rod`.
 
     ``pair_law``: the law table (c, c, LAW_COLUMNS) of :mod:`knitlad.engine.kernels.contact_law`, the row of
-    each pair's two edge classes: its k_n, k_t and normal law f(delta) with energy U(delta).
+    each pair's two edge classes: its k_n, k_t, normal law f(delta) with energy U(delta), and the factor on
+    ``mu`` of its friction.
 
     The energy the contacts take out over the step goes to ``ledger[blk]``: at CONTACT_DASHPOT the normal
     force's excess over the spring's, (f_n - f(delta)) d(delta)/dt dt (the dashpot, and a spring cut off when the
@@ -801,7 +803,8 @@ def pair_contact_forces(
             sx, sy, sz = vtx, vty, vtz
         gamma_t = 2.0 * damping_t * math.sqrt(k_t * m_eff)
         ftx, fty, ftz, ux, uy, uz, slides = coulomb_spring(slip[p, 0], slip[p, 1], slip[p, 2], nx, ny, nz, vtx, vty,
-                                                           vtz, sx, sy, sz, dt, k_t, gamma_t, mu * fn)
+                                                           vtz, sx, sy, sz, dt, k_t, gamma_t,
+                                                           mu * pair_law[ci, cj, FRICTION_FACTOR] * fn)
         sliding = 1.0 if slides else 0.0
         dashpot -= (fn - spring) * vn * dt
         friction -= (ftx * sx + fty * sy + ftz * sz) * dt + 0.5 * k_t * (

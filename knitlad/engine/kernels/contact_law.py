@@ -28,10 +28,11 @@ from numba import njit
 from knitlad.engine.kernels.options import INLINE_OPTS
 
 LINEAR, HERTZ = 0, 1
-# columns of a contact's law table (c, c, LAW_COLUMNS), one row per pair of edge classes (materials):
-# k_n and k_t [mN/mm], the law's mode, delta_ref [mm] (knitlad.engine.contact.pair_law_table)
-K_NORMAL, K_TANGENT, LAW, REFERENCE_OVERLAP = range(4)
-LAW_COLUMNS = 4
+# columns of a contact's law table (c, c, LAW_COLUMNS), one row per pair of edge classes (materials, and
+# yarns of their own friction): k_n and k_t [mN/mm], the law's mode, delta_ref [mm], and the factor on the
+# Coulomb coefficient mu of the pair (knitlad.engine.contact.pair_law_table)
+K_NORMAL, K_TANGENT, LAW, REFERENCE_OVERLAP, FRICTION_FACTOR = range(5)
+LAW_COLUMNS = 5
 # the time step is stable for overlaps up to this many delta_ref (a contact then carries 8 x the working
 # force under HERTZ): the stiffest slope df/d(delta) a law reaches there sets the contact's step
 STEP_OVERLAP_OVER_REFERENCE = 4.0
