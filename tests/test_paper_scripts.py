@@ -36,3 +36,26 @@ def test_the_paired_step_study_pairs_each_knit_with_itself_at_the_reference_fact
     against_035 = study.paired_changes(pd.DataFrame(rows), reference=0.35).set_index(["fx_nominal", "dt_safety"])
     assert against_035.loc[(13.6, 0.175)].v_lad_over_cb_change_pct == pytest.approx(0.0)
     assert "| 4.00 | 0.7 | 3 |" in study.markdown(study.paired_changes(pd.DataFrame(rows)))
+
+
+def test_the_run_stop_band_table_says_whether_a_ladder_entered_and_crossed_the_band(tmp_path):
+    """Two synthetic jobs on 16 courses, band 11-12, cut at 8: one ladder stops at 10 (below the band), one
+    runs to 14 (across it); the table reads the reach from each file's final map."""
+    import h5py
+
+    study = paper_script("run_stop_band")
+    (tmp_path / "jobs").mkdir()
+    rows = []
+    for job, top in (("a", 10), ("b", 14)):
+        laddered = np.zeros((16, 16), dtype=bool)
+        laddered[6:top + 1, 8] = True
+        with h5py.File(tmp_path / "jobs" / f"{job}.h5", "w") as f:
+            f["final/laddered"] = laddered
+        rows.append({"job_id": job, "fx": 4.0, "fx_ini": 4.0, "band_row": 11, "band_courses": 2, "mu": 0.4,
+                     "band_friction_factor": 2.0 if job == "a" else 1.0, "n_lad_over_ny": (top - 5) / 16,
+                     "fx_fin": 2.0, "v_lad_over_cb": 0.3, "stop_reason": "arrested"})
+    pd.DataFrame(rows).to_csv(tmp_path / "summary.csv", index=False)
+    table = study.table(tmp_path).set_index("job_id")
+    assert table.loc["a", "top_course"] == 10 and not table.loc["a", "entered_band"]
+    assert table.loc["b", "top_course"] == 14 and table.loc["b", "crossed_band"]
+    assert table.loc["a", "bottom_course"] == 6 and table.loc["a", "mu_band"] == pytest.approx(0.8)

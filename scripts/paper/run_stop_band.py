@@ -1,0 +1,81 @@
+"""Does a run-stop band hold the ladder? A table from a sweep over the band's friction (configs/run_stop_band.yaml).
+
+    python scripts/paper/run_stop_band.py runs/run_stop_band [--csv FILE] [--png FILE]
+
+For each job: the band (its first course and courses, the factor on mu), f_x^ini, the damage n_lad/n_y, how
+far the ladders reached above and below the cut (the highest and lowest course with an undone cell, from
+the job file's final ``laddered`` map), whether a ladder entered the band and whether one crossed it (an
+undone cell above its last course), f_x^fin and v_lad/c_b. Prints a markdown table; with ``--png`` draws
+each job's final map of undone cells with the band marked.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pandas as pd
+
+
+def reach(h5: Path) -> tuple[np.ndarray, int, int]:
+    """(the final laddered map (rows, columns), the highest and the lowest course with an undone cell)."""
+    with h5py.File(h5, "r") as f:
+        laddered = np.asarray(f["final/laddered"][()], dtype=bool)
+    rows = np.flatnonzero(laddered.any(axis=1))
+    return laddered, int(rows.max()) if rows.size else -1, int(rows.min()) if rows.size else -1
+
+
+def table(folder: Path) -> pd.DataFrame:
+    summary = pd.read_csv(folder / "summary.csv")
+    out = []
+    for _, job in summary.sort_values(["fx", "band_friction_factor"]).iterrows():
+        laddered, top, bottom = reach(folder / "jobs" / f"{job.job_id}.h5")
+        first, last = int(job.band_row), int(job.band_row + job.band_courses - 1)
+        out.append({"fx_ini": job.fx_ini, "band": f"{first}-{last}", "factor": job.band_friction_factor,
+                    "mu_band": job.mu * job.band_friction_factor, "n_lad_over_ny": job.n_lad_over_ny,
+                    "top_course": top, "bottom_course": bottom, "entered_band": top >= first,
+                    "crossed_band": top > last, "fx_fin": job.fx_fin, "v_lad_over_cb": job.v_lad_over_cb,
+                    "stop_reason": job.stop_reason, "job_id": job.job_id})
+    return pd.DataFrame(out)
+
+
+def draw(folder: Path, df: pd.DataFrame, png: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(df), figsize=(2.2 * len(df), 2.8), squeeze=False)
+    for ax, (_, row) in zip(axes[0], df.iterrows()):
+        laddered, _, _ = reach(folder / "jobs" / f"{row.job_id}.h5")
+        ax.imshow(laddered, origin="lower", cmap="Greys", vmin=0, vmax=1)
+        first, last = (int(v) for v in row.band.split("-"))
+        ax.axhspan(first - 0.5, last + 0.5, color="tab:orange", alpha=0.35, lw=0)
+        ax.set_title(f"f_x {row.fx_ini:.1f}, x{row.factor:g}", fontsize=8)
+        ax.set_xticks([])
+        ax.set_yticks([])
+    fig.suptitle("undone cells (black) and the band (orange)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(png, dpi=130)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("folder", type=Path)
+    p.add_argument("--csv")
+    p.add_argument("--png")
+    args = p.parse_args()
+    df = table(args.folder)
+    print(df.drop(columns=["job_id"]).to_markdown(index=False, floatfmt=".3g"))
+    if args.csv:
+        df.to_csv(args.csv, index=False)
+    if args.png:
+        draw(args.folder, df, args.png)
+    print(json.dumps({"jobs": len(df)}))
+
+
+if __name__ == "__main__":
+    main()
