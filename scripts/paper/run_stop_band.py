@@ -69,7 +69,11 @@ def main() -> None:
     p.add_argument("--png")
     args = p.parse_args()
     df = table(args.folder)
-    print(df.drop(columns=["job_id"]).to_markdown(index=False, floatfmt=".3g"))
+    shown = df.drop(columns=["job_id"])
+    print("| " + " | ".join(shown.columns) + " |")
+    print("|" + "---|" * len(shown.columns))
+    for _, row in shown.iterrows():
+        print("| " + " | ".join(f"{v:.3g}" if isinstance(v, float) else str(v) for v in row) + " |")
     if args.csv:
         df.to_csv(args.csv, index=False)
     if args.png:
