@@ -59,3 +59,5 @@ def test_the_run_stop_band_table_says_whether_a_ladder_entered_and_crossed_the_b
     assert table.loc["a", "top_course"] == 10 and not table.loc["a", "entered_band"]
     assert table.loc["b", "top_course"] == 14 and table.loc["b", "crossed_band"]
     assert table.loc["a", "bottom_course"] == 6 and table.loc["a", "mu_band"] == pytest.approx(0.8)
+    points = study.by_point(table.reset_index()).set_index("factor")
+    assert points.loc[2.0, "crossed"] == 0 and points.loc[1.0, "crossed"] == 1 and points.loc[1.0, "knits"] == 1

@@ -32,14 +32,37 @@ def table(folder: Path) -> pd.DataFrame:
     summary = pd.read_csv(folder / "summary.csv")
     out = []
     for _, job in summary.sort_values(["fx", "band_friction_factor"]).iterrows():
+        if job.get("status", "ok") != "ok":
+            continue
         laddered, top, bottom = reach(folder / "jobs" / f"{job.job_id}.h5")
         first, last = int(job.band_row), int(job.band_row + job.band_courses - 1)
-        out.append({"fx_ini": job.fx_ini, "band": f"{first}-{last}", "factor": job.band_friction_factor,
+        out.append({"fx_nominal": job.get("fx_nominal", job.fx), "fx_ini": job.fx_ini, "band": f"{first}-{last}", "factor": job.band_friction_factor,
                     "mu_band": job.mu * job.band_friction_factor, "n_lad_over_ny": job.n_lad_over_ny,
                     "top_course": top, "bottom_course": bottom, "entered_band": top >= first,
                     "crossed_band": top > last, "fx_fin": job.fx_fin, "v_lad_over_cb": job.v_lad_over_cb,
                     "stop_reason": job.stop_reason, "job_id": job.job_id})
     return pd.DataFrame(out)
+
+
+def by_point(df: pd.DataFrame) -> pd.DataFrame:
+    """Per (nominal f_x, factor): the knits, how many crossed the band, n_lad/n_y and v_lad/c_b as mean and
+    standard error over the knits (v over the runs that have a front fit)."""
+    rows = []
+    for (fx, factor), g in df.groupby(["fx_nominal", "factor"]):
+        v = g.v_lad_over_cb.dropna()
+        rows.append({"fx_nominal": fx, "factor": factor, "knits": len(g), "crossed": int(g.crossed_band.sum()),
+                     "n_lad_over_ny": g.n_lad_over_ny.mean(),
+                     "n_lad_se": g.n_lad_over_ny.std(ddof=1) / np.sqrt(len(g)) if len(g) > 1 else np.nan,
+                     "v_lad_over_cb": v.mean() if len(v) else np.nan,
+                     "v_se": v.std(ddof=1) / np.sqrt(len(v)) if len(v) > 1 else np.nan})
+    return pd.DataFrame(rows)
+
+
+def markdown(df: pd.DataFrame) -> str:
+    lines = ["| " + " | ".join(df.columns) + " |", "|" + "---|" * len(df.columns)]
+    for _, row in df.iterrows():
+        lines.append("| " + " | ".join(f"{v:.3g}" if isinstance(v, float) else str(v) for v in row) + " |")
+    return "\n".join(lines)
 
 
 def draw(folder: Path, df: pd.DataFrame, png: str) -> None:
@@ -48,6 +71,7 @@ def draw(folder: Path, df: pd.DataFrame, png: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    df = df.drop_duplicates(["fx_nominal", "factor"])  # one knit per point: the first
     fig, axes = plt.subplots(1, len(df), figsize=(2.2 * len(df), 2.8), squeeze=False)
     for ax, (_, row) in zip(axes[0], df.iterrows()):
         laddered, _, _ = reach(folder / "jobs" / f"{row.job_id}.h5")
@@ -69,11 +93,9 @@ def main() -> None:
     p.add_argument("--png")
     args = p.parse_args()
     df = table(args.folder)
-    shown = df.drop(columns=["job_id"])
-    print("| " + " | ".join(shown.columns) + " |")
-    print("|" + "---|" * len(shown.columns))
-    for _, row in shown.iterrows():
-        print("| " + " | ".join(f"{v:.3g}" if isinstance(v, float) else str(v) for v in row) + " |")
+    print(markdown(df.drop(columns=["job_id"])))
+    print()
+    print(markdown(by_point(df)))
     if args.csv:
         df.to_csv(args.csv, index=False)
     if args.png:
