@@ -41,7 +41,9 @@ def test_a_run_restored_from_its_checkpoint_file_continues_to_the_bit(tmp_path):
     second.step(3000)
     assert np.array_equal(second.state.x, whole.state.x) and np.array_equal(second.state.v, whole.state.v)
     assert second.time_s == whole.time_s and second.steps == whole.steps
-    assert second.ledger().as_dict() == whole.ledger().as_dict()
+    # the state to the bit; the ledger's sums to rounding: they add per-block slices, and the blocks follow the
+    # threads the step planner picks from its timings (a cold compile times differently), so their grouping may differ
+    assert second.ledger().as_dict() == pytest.approx(whole.ledger().as_dict(), rel=1e-12, abs=1e-30)
     assert np.array_equal(second.obstacle_reactions_N(), whole.obstacle_reactions_N())
 
 
