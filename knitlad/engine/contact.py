@@ -479,7 +479,7 @@ def pair_law_table(m: RodModel, model: ContactModel | None, params: ContactParam
         materials += [mat for mat in entry[:2] if mat not in materials]
     table = np.empty((len(materials) + 1, len(materials) + 1, LAW_COLUMNS))
     table[:, :, K_NORMAL], table[:, :, K_TANGENT] = params.k_n, params.k_t
-    table[:, :, LAW] = law_mode(model.law) if model is not None else law_mode("linear")
+    table[:, :, LAW] = law_mode("linear" if model is None else model.law)
     reference = None if model is None else model.reference_overlap
     table[:, :, REFERENCE_OVERLAP] = reference / units.LENGTH if reference is not None else 0.0
     radius = 0.5 * (m.radius[m.edge_a] + m.radius[m.edge_b])
@@ -508,9 +508,10 @@ def with_yarn_friction(m: RodModel, yarn_friction: tuple, edge_class: np.ndarray
     built_yarn = m.yarn_parent[m.edge_yarn]
     factor = np.ones(edge_class.shape[0])
     for yarn, f in yarn_friction:
-        if not np.any(built_yarn == yarn):
+        its = built_yarn == yarn
+        if not its.any():
             raise ValueError(f"yarn_friction: no yarn {yarn} in the rods (yarns as built: 0 to {built_yarn.max()})")
-        factor[built_yarn == yarn] = f
+        factor[its] = f
     classes, edge_new = np.unique(np.column_stack([edge_class, factor]), axis=0, return_inverse=True)
     material = classes[:, 0].astype(np.int64)
     split = table[material[:, None], material[None, :]].copy()

@@ -3,7 +3,8 @@
 ``Simulation(rods, obstacles=[Plane(...), Cylinder(...)])``. Each has its own contact stiffness,
 dashpots, friction coefficient and normal law, in the yarn-yarn contact's forms
 (:mod:`knitlad.engine.kernels.obstacles`, :mod:`knitlad.engine.kernels.contact_law`), and may translate at a
-constant velocity (a plate pressing, a bar pulled). The time step accounts for their stiffness. The force the yarns exert on each: ``Simulation.obstacle_reactions_N()``.
+constant velocity (a plate pressing, a bar pulled). The time step accounts for their stiffness. The force the
+yarns exert on each: ``Simulation.obstacle_reactions_N()``.
 """
 
 from __future__ import annotations

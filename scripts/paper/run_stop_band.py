@@ -34,9 +34,10 @@ def table(folder: Path) -> pd.DataFrame:
     for _, job in summary.sort_values(["fx", "band_friction_factor"]).iterrows():
         if job.get("status", "ok") != "ok":
             continue
-        laddered, top, bottom = reach(folder / "jobs" / f"{job.job_id}.h5")
+        _, top, bottom = reach(folder / "jobs" / f"{job.job_id}.h5")
         first, last = int(job.band_row), int(job.band_row + job.band_courses - 1)
-        out.append({"fx_nominal": job.get("fx_nominal", job.fx), "fx_ini": job.fx_ini, "band": f"{first}-{last}", "factor": job.band_friction_factor,
+        out.append({"fx_nominal": job.get("fx_nominal", job.fx), "fx_ini": job.fx_ini, "band": f"{first}-{last}",
+                    "factor": job.band_friction_factor,
                     "mu_band": job.mu * job.band_friction_factor, "n_lad_over_ny": job.n_lad_over_ny,
                     "top_course": top, "bottom_course": bottom, "entered_band": top >= first,
                     "crossed_band": top > last, "fx_fin": job.fx_fin, "v_lad_over_cb": job.v_lad_over_cb,
