@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from knitlad.experiments.config import CutConfig
@@ -75,3 +76,16 @@ def laddering_velocity_by_default_and_with(fx: float, size: int = 24, **dynamics
         assert math.isfinite(result.v_lad_over_cb), result.stop_reason
         v.append(result.v_lad_over_cb)
     return v[0], v[1]
+
+
+@pytest.mark.slow
+def test_a_run_stop_band_of_three_times_the_friction_holds_the_ladder_at_low_tension_not_at_high():
+    """docs/snag.md (2026-12-06, 16 x 16, default preset, three knits per point): a band of courses 11-12 with
+    three times the friction stops the upward ladder below it at f_x^ini 4 (highest undone course 9 on
+    every knit), and the ladder crosses it at 8 (course 14). One knit each here (the middle target)."""
+    reach = {}
+    for fx in (4.0, 8.0):
+        cfg = CutConfig(n_x=16, n_y=16, fx=fx, band_row=11, band_courses=2, band_friction_factor=3.0)
+        laddered = run_ladder(cfg.settings()).final_laddered
+        reach[fx] = int(np.flatnonzero(laddered.any(axis=1)).max())
+    assert reach[4.0] < 11 <= reach[8.0]
