@@ -342,7 +342,7 @@ def _report_cut(cfg, result, summary: dict, json_out: bool, h5: Path, png: Path,
         typer.echo(_json(summary))
         return
     typer.echo(
-        f"{n_x} x {n_y} jersey, mu = {cfg.mu}, {cfg.resolution} nodes/stitch ({result.nodes} nodes)\n"
+        f"{n_x} x {n_y} {cfg.pattern}, mu = {cfg.mu}, {cfg.resolution} nodes/stitch ({result.nodes} nodes)\n"
         f"  f_x^ini     = {result.fx_ini:.3f}\n"
         f"  f_x^fin     = {result.fx_fin:.3f}{_fin_caveat(result)}\n    per course: {result.fx_fin_crossed:.3f} crossed by the ladder, {result.fx_fin_intact:.3f} not\n"
         f"  n_lad/n_y   = {result.n_lad_over_ny:.3f}  ({result.n_lad} cells; {_loop_line(result)})\n"
@@ -411,7 +411,7 @@ def cycle(
     (out_dir / CYCLE_CHECKPOINT).unlink(missing_ok=True)  # finished: nothing to resume, nor to re-stretch
     shutil.rmtree(out_dir / "stretched", ignore_errors=True)
     typer.echo(
-        f"{n_x} x {n_y} jersey, protocol B: {cfg.cycles} cycles at mu = {cfg.mu}, bars at {cfg.bar_speed:g} m/s, "
+        f"{n_x} x {n_y} {cfg.pattern}, protocol B: {cfg.cycles} cycles at mu = {cfg.mu}, bars at {cfg.bar_speed:g} m/s, "
         f"{cfg.resolution} nodes/stitch\n"
         f"  Delta x_max - Delta x_min = {(cfg.lx_max - result.lx_min) * n_x * l0 * 1e3:.3f} mm "
         f"(box l_x/l0 {result.lx_min:.4f} -> {cfg.lx_max:.4f})\n"
@@ -503,7 +503,7 @@ def tensile(
         typer.echo(_json(summary))
         return
     typer.echo(
-        f"{cfg.n_x} x {cfg.n_y} jersey, tensile test at mu = {cfg.mu}, bars at {cfg.bar_speed:g} m/s, "
+        f"{cfg.n_x} x {cfg.n_y} {cfg.pattern}, tensile test at mu = {cfg.mu}, bars at {cfg.bar_speed:g} m/s, "
         f"{cfg.resolution} nodes/stitch\n"
         f"  start: f_x = {summary['fx_start']:.3f}, f_y = {summary['fy_start']:.3f}\n"
         f"  top:   f_x = {summary['fx_top']:.3f}, f_y = {summary['fy_top']:.3f} at l_x/l0 = "
@@ -556,8 +556,8 @@ def snag(
     if json_out:
         typer.echo(_json(summary))
         return
-    head = (f"{cfg.n_x} x {cfg.n_y} jersey at f_x^ini = {summary['fx_ini']:.3f}" if result.ladder else
-            f"{cfg.n_x} x {cfg.n_y} jersey") + f", pin at {cfg.snag_speed:g} m/s behind the loop of course " \
+    head = (f"{cfg.n_x} x {cfg.n_y} {cfg.pattern} at f_x^ini = {summary['fx_ini']:.3f}" if result.ladder else
+            f"{cfg.n_x} x {cfg.n_y} {cfg.pattern}") + f", pin at {cfg.snag_speed:g} m/s behind the loop of course " \
         f"{summary['snag_row']}, column {summary['snag_column']}, mu = {cfg.mu}, {cfg.resolution} nodes/stitch"
     if not result.broke:
         typer.echo(f"{head}\n  no break within {cfg.max_pull_mm:g} mm: peak pull-out force "
@@ -1036,7 +1036,7 @@ def _experiment_or_exit(run, progress, kept: str = "nothing written"):
     is built (2)."""
     from knitlad.fabric.observers import Interpenetration
     from knitlad.fabric.preparation import InfeasibleRun
-    from knitlad.fabric.scenes.jersey import CourseTooWide
+    from knitlad.fabric.scenes.knit import CourseTooWide
     from knitlad.engine.simulation import SimulationBlowUp
     from knitlad.fabric.stretching import OutOfReach
 

@@ -36,6 +36,8 @@ def run(*args, cwd=None):
         (["loop", "--geometry", "strip", "--lx", "0.32"], "lx"),
         (["loop", "--geometry", "periodic", "--columns", "3"], "columns"),
         (["cut", "--preset", "fastest"], "--preset"),
+        (["cut", "--pattern", "purl"], "--pattern"),
+        (["cut", "--pattern", "rib", "--stretch-start", "tiled"], "stretch_start"),
         (["loop", "--preset", "exact"], "--preset"),
         (["cycle", "--lx", "0.38", "--lx-max", "0.36"], "lx_max"),
         (["cycle"], "--lx-max"),
@@ -65,6 +67,23 @@ def test_cut_runs_a_ladder_end_to_end_on_a_small_knit(tmp_path):
         assert f.attrs["scale_f0_N"] == pytest.approx(0.01477, abs=1e-4)
         assert len(f["series/front_up"]) == len(f["series/time"])
     assert (tmp_path / "spatio_temporal.png").stat().st_size > 1000
+
+
+@pytest.mark.parametrize("pattern", ["rib", "garter"])
+def test_cut_ladders_and_renders_a_knit_of_another_pattern(tmp_path, pattern):
+    """A 6 x 6 knit of rib or garter is built, stretched affinely to f_x^ini 3, cut and rendered; its file
+    says its pattern, the read-out names it."""
+    p = run("cut", "--pattern", pattern, "--stitches", "6x6", "--preset", "fast", "--fx", "3", "--max-time-ms", "2",
+            "--out", str(tmp_path))
+    assert p.returncode == 0, p.stderr
+    assert f"6 x 6 {pattern}, mu = 0.4" in p.stdout
+    with h5py.File(tmp_path / "ladder.h5") as f:
+        assert json.loads(f.attrs["settings_json"])["stretch"]["pattern"] == pattern
+        assert f.attrs["fx_ini"] == pytest.approx(3.0, rel=0.02)
+        assert f.attrs["n_lad"] >= 1
+    p = run("render", str(tmp_path), "--at-ms", "0", "--view", "front", "--width", "400")
+    assert p.returncode == 0, p.stderr
+    assert len(list((tmp_path / "render").glob("render_front_*.png"))) == 1
 
 
 def test_cycle_runs_protocol_b_end_to_end_on_a_small_knit(tmp_path):

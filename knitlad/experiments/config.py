@@ -14,6 +14,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationErr
 from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP
 from knitlad.engine.kernels.contact_law import LAWS, law_mode
 from knitlad.fabric.observers import AUTO_FRAMES
+from knitlad.fabric.patterns import PATTERNS
 from knitlad.fabric.presets import LADDER_PRESETS, LOOP_PRESETS, PRESET_HELP, STITCH_PRESETS
 
 Preset = Literal["fast", "default", "accurate"]
@@ -80,6 +81,9 @@ def _known_law(name: str) -> str:
 ContactLawName = Annotated[str, AfterValidator(_known_law)]
 
 
+PatternName = Literal[tuple(PATTERNS)]  # the knit patterns' names (knitlad.fabric.patterns)
+
+
 def _contact_law():
     return Field("linear", description=(
         f"the contact's normal spring through its working point (contact_force_f0 at overlap_fraction d): "
@@ -102,7 +106,7 @@ class CutConfig(_WithPreset):
         "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor",
         "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
         "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches", "contact_law",
-        "band_row", "band_courses", "band_friction_factor")
+        "band_row", "band_courses", "band_friction_factor", "pattern")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -110,6 +114,9 @@ class CutConfig(_WithPreset):
     mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient during laddering [-]")
     n_x: int = Field(42, ge=4, le=200, description="stitches per course [-]")
     n_y: int = Field(42, ge=4, le=200, description="courses [-]")
+    pattern: PatternName = Field("jersey", description=(
+        "the knit's pattern: jersey (the paper's), rib (1x1: knit and purl columns) or garter (knit and purl "
+        "courses); rib and garter are stretched affinely from a narrower build (docs/patterns.md) [-]"))
     resolution: int | None = Field(None, ge=12, le=280, description="nodes per stitch (segment = l0/resolution) [-]; default: the preset's")
     max_time_ms: float = Field(30.0, gt=0, description="longest laddering time simulated after the cut [ms]")
     arrest_ms: float = Field(2.0, gt=0, description="the ladder has stopped when no cell changed for this long [ms]")
@@ -211,6 +218,14 @@ class CutConfig(_WithPreset):
 
     @model_validator(mode="before")
     @classmethod
+    def patterns_stretch_affinely(cls, data):
+        """A pattern with purl stitches has no periodised stitch to tile: its knit is stretched affinely."""
+        if isinstance(data, dict) and data.get("pattern", "jersey") != "jersey" and "stretch_start" not in data:
+            data = {**data, "stretch_start": "affine"}
+        return data
+
+    @model_validator(mode="before")
+    @classmethod
     def natural_curvature_carries_twist(cls, data):
         """A yarn with natural curvature carries twist (its curvature lives in its material frame)."""
         if isinstance(data, dict) and isinstance(data.get("natural_curvature"), (int, float)) \
@@ -229,6 +244,9 @@ class CutConfig(_WithPreset):
         if self.natural_curvature > 0 and (self.stretch_start, self.edge) != ("tiled", "clamped"):
             raise ValueError("natural_curvature: set in the periodised stitch and tiled over the knit, it needs "
                              "stretch_start tiled and edge clamped")
+        if self.pattern != "jersey" and self.stretch_start != "affine":
+            raise ValueError(f"stretch_start: the periodised stitch is jersey's; a {self.pattern} knit is stretched "
+                             "affinely (stretch_start affine)")
         if self.memory_peak_ratio is not None and self.natural_curvature == 0:
             raise ValueError("memory_peak_ratio: shapes the memory of natural_curvature > 0; the yarn has none")
         check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
@@ -263,7 +281,7 @@ class CutConfig(_WithPreset):
             steps_per_increment=self.steps_per_increment, fx_tolerance=self.fx_tolerance, start=self.stretch_start,
             natural_curvature=self.natural_curvature, memory_peak_ratio=self.memory_peak_ratio,
             material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
-            contact_law=self.contact_law,
+            contact_law=self.contact_law, pattern=self.pattern,
         )
 
     def dynamics_settings(self):

@@ -34,7 +34,7 @@ from typing import NamedTuple
 from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP, ContactModel
 from knitlad.fabric.observers import LetGo, TimeLimit
 from knitlad.engine.runloop import run_until
-from knitlad.fabric.scenes.jersey import Jersey
+from knitlad.fabric.scenes.knit import KnitGeometry
 from knitlad.fabric.scenes.loop import LoopScene, build_single_loop
 from knitlad.engine.simulation import Simulation, small_scene_threads
 from knitlad.engine.timestep import DEFAULT_SAFETY
@@ -124,7 +124,7 @@ class LoopRun:
         self.s = settings
         m = settings.material
         l0 = m.stitch_length
-        geometry = Jersey(n_x=1, n_y=1, l_x=settings.lx_over_l0 * l0, l_y=settings.ly_over_l0 * l0,
+        geometry = KnitGeometry(n_x=1, n_y=1, l_x=settings.lx_over_l0 * l0, l_y=settings.ly_over_l0 * l0,
                           nodes_per_stitch=settings.nodes_per_stitch, material=m, edge="tail")
         self.scene: LoopScene = build_single_loop(geometry, settings.fx * m.f0)
         contact = ContactModel.of_settings(settings, mu=0.0)

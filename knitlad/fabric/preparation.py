@@ -34,7 +34,15 @@ from knitlad.fabric.measure import (
     transverse_tension,
 )
 from knitlad.fabric.observers import Interpenetration, OverlapGuard
-from knitlad.fabric.scenes.jersey import BUILD_LX, CourseTooWide, Jersey, KnitScene, build_jersey, widest_fitting_width
+from knitlad.fabric.scenes.knit import (
+    BUILD_LX,
+    CourseTooWide,
+    KnitGeometry,
+    KnitScene,
+    build_knit,
+    build_loop_overlap,
+    widest_fitting_width,
+)
 from knitlad.fabric.stitch_model import StitchRun, StitchSettings, zero_tension_lx
 from knitlad.fabric.stretching import OutOfReach, force_control, relax_to_steady_tension, stretch_to
 
@@ -86,7 +94,7 @@ class StretchSettings:
     nodes_per_stitch: int
     contact_force_f0: float  # the contact force (in f0) at which the overlap is overlap_fraction d
     overlap_fraction: float
-    edge: str  # how the course ends are held (knitlad.fabric.scenes.jersey.EDGES)
+    edge: str  # how the course ends are held (knitlad.fabric.scenes.knit.EDGES)
     stretch_increment: float  # l/l0 per affine step
     steps_per_increment: int  # FIRE steps per round
     fx_tolerance: float  # force control: relative
@@ -96,6 +104,7 @@ class StretchSettings:
     sagitta_radius_d: float = 0.0  # the contact's sagitta correction, in d (0: none; knitlad.engine.contact)
     contact_law: str = "linear"  # the contact's normal law (knitlad.engine.kernels.contact_law)
     memory_peak_ratio: float | None = None  # max/mean of (kappa_bar/kappa0)^2 (None: the scaled copy's own)
+    pattern: str = "jersey"  # the knit's pattern (knitlad.fabric.patterns.PATTERNS)
 
     def __post_init__(self) -> None:
         if (self.lx_over_l0 is None) == (self.fx_target is None):
@@ -103,6 +112,9 @@ class StretchSettings:
         if self.natural_curvature > 0 and (self.start, self.edge) != ("tiled", "clamped"):
             raise ValueError("natural_curvature needs the tiled stretch and clamped ends: it is set in the "
                              "periodised stitch and tiled over the knit")
+        if self.pattern != "jersey" and self.start != "affine":
+            raise ValueError(f"pattern {self.pattern}: the periodised stitch is jersey's; this knit is stretched "
+                             "affinely (start='affine')")
 
 
 @dataclass(frozen=True)
@@ -199,12 +211,21 @@ class KnitBox:
         self.build_lx = build_width(s.ly_over_l0, m, s.nodes_per_stitch, s.sagitta_radius_d)
         self.lx = min(s.lx_over_l0, self.build_lx) if s.lx_over_l0 is not None else self.build_lx
         self.ly = s.ly_over_l0
-        lx = widest_fitting_width(self.lx, self.ly, m, s.nodes_per_stitch, lx_min=MIN_BUILD_LX)
-        if lx < self.lx:  # thick yarns (d/l0 = 1/20) only fit narrower
+        try:
+            lx = widest_fitting_width(self.lx, self.ly, m, s.nodes_per_stitch,
+                                      min_loop_overlap=build_loop_overlap(m, s.pattern), lx_min=MIN_BUILD_LX,
+                                      pattern=s.pattern)
+        except CourseTooWide:
+            if s.pattern != "jersey":
+                raise
+            # the thickest jersey yarns (d/l0 = 1/20): built where a stitch holds l0 at all; the first
+            # relaxation pushes their touching loops apart (docs/history.md: peak overlap 0.005 d)
+            lx = widest_fitting_width(self.lx, self.ly, m, s.nodes_per_stitch, lx_min=MIN_BUILD_LX)
+        if lx < self.lx:  # thick yarns and purl stitches only fit narrower
             self.lx = self.build_lx = lx
-        self.knit = build_jersey(Jersey(
+        self.knit = build_knit(KnitGeometry(
             n_x=s.n_x, n_y=s.n_y, l_x=self.lx * m.stitch_length, l_y=self.ly * m.stitch_length,
-            nodes_per_stitch=s.nodes_per_stitch, material=m, edge=s.edge,
+            nodes_per_stitch=s.nodes_per_stitch, material=m, edge=s.edge, pattern=s.pattern,
         ), stretch_damping_ratio=STRETCH_AXIAL_DAMPING)
         self.sim = Simulation(self.knit.rods, contact=stretch_contact(s))
         self.gauge = KnitGauge(self.knit, m)
@@ -330,7 +351,7 @@ def check_whole(knit: StretchedKnit) -> None:
     periodised stitch's f_x = 0 curve, where a knit whose loops still hold each other is in tension
     (position control to l_x/l0 = 0.999 gave f_x^ini = -0.98 and every cell undone, exit 0)."""
     s = knit.settings
-    if knit.fx_ini > 0 or s.lx_over_l0 is None:
+    if knit.fx_ini > 0 or s.lx_over_l0 is None or s.pattern != "jersey":  # the f_x = 0 width is jersey's
         return
     try:
         unloaded = unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material, s.sagitta_radius_d, s.contact_law)

@@ -34,7 +34,7 @@ from knitlad.engine.kernels.elastic import bending_energy, edge_vectors, framed_
 from knitlad.engine.kernels.frames import material_frames, transport_reference_frames, update_reference_twist
 from knitlad.fabric.shape_memory import remember_shape
 from knitlad.fabric.presets import STITCH_PRESETS
-from knitlad.fabric.scenes.jersey import BUILD_LX, Jersey, widest_fitting_width
+from knitlad.fabric.scenes.knit import BUILD_LX, KnitGeometry, build_loop_overlap, widest_fitting_width
 from knitlad.fabric.scenes.stitch import PeriodicStitch, build_periodic_stitch
 from knitlad.engine.simulation import Simulation, small_scene_threads
 from knitlad.fabric.stretching import stretch_to
@@ -89,13 +89,14 @@ class StitchRun:
         self.sim = Simulation(self.cell.rods, contact=contact)
         self.result = StitchResult(settings)
 
-    def _build_geometry(self) -> tuple[float, Jersey]:
+    def _build_geometry(self) -> tuple[float, KnitGeometry]:
         """The widest build l_x <= min(target, 0.30 l0) at which a stitch holds l0 and its loop
-        overlaps the next course's by at least d (thick yarns need narrower cells)."""
+        overlaps the next course's by at least d, and as far as thick yarns need
+        (:func:`~knitlad.fabric.scenes.knit.build_loop_overlap`: they need narrower cells)."""
         s, m = self.s, self.s.material
         lx = widest_fitting_width(min(s.lx_over_l0, BUILD_LX), self.ly, m, s.nodes_per_stitch,
-                                  min_loop_overlap=m.diameter)
-        return lx, Jersey(n_x=1, n_y=1, l_x=lx * m.stitch_length, l_y=self.ly * m.stitch_length,
+                                  min_loop_overlap=max(m.diameter, build_loop_overlap(m)))
+        return lx, KnitGeometry(n_x=1, n_y=1, l_x=lx * m.stitch_length, l_y=self.ly * m.stitch_length,
                           nodes_per_stitch=s.nodes_per_stitch, material=m)
 
     def _relax(self, steps: int, tol_f0: float) -> dict:

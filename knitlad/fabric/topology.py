@@ -3,7 +3,7 @@
 A loop of course r+1 is pulled through the head of course r: as a U through a
 ring, it pierces the ring's spanning surface twice with opposite signs, so the
 two closed curves are *not* linked (a Gauss linking number is 0 for every local
-closure, which is why it is not used here). Used to prove the jersey topology.
+closure, which is why it is not used here). Used to prove each pattern's topology.
 """
 
 import numpy as np
@@ -59,3 +59,22 @@ def piercings(ring, arc):
                 count += 1
                 signed += hit
     return count, signed
+
+
+@njit(cache=True)
+def threading_direction(ring, arc):
+    """Which way the open polyline ``arc`` first passes through the fan spanning ``ring``: the sign of
+    its z-step there (+1 towards +z, -1 towards -z), 0 if it does not pass. A knit stitch's loop is
+    drawn through its head from the technical back (+z in knitlad's knits) to the face: -1; a purl
+    stitch's: +1 (knitlad.fabric.patterns)."""
+    centre = np.zeros(3)
+    m = ring.shape[0]
+    for i in range(m):
+        centre += ring[i]
+    centre /= m
+    for j in range(arc.shape[0] - 1):
+        for i in range(m):
+            if _segment_hits_triangle(arc[j], arc[j + 1], centre, ring[i], ring[(i + 1) % m]) != 0:
+                step = arc[j + 1, 2] - arc[j, 2]
+                return 1 if step > 0 else -1
+    return 0

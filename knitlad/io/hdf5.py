@@ -38,7 +38,7 @@ and, with obstacles (``Plane``, ``Cylinder``), their shapes and where each was a
 A stretched knit (:class:`knitlad.fabric.preparation.StretchedKnit`, ``stretched.h5``): its scalars
 and settings as attributes, ``/model/*`` and ``/state/*`` (the arrays of
 :class:`knitlad.engine.state.RodModel` and :class:`~knitlad.engine.state.RodState`, internal units)
-and ``/knit/*`` (the course bookkeeping of :class:`knitlad.fabric.scenes.jersey.KnitScene`).
+and ``/knit/*`` (the course bookkeeping of :class:`knitlad.fabric.scenes.knit.KnitScene`).
 """
 
 from __future__ import annotations
@@ -436,7 +436,7 @@ def write_stretched_knit(path: str | Path, knit) -> Path:
 def read_stretched_knit(path: str | Path):
     """The :class:`knitlad.fabric.preparation.StretchedKnit` of a file of :func:`write_stretched_knit`."""
     from knitlad.fabric.preparation import StretchedKnit, StretchSettings
-    from knitlad.fabric.scenes.jersey import Jersey, KnitScene
+    from knitlad.fabric.scenes.knit import KnitGeometry, KnitScene
     from knitlad.engine.state import RodModel, Rods, RodState
     from knitlad.engine.units import Material
 
@@ -460,7 +460,7 @@ def read_stretched_knit(path: str | Path):
         twist = bool(f.attrs.get("rods_twist", False))
         # knits stored before 0.5.1 did not say whether they are framed; theirs was the model's natural curvature
         framed = bool(f.attrs["rods_framed"]) if "rods_framed" in f.attrs else twist and bool(np.any(model.kappa_bar))
-        knit = KnitScene(geometry=Jersey(**geometry), rods=Rods(model, state, twist, framed), H=float(f.attrs["H"]),
+        knit = KnitScene(geometry=KnitGeometry(**geometry), rods=Rods(model, state, twist, framed), H=float(f.attrs["H"]),
                          courses=[int(c) for c in g["courses"][()]], bars=[int(b) for b in g["bars"][()]],
                          node_t=g["node_t"][()], left_end=g["left_end"][()], right_end=g["right_end"][()])
         scalars = {name: f.attrs[name].item() if isinstance(f.attrs[name], np.generic) else f.attrs[name]

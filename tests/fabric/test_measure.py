@@ -21,7 +21,7 @@ from knitlad.fabric.measure import (
     periodicities,
     tension_per_thread,
 )
-from knitlad.fabric.scenes.jersey import Jersey, build_jersey
+from knitlad.fabric.scenes.knit import KnitGeometry, build_knit
 from knitlad.engine.state import cut_edge
 
 L0 = kl.NYLON.stitch_length
@@ -29,7 +29,7 @@ L0 = kl.NYLON.stitch_length
 
 @pytest.fixture(scope="module")
 def knit():
-    return build_jersey(Jersey(n_x=6, n_y=6, l_x=0.3 * L0, l_y=0.25 * L0, nodes_per_stitch=24))
+    return build_knit(KnitGeometry(n_x=6, n_y=6, l_x=0.3 * L0, l_y=0.25 * L0, nodes_per_stitch=24))
 
 
 def rows_of(knit, x):

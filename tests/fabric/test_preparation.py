@@ -7,7 +7,7 @@ import pytest
 
 from knitlad.experiments.config import CutConfig
 from knitlad.fabric.preparation import KnitBox, build_width, stretch
-from knitlad.fabric.scenes.jersey import BUILD_LX
+from knitlad.fabric.scenes.knit import BUILD_LX
 from knitlad.fabric.stretching import OutOfReach, stretch_to
 from knitlad.engine.units import NYLON
 

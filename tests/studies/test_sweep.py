@@ -435,3 +435,19 @@ def test_a_snag_sweep_breaks_worn_loops_and_writes_the_curve_and_the_ladder(tmp_
     with h5py.File(out / "jobs" / f"{df['job_id'][0]}.h5") as f:
         assert f["snag/force"].attrs["unit"] == "N" and f["snag/pull"].shape == f["snag/force"].shape
         assert "series/front_up" in f and f.attrs["scale_f0_N"] > 0
+
+
+def test_a_sweep_over_patterns_ladders_each_and_tabulates_its_pattern(tmp_path):
+    """The knit's pattern is a sweep axis: jersey and garter 6 x 6 jobs at f_x^ini 3 both ladder; the summary
+    says each job's pattern, and the jersey job's id is the one it had before patterns existed."""
+    config = write_config(tmp_path / "patterns.yaml", {
+        "scene": "ladder", "fixed": {"n_x": 6, "n_y": 6, "preset": "fast", "fx": 3.0, "max_time_ms": 2},
+        "sweep": {"expand": "grid", "axes": {"pattern": ["jersey", "garter"]}}, "output": {"frames": False}})
+    out = tmp_path / "out"
+    p = knitlad("sweep", str(config), "--out", str(out))
+    assert p.returncode == 0, p.stderr
+    df = read_summary(out).set_index("pattern")
+    assert (df["status"] == "ok").all() and sorted(df.index) == ["garter", "jersey"]
+    assert (df["n_lad"] >= 1).all() and (abs(df["fx_ini"] - 3.0) < 0.06).all()
+    plain = [j for j in load_sweep(config)[1] if j.params["pattern"] == "jersey"][0]
+    assert plain.id == job_id("ladder", {k: v for k, v in plain.params.items() if k != "pattern"}, plain.output)

@@ -1,6 +1,6 @@
 """The single-loop model (paper, Fig. 5b): one loop under tension, hooked to a lower loop.
 
-Three one-stitch courses of the jersey centreline (:class:`knitlad.fabric.scenes.jersey.Jersey`
+Three one-stitch courses of the jersey centreline (:class:`knitlad.fabric.scenes.knit.KnitGeometry`
 with n_x = 1), bottom to top: the *lower* row n - 1 (held whole; removed to start
 the ladder), the *loop* row n (free, pulled at both ends by the tension f_x f0)
 and the *upper* row n + 1 (held whole). The legs of the loop pass through the
@@ -19,13 +19,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from knitlad.fabric.scenes.jersey import Jersey, discrete_loop_half_height
+from knitlad.fabric.scenes.knit import KnitGeometry, discrete_loop_half_height
 from knitlad.engine.state import Rods, Scene
 
 
 @dataclass
 class LoopScene:
-    geometry: Jersey
+    geometry: KnitGeometry
     rods: Rods
     lower: int  # yarn index of the held lower row (removed to start the ladder)
     loop: int  # the free row whose release is timed
@@ -33,7 +33,7 @@ class LoopScene:
     tension_N: float
 
 
-def build_single_loop(geometry: Jersey, tension_N: float) -> LoopScene:
+def build_single_loop(geometry: KnitGeometry, tension_N: float) -> LoopScene:
     """The three rows of one column at (l_x, l_y); the loop row's ends pulled by ``tension_N``."""
     if geometry.n_x != 1:
         raise ValueError("the single-loop model has one stitch per row (n_x = 1)")

@@ -1,6 +1,6 @@
 """The periodised jersey stitch: one stitch of one course, periodic in x and y.
 
-The yarn is one stitch of the jersey centreline (:class:`knitlad.fabric.scenes.jersey.Jersey`
+The yarn is one stitch of the jersey centreline (:class:`knitlad.fabric.scenes.knit.KnitGeometry`
 with n_x = n_y = 1), closed on itself across the cell: its last edge joins the
 first node shifted by the period (l_x, 0, 0). Its periodic images, shifted by
 i l_x along x and j l_y along y (|i| <= 2, |j| <= 1, not both 0), are held
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from knitlad.engine import units
-from knitlad.fabric.scenes.jersey import Jersey, discrete_loop_half_height
+from knitlad.fabric.scenes.knit import KnitGeometry, discrete_loop_half_height
 from knitlad.engine.state import Rods, Scene
 
 IMAGES_X = 2  # images up to 2 cells away along x: a loop bulges past its cell (Crane's a = 3/2)
@@ -26,7 +26,7 @@ IMAGES_Y = 1
 
 @dataclass
 class PeriodicStitch:
-    geometry: Jersey
+    geometry: KnitGeometry
     rods: Rods
     yarn: int  # the real yarn (the images are the other yarns)
     lx: float  # current cell [internal length]
@@ -52,7 +52,7 @@ class PeriodicStitch:
         return np.flatnonzero(m.node_yarn[m.edge_a[m.hinge_e0]] == self.yarn)
 
 
-def build_periodic_stitch(geometry: Jersey) -> PeriodicStitch:
+def build_periodic_stitch(geometry: KnitGeometry) -> PeriodicStitch:
     """One stitch at (geometry.l_x, geometry.l_y), periodic through its images."""
     if geometry.n_x != 1 or geometry.n_y != 1:
         raise ValueError("the periodised stitch is one stitch (n_x = n_y = 1)")

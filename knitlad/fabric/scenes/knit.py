@@ -1,9 +1,12 @@
-"""Jersey (stockinette) fabric: n_x stitches per course, n_y courses.
+"""A weft-knitted fabric of a pattern (jersey by default): n_x stitches per course, n_y courses.
 
 Centreline of course r (after Crane's "plain-knit-yarn", see shared/notes), one
 stitch per 2 pi of the parameter t:
 
-    x = (t + a sin 2t) l_x / (2 pi),  y = r l_y + H cos t,  z = c cos 2t,   a = 3/2.
+    x = (t + a sin 2t) l_x / (2 pi),  y = r l_y + H cos t,  z = c cos 2t,   a = 3/2
+
+for jersey (stockinette); other patterns multiply z by the face sign of their purl
+stitches (:mod:`knitlad.fabric.patterns`).
 
 Heads (needle loops, pointing +y) sit at t = 2 pi i (column i), sinker loops
 (pointing -y) at t = 2 pi i + pi. The loop half-height H is solved so that each
@@ -13,7 +16,7 @@ of column n_x - 1: on the box edges x = +-n_x l_x / 2. One extra course below
 (r = -1) and above (r = n_y), entirely held, secure the bottom and top edges so
 that a ladder reaching them stops there.
 
-How the course ends are held (``Jersey.edge``):
+How the course ends are held (``KnitGeometry.edge``):
 
 * ``"clamped"`` (default): the last two nodes at each end are held, fixing the
   end's position and its tangent (along x). The periodic stitch is mirror
@@ -38,6 +41,7 @@ import numpy as np
 
 from knitlad.engine.state import Rods, Scene
 from knitlad.engine.units import NYLON, Material
+from knitlad.fabric.patterns import knit_pattern
 
 
 class CourseTooWide(ValueError):
@@ -48,11 +52,33 @@ EDGES = ("clamped", "tail")  # how the course ends are held: see the module docs
 # widest l_x/l0 at which the knit and the periodised stitch are built: wider, Crane's loops
 # of successive courses barely overlap; they are stretched from there
 BUILD_LX = 0.30
+# a pattern with purl stitches passes its yarn through the mid-plane where the face changes, which
+# takes yarn from the loops (H smaller than jersey's): built where its loops reach this far past the
+# next course [d] (rib and garter at l_y/l0 0.25: 4.8 and 3.8 d at l_x/l0 0.27 left 2.0 and 1.5 d
+# between yarns; at 2.8 and 1.9 d, 0.42 and 0.29 d, and garter's loops no longer interlocked)
+PATTERN_LOOP_OVERLAP_D = 5.0
+# yarns thicker than the paper's collide in the plane where the paper's is built (d/l0 = 1/50 at l_x/l0
+# 0.30, l_y/l0 0.25: loops 1.6 d past the next course, nodes of two yarns 0.35 d apart; 1/35 at 0.24:
+# 1.5 d and 0.53 d): they are built where their loops reach this far [d] (1/50: 0.24, 2.2 d apart)
+THICK_LOOP_OVERLAP_D = 4.0
+PAPER_D_OVER_L0 = NYLON.diameter / NYLON.stitch_length
+
+
+def build_loop_overlap(material: Material, pattern: str = "jersey") -> float:
+    """How far [m] the loops of a knit being built must reach past the next course (2 H - l_y), for
+    :func:`widest_fitting_width`: jersey of the paper's yarn or finer, no demand (its builds as they
+    always were); thicker yarns THICK_LOOP_OVERLAP_D d, other patterns PATTERN_LOOP_OVERLAP_D d."""
+    d = material.diameter
+    if pattern != "jersey":
+        return PATTERN_LOOP_OVERLAP_D * d
+    if d / material.stitch_length <= PAPER_D_OVER_L0 * (1 + 1e-9):
+        return -math.inf
+    return THICK_LOOP_OVERLAP_D * d
 
 
 @dataclass(frozen=True)
-class Jersey:
-    """Geometry of a jersey knit (SI units)."""
+class KnitGeometry:
+    """Geometry of a weft knit of ``pattern`` (:data:`knitlad.fabric.patterns.PATTERNS`; SI units)."""
 
     n_x: int = 42
     n_y: int = 42
@@ -64,6 +90,7 @@ class Jersey:
     tail: float = 0.5  # straight tail beyond the last sinker, in l_x (edge "tail" only)
     edge: str = "clamped"  # how the course ends are held: EDGES
     width: float = CRANE_A  # a: how far the head bulges sideways (Crane: 3/2)
+    pattern: str = "jersey"  # which stitches are knit and which purl (knitlad.fabric.patterns)
 
     def __post_init__(self) -> None:
         if self.n_x < 1 or self.n_y < 1:
@@ -72,6 +99,7 @@ class Jersey:
             raise ValueError(f"nodes_per_stitch must be >= 8, got {self.nodes_per_stitch}")
         if self.edge not in EDGES:
             raise ValueError(f"edge must be one of {', '.join(EDGES)}, got {self.edge!r}")
+        knit_pattern(self.pattern)
         l0 = self.material.stitch_length
         if not 0 < self.l_x < l0 or not 0 < self.l_y < l0:
             raise ValueError("l_x and l_y must lie strictly between 0 and l0")
@@ -92,11 +120,17 @@ class Jersey:
         x = (t + self.width * np.sin(2 * t)) * self.l_x / (2 * math.pi) + self.column_x(0)
         y = row * self.l_y + H * np.cos(t)
         z = self.c * np.cos(2 * t)
+        pattern = knit_pattern(self.pattern)
+        if not pattern.plain:
+            z = z * pattern.face(t, row)
         return np.column_stack([x, y, z])
 
     def stitch_length_for(self, H: float, samples: int = 4000) -> float:
-        t = np.linspace(0.0, 2 * math.pi, samples + 1)
-        return float(np.linalg.norm(np.diff(self.curve(t, 0, H), axis=0), axis=1).sum())
+        """Yarn length per stitch of the smooth curve: one stitch of jersey, the mean over a pattern's repeat."""
+        columns, rows = knit_pattern(self.pattern).period
+        t = np.linspace(0.0, 2 * math.pi * columns, samples * columns + 1)
+        total = sum(np.linalg.norm(np.diff(self.curve(t, r, H), axis=0), axis=1).sum() for r in range(rows))
+        return float(total / (columns * rows))
 
     def loop_half_height(self, length: float | None = None) -> float:
         """H such that one stitch of the smooth curve holds ``length`` (default l0) of yarn."""
@@ -139,28 +173,29 @@ class Jersey:
 
 
 def widest_fitting_width(lx_max: float, ly: float, material: Material, nodes_per_stitch: int,
-                         min_loop_overlap: float = -math.inf, lx_min: float = 0.1) -> float:
+                         min_loop_overlap: float = -math.inf, lx_min: float = 0.1, pattern: str = "jersey") -> float:
     """The widest l_x/l0 <= lx_max, in steps of 0.01, at which a stitch holds l0 of yarn and its
     loop reaches ``min_loop_overlap`` [m] past the next course (2 H - l_y); thick yarns need
     narrower cells. Raises :class:`CourseTooWide` if none down to ``lx_min`` does."""
     l0 = material.stitch_length
     lx = lx_max
     while lx >= lx_min - 1e-12:
-        geometry = Jersey(n_x=1, n_y=1, l_x=lx * l0, l_y=ly * l0, nodes_per_stitch=nodes_per_stitch, material=material)
+        geometry = KnitGeometry(n_x=1, n_y=1, l_x=lx * l0, l_y=ly * l0, nodes_per_stitch=nodes_per_stitch,
+                                material=material, pattern=pattern)
         try:
             if 2 * geometry.loop_half_height() - ly * l0 > min_loop_overlap:
                 return lx
         except CourseTooWide:
             pass
         lx = round(lx - 0.01, 6)
-    raise CourseTooWide(f"no jersey stitch of d/l0 = {material.diameter / l0:.3g} fits at l_y/l0 = {ly}")
+    raise CourseTooWide(f"no {pattern} stitch of d/l0 = {material.diameter / l0:.3g} fits at l_y/l0 = {ly}")
 
 
 @dataclass
 class KnitScene:
     """The built knit: its state plus the bookkeeping the protocol and observers need."""
 
-    geometry: Jersey
+    geometry: KnitGeometry
     rods: Rods
     H: float
     courses: list[int]  # yarn index of each free course, bottom to top
@@ -191,7 +226,7 @@ class KnitScene:
         return slice(int(start[y]), int(start[y + 1]))
 
 
-def discrete_loop_half_height(geometry: Jersey) -> float:
+def discrete_loop_half_height(geometry: KnitGeometry) -> float:
     """H at which the resampled polygon (not the smooth curve) holds l0 per stitch.
 
     Chords are shorter than the arcs they span, by about (kappa seg)^2 / 24; the
@@ -209,7 +244,7 @@ def discrete_loop_half_height(geometry: Jersey) -> float:
     return H
 
 
-def build_jersey(geometry: Jersey, stretch_damping_ratio: float = 0.2) -> KnitScene:
+def build_knit(geometry: KnitGeometry, stretch_damping_ratio: float = 0.2) -> KnitScene:
     """A jersey knit at (l_x, l_y), every course held at its two ends (``geometry.edge``), edge courses held whole.
 
     ``stretch_damping_ratio``: each edge's axial dashpot as a fraction of critical (``Scene.build``).

@@ -10,7 +10,7 @@ import pytest
 import knitlad as kl
 from knitlad.engine.contact import ContactModel, make_contacts
 from knitlad.engine.kernels.contact import refresh_contacts, segment_distance
-from knitlad.fabric.scenes.jersey import Jersey, build_jersey
+from knitlad.fabric.scenes.knit import KnitGeometry, build_knit
 from knitlad.fabric.topology import piercings
 
 D = kl.NYLON.diameter
@@ -20,7 +20,7 @@ L0 = kl.NYLON.stitch_length
 @pytest.fixture(scope="module", params=[0.245, 0.30], ids=["paper-start-0.245", "protocol-build-0.30"])
 def knit(request):
     """The paper's initial l_x = l_y = 0.245 l0, and the l_x = 0.30 l0 the protocol builds at."""
-    return build_jersey(Jersey(n_x=5, n_y=4, l_x=request.param * L0, l_y=min(request.param, 0.25) * L0, nodes_per_stitch=36))
+    return build_knit(KnitGeometry(n_x=5, n_y=4, l_x=request.param * L0, l_y=min(request.param, 0.25) * L0, nodes_per_stitch=36))
 
 
 def test_each_stitch_holds_l0_of_yarn(knit):
@@ -93,7 +93,7 @@ def test_edge_courses_are_held_and_courses_are_clamped_at_their_edge_sinkers(kni
 
 
 def test_course_ends_with_tails_are_held_at_one_node():
-    knit = build_jersey(Jersey(n_x=3, n_y=2, l_x=0.3 * L0, l_y=0.25 * L0, nodes_per_stitch=24, edge="tail"))
+    knit = build_knit(KnitGeometry(n_x=3, n_y=2, l_x=0.3 * L0, l_y=0.25 * L0, nodes_per_stitch=24, edge="tail"))
     s = knit.rods
     for y in knit.courses:
         held = np.flatnonzero(s.model.held[s.model.yarn_start[y]: s.model.yarn_start[y + 1]])
@@ -104,4 +104,4 @@ def test_course_ends_with_tails_are_held_at_one_node():
                                            (dict(edge="loose"), "edge must be one of")])
 def test_bad_geometry_is_refused(kwargs, match):
     with pytest.raises(ValueError, match=match):
-        Jersey(**kwargs)
+        KnitGeometry(**kwargs)
