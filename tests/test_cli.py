@@ -38,6 +38,8 @@ def run(*args, cwd=None):
         (["cut", "--preset", "fastest"], "--preset"),
         (["cut", "--pattern", "purl"], "--pattern"),
         (["cut", "--pattern", "rib", "--stretch-start", "tiled"], "stretch_start"),
+        (["cut", "--band", "rib"], "band_row"),
+        (["cut", "--band", "rib", "--band-row", "30", "--band-friction-factor", "3"], "band_friction_factor"),
         (["loop", "--preset", "exact"], "--preset"),
         (["cycle", "--lx", "0.38", "--lx-max", "0.36"], "lx_max"),
         (["cycle"], "--lx-max"),

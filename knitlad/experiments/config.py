@@ -106,7 +106,7 @@ class CutConfig(_WithPreset):
         "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor",
         "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
         "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches", "contact_law",
-        "band_row", "band_courses", "band_friction_factor", "pattern")
+        "band_row", "band_courses", "band_friction_factor", "pattern", "band")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -144,6 +144,9 @@ class CutConfig(_WithPreset):
     band_row: int | None = Field(None, ge=0, le=199, description=(
         "a run-stop band: its first course, counted from the bottom (the cut is at n_y // 2) [-]; none: no band"))
     band_courses: int = Field(2, ge=1, le=200, description="courses of the run-stop band [-]")
+    band: Literal["friction", "rib", "garter"] = Field("friction", description=(
+        "what the run-stop band is: courses of a yarn with more friction (band_friction_factor), or courses "
+        "knitted in rib or garter (the fabric's friction; stretched affinely) [-]"))
     band_friction_factor: float = Field(2.0, ge=0, le=10, description=(
         "the band's yarn friction over the fabric's: a contact touching a band course has this factor x mu "
         "during the laddering [-]"))
@@ -220,7 +223,9 @@ class CutConfig(_WithPreset):
     @classmethod
     def patterns_stretch_affinely(cls, data):
         """A pattern with purl stitches has no periodised stitch to tile: its knit is stretched affinely."""
-        if isinstance(data, dict) and data.get("pattern", "jersey") != "jersey" and "stretch_start" not in data:
+        knitted_band = isinstance(data, dict) and data.get("band", "friction") != "friction"
+        if isinstance(data, dict) and (data.get("pattern", "jersey") != "jersey" or knitted_band) \
+                and "stretch_start" not in data:
             data = {**data, "stretch_start": "affine"}
         return data
 
@@ -247,6 +252,14 @@ class CutConfig(_WithPreset):
         if self.pattern != "jersey" and self.stretch_start != "affine":
             raise ValueError(f"stretch_start: the periodised stitch is jersey's; a {self.pattern} knit is stretched "
                              "affinely (stretch_start affine)")
+        if self.band != "friction":
+            if self.band_row is None:
+                raise ValueError(f"band: a {self.band} band needs its first course (band_row)")
+            if self.stretch_start != "affine":
+                raise ValueError(f"stretch_start: a knit with a {self.band} band is stretched affinely "
+                                 "(stretch_start affine)")
+            if "band_friction_factor" in self.model_fields_set:
+                raise ValueError(f"band_friction_factor: a {self.band} band has the fabric's friction")
         if self.memory_peak_ratio is not None and self.natural_curvature == 0:
             raise ValueError("memory_peak_ratio: shapes the memory of natural_curvature > 0; the yarn has none")
         check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
@@ -282,7 +295,13 @@ class CutConfig(_WithPreset):
             natural_curvature=self.natural_curvature, memory_peak_ratio=self.memory_peak_ratio,
             material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
             contact_law=self.contact_law, pattern=self.pattern,
+            pattern_band=(self.band, self.band_row, self.band_courses) if self.knitted_band else None,
         )
+
+    @property
+    def knitted_band(self) -> bool:
+        """A run-stop band knitted in another pattern (not a band of friction)."""
+        return self.band_row is not None and self.band != "friction"
 
     def dynamics_settings(self):
         from knitlad.engine.contact import Counting
@@ -300,8 +319,8 @@ class CutConfig(_WithPreset):
             frame_every_s=None if self.frame_every_us is None else self.frame_every_us * 1e-6,
             stop_at_edge=self.stop_at_edge, loss_factor=self.loss_factor, loss_peak_hz=self.loss_peak_hz,
             air_drag=self.air_drag, stop_after_stitches=self.stop_after_stitches,
-            friction_band=None if self.band_row is None else (self.band_row, self.band_courses,
-                                                               self.band_friction_factor),
+            friction_band=None if self.band_row is None or self.knitted_band else (
+                self.band_row, self.band_courses, self.band_friction_factor),
         )
 
     def settings(self):

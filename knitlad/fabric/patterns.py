@@ -63,25 +63,61 @@ class KnitPattern:
         return table[np.mod(row, table.shape[0]), np.mod(column, table.shape[1])]
 
     def face(self, t: np.ndarray, row: int) -> np.ndarray:
-        """The face sign along course ``row`` at centreline parameter ``t`` (module docstring): stitch
-        (row, i) on the upper half of column i, stitch (row - 1, i) on its lower half, smoothed."""
-        t = np.asarray(t, dtype=float)
-        if self.plain:
-            return np.ones_like(t)
-        first = math.floor((t.min() + math.pi) / (2 * math.pi)) - 1
-        last = math.ceil((t.max() + math.pi) / (2 * math.pi)) + 1
-        columns = np.arange(first, last + 1)
-        upper, lower = self.stitch(row, columns), self.stitch(row - 1, columns)
-        # the sign piecewise, column by column: lower | upper | lower, switching at -pi/2, +pi/2 and +pi
-        points = np.column_stack([2 * math.pi * columns - math.pi / 2, 2 * math.pi * columns + math.pi / 2,
-                                  2 * math.pi * columns + math.pi]).ravel()
-        before = np.column_stack([lower, upper, lower]).ravel()
-        after = np.column_stack([upper, lower, np.append(lower[1:], lower[-1])]).ravel()
-        out = np.full(t.shape, float(before[0]))
-        for p, a, b in zip(points, before, after):
-            if a != b:
-                out += 0.5 * (b - a) * (1.0 + np.tanh((t - p) / FACE_SWITCH))
-        return out
+        """The face sign along course ``row`` at centreline parameter ``t`` (:func:`face_sign`)."""
+        return face_sign(self, t, row)
+
+
+@dataclass(frozen=True)
+class BandedPattern:
+    """A fabric of pattern ``base`` with the courses ``first`` to ``first + rows - 1`` (0: the bottom free
+    course) knitted in pattern ``band``: a run-stop band (hosiery's century-old device)."""
+
+    base: KnitPattern
+    band: KnitPattern
+    first: int
+    rows: int
+
+    @property
+    def name(self) -> str:
+        return f"{self.base.name} with a {self.band.name} band"
+
+    @property
+    def period(self) -> tuple[int, int]:
+        return self.base.period
+
+    @property
+    def plain(self) -> bool:
+        return self.base.plain and self.band.plain
+
+    def stitch(self, row, column):
+        row = np.asarray(row)
+        inside = (row >= self.first) & (row < self.first + self.rows)
+        return np.where(inside, self.band.stitch(row, column), self.base.stitch(row, column))
+
+    def face(self, t: np.ndarray, row: int) -> np.ndarray:
+        return face_sign(self, t, row)
+
+
+def face_sign(pattern, t: np.ndarray, row: int) -> np.ndarray:
+    """The face sign along course ``row`` at centreline parameter ``t`` (module docstring): stitch
+    (row, i) on the upper half of column i, stitch (row - 1, i) on its lower half, smoothed."""
+    t = np.asarray(t, dtype=float)
+    if pattern.plain:
+        return np.ones_like(t)
+    first = math.floor((t.min() + math.pi) / (2 * math.pi)) - 1
+    last = math.ceil((t.max() + math.pi) / (2 * math.pi)) + 1
+    columns = np.arange(first, last + 1)
+    upper, lower = pattern.stitch(row, columns), pattern.stitch(row - 1, columns)
+    # the sign piecewise, column by column: lower | upper | lower, switching at -pi/2, +pi/2 and +pi
+    points = np.column_stack([2 * math.pi * columns - math.pi / 2, 2 * math.pi * columns + math.pi / 2,
+                              2 * math.pi * columns + math.pi]).ravel()
+    before = np.column_stack([lower, upper, lower]).ravel()
+    after = np.column_stack([upper, lower, np.append(lower[1:], lower[-1])]).ravel()
+    out = np.full(t.shape, float(before[0]))
+    for p, a, b in zip(points, before, after):
+        if a != b:
+            out += 0.5 * (b - a) * (1.0 + np.tanh((t - p) / FACE_SWITCH))
+    return out
 
 
 PATTERNS: dict[str, KnitPattern] = {
@@ -97,3 +133,14 @@ def knit_pattern(name: str) -> KnitPattern:
         return PATTERNS[name]
     except KeyError:
         raise ValueError(f"unknown knit pattern {name!r}: one of {', '.join(PATTERNS)}") from None
+
+
+def fabric_pattern(name: str, band: tuple[str, int, int] | list | None = None) -> KnitPattern | BandedPattern:
+    """The pattern ``name``, with ``band`` = (its pattern, first course, courses) knitted in, if given."""
+    base = knit_pattern(name)
+    if band is None:
+        return base
+    band_name, first, rows = band
+    if int(rows) < 1:
+        raise ValueError(f"a band of {rows} courses: it needs at least one")
+    return BandedPattern(base, knit_pattern(band_name), int(first), int(rows))

@@ -105,6 +105,7 @@ class StretchSettings:
     contact_law: str = "linear"  # the contact's normal law (knitlad.engine.kernels.contact_law)
     memory_peak_ratio: float | None = None  # max/mean of (kappa_bar/kappa0)^2 (None: the scaled copy's own)
     pattern: str = "jersey"  # the knit's pattern (knitlad.fabric.patterns.PATTERNS)
+    pattern_band: tuple[str, int, int] | None = None  # (pattern, first course, courses) knitted in another pattern
 
     def __post_init__(self) -> None:
         if (self.lx_over_l0 is None) == (self.fx_target is None):
@@ -112,9 +113,9 @@ class StretchSettings:
         if self.natural_curvature > 0 and (self.start, self.edge) != ("tiled", "clamped"):
             raise ValueError("natural_curvature needs the tiled stretch and clamped ends: it is set in the "
                              "periodised stitch and tiled over the knit")
-        if self.pattern != "jersey" and self.start != "affine":
-            raise ValueError(f"pattern {self.pattern}: the periodised stitch is jersey's; this knit is stretched "
-                             "affinely (start='affine')")
+        if (self.pattern != "jersey" or self.pattern_band is not None) and self.start != "affine":
+            raise ValueError(f"pattern {self.pattern} (band {self.pattern_band}): the periodised stitch is "
+                             "jersey's; this knit is stretched affinely (start='affine')")
 
 
 @dataclass(frozen=True)
@@ -212,11 +213,12 @@ class KnitBox:
         self.lx = min(s.lx_over_l0, self.build_lx) if s.lx_over_l0 is not None else self.build_lx
         self.ly = s.ly_over_l0
         try:
+            band = None if s.pattern_band is None else s.pattern_band[0]
             lx = widest_fitting_width(self.lx, self.ly, m, s.nodes_per_stitch,
-                                      min_loop_overlap=build_loop_overlap(m, s.pattern), lx_min=MIN_BUILD_LX,
+                                      min_loop_overlap=build_loop_overlap(m, s.pattern, band), lx_min=MIN_BUILD_LX,
                                       pattern=s.pattern)
         except CourseTooWide:
-            if s.pattern != "jersey":
+            if s.pattern != "jersey" or s.pattern_band is not None:
                 raise
             # the thickest jersey yarns (d/l0 = 1/20): built where a stitch holds l0 at all; the first
             # relaxation pushes their touching loops apart (docs/history.md: peak overlap 0.005 d)
@@ -226,6 +228,7 @@ class KnitBox:
         self.knit = build_knit(KnitGeometry(
             n_x=s.n_x, n_y=s.n_y, l_x=self.lx * m.stitch_length, l_y=self.ly * m.stitch_length,
             nodes_per_stitch=s.nodes_per_stitch, material=m, edge=s.edge, pattern=s.pattern,
+            band=None if s.pattern_band is None else tuple(s.pattern_band),
         ), stretch_damping_ratio=STRETCH_AXIAL_DAMPING)
         self.sim = Simulation(self.knit.rods, contact=stretch_contact(s))
         self.gauge = KnitGauge(self.knit, m)
@@ -351,7 +354,8 @@ def check_whole(knit: StretchedKnit) -> None:
     periodised stitch's f_x = 0 curve, where a knit whose loops still hold each other is in tension
     (position control to l_x/l0 = 0.999 gave f_x^ini = -0.98 and every cell undone, exit 0)."""
     s = knit.settings
-    if knit.fx_ini > 0 or s.lx_over_l0 is None or s.pattern != "jersey":  # the f_x = 0 width is jersey's
+    if knit.fx_ini > 0 or s.lx_over_l0 is None or s.pattern != "jersey" or s.pattern_band is not None:
+        # the f_x = 0 width is jersey's
         return
     try:
         unloaded = unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material, s.sagitta_radius_d, s.contact_law)

@@ -449,8 +449,12 @@ def read_stretched_knit(path: str | Path):
         settings.setdefault("natural_curvature", 0.0)
         settings.setdefault("sagitta_radius_d", 0.0)  # knits stretched before the sagitta correction had none
         settings.setdefault("contact_law", "linear")  # and before the contact laws, the linear one
+        if settings.get("pattern_band") is not None:  # JSON has lists, the frozen settings tuples
+            settings["pattern_band"] = tuple(settings["pattern_band"])
         geometry = json.loads(f.attrs["geometry_json"])
         geometry["material"] = material
+        if geometry.get("band") is not None:
+            geometry["band"] = tuple(geometry["band"])
         stored = {name: f["model"][name][()] for name in RodModel._fields if name in f["model"]}
         # knits stored before cuts kept their pieces one yarn for the contact were never cut
         stored.setdefault("yarn_parent", np.arange(stored["yarn_start"].shape[0] - 1, dtype=np.int64))

@@ -10,7 +10,7 @@ import pytest
 import knitlad as kl
 from knitlad.engine.contact import ContactModel, make_contacts
 from knitlad.engine.kernels.contact import refresh_contacts, segment_distance
-from knitlad.fabric.patterns import FACE_SWITCH, KNIT, PATTERNS, PURL, KnitPattern, knit_pattern
+from knitlad.fabric.patterns import FACE_SWITCH, KNIT, PATTERNS, PURL, KnitPattern, fabric_pattern, knit_pattern
 from knitlad.fabric.scenes.knit import KnitGeometry, build_knit, build_loop_overlap, widest_fitting_width
 from knitlad.fabric.topology import piercings, threading_direction
 
@@ -113,3 +113,28 @@ def test_each_stitch_of_a_pattern_holds_l0_on_average(knit):
         x = knit.rods.state.x[knit.course_nodes(k)] * kl.units.LENGTH
         lengths.append(np.linalg.norm(np.diff(x, axis=0), axis=1).sum() / g.n_x)
     assert np.mean(lengths) == pytest.approx(L0, rel=2e-3)
+
+
+def test_a_band_of_rib_in_jersey_threads_its_own_courses_as_rib_and_the_rest_as_jersey():
+    """A jersey of 6 x 6 with courses 2 and 3 knitted in rib: the loops drawn through the heads of courses 2
+    and 3 thread as rib's columns say, every other as jersey's; the face of course 2's lower half (its
+    sinkers, on jersey's course 1) is jersey's."""
+    band = fabric_pattern("jersey", ("rib", 2, 2))
+    assert band.stitch(np.arange(6)[:, None], np.arange(2)).tolist() == [[1, 1], [1, 1], [1, -1], [1, -1], [1, 1],
+                                                                          [1, 1]]
+    overlap = build_loop_overlap(kl.NYLON, "jersey", "rib")
+    lx = widest_fitting_width(0.30, 0.25, kl.NYLON, 36, min_loop_overlap=overlap, pattern="jersey")
+    knit = build_knit(KnitGeometry(n_x=6, n_y=6, l_x=lx * L0, l_y=0.25 * L0, nodes_per_stitch=36,
+                                   band=("rib", 2, 2)))
+    for r in range(5):
+        for i in range(1, 5):
+            ring, arc = head_ring(knit, r, i), loop_arc(knit, r + 1, i)
+            assert piercings(ring, arc) == (2, 0), (r, i)
+            assert threading_direction(ring, arc) == -band.stitch(r, i), (r, i)
+    sinkers = 2 * math.pi * np.arange(6) + math.pi
+    assert band.face(sinkers, 2) == pytest.approx(1.0, abs=1e-12)
+
+
+def test_a_band_of_no_courses_is_refused():
+    with pytest.raises(ValueError, match="at least one"):
+        fabric_pattern("jersey", ("rib", 2, 0))

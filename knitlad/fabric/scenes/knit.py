@@ -34,6 +34,7 @@ How the course ends are held (``KnitGeometry.edge``):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -41,7 +42,7 @@ import numpy as np
 
 from knitlad.engine.state import Rods, Scene
 from knitlad.engine.units import NYLON, Material
-from knitlad.fabric.patterns import knit_pattern
+from knitlad.fabric.patterns import fabric_pattern, knit_pattern
 
 
 class CourseTooWide(ValueError):
@@ -64,12 +65,13 @@ THICK_LOOP_OVERLAP_D = 4.0
 PAPER_D_OVER_L0 = NYLON.diameter / NYLON.stitch_length
 
 
-def build_loop_overlap(material: Material, pattern: str = "jersey") -> float:
+def build_loop_overlap(material: Material, pattern: str = "jersey", band: str | None = None) -> float:
     """How far [m] the loops of a knit being built must reach past the next course (2 H - l_y), for
     :func:`widest_fitting_width`: jersey of the paper's yarn or finer, no demand (its builds as they
-    always were); thicker yarns THICK_LOOP_OVERLAP_D d, other patterns PATTERN_LOOP_OVERLAP_D d."""
+    always were); thicker yarns THICK_LOOP_OVERLAP_D d, other patterns (or bands of them)
+    PATTERN_LOOP_OVERLAP_D d."""
     d = material.diameter
-    if pattern != "jersey":
+    if pattern != "jersey" or band not in (None, "jersey"):
         return PATTERN_LOOP_OVERLAP_D * d
     if d / material.stitch_length <= PAPER_D_OVER_L0 * (1 + 1e-9):
         return -math.inf
@@ -91,6 +93,7 @@ class KnitGeometry:
     edge: str = "clamped"  # how the course ends are held: EDGES
     width: float = CRANE_A  # a: how far the head bulges sideways (Crane: 3/2)
     pattern: str = "jersey"  # which stitches are knit and which purl (knitlad.fabric.patterns)
+    band: tuple[str, int, int] | None = None  # (pattern, first course, courses) knitted in another pattern
 
     def __post_init__(self) -> None:
         if self.n_x < 1 or self.n_y < 1:
@@ -99,7 +102,7 @@ class KnitGeometry:
             raise ValueError(f"nodes_per_stitch must be >= 8, got {self.nodes_per_stitch}")
         if self.edge not in EDGES:
             raise ValueError(f"edge must be one of {', '.join(EDGES)}, got {self.edge!r}")
-        knit_pattern(self.pattern)
+        fabric_pattern(self.pattern, self.band)
         l0 = self.material.stitch_length
         if not 0 < self.l_x < l0 or not 0 < self.l_y < l0:
             raise ValueError("l_x and l_y must lie strictly between 0 and l0")
@@ -120,16 +123,18 @@ class KnitGeometry:
         x = (t + self.width * np.sin(2 * t)) * self.l_x / (2 * math.pi) + self.column_x(0)
         y = row * self.l_y + H * np.cos(t)
         z = self.c * np.cos(2 * t)
-        pattern = knit_pattern(self.pattern)
+        pattern = fabric_pattern(self.pattern, self.band)
         if not pattern.plain:
             z = z * pattern.face(t, row)
         return np.column_stack([x, y, z])
 
     def stitch_length_for(self, H: float, samples: int = 4000) -> float:
-        """Yarn length per stitch of the smooth curve: one stitch of jersey, the mean over a pattern's repeat."""
+        """Yarn length per stitch of the smooth curve: one stitch of jersey, the mean over a pattern's repeat
+        (a band's courses are knitted at the same loop height: their stitches hold a little more or less)."""
         columns, rows = knit_pattern(self.pattern).period
         t = np.linspace(0.0, 2 * math.pi * columns, samples * columns + 1)
-        total = sum(np.linalg.norm(np.diff(self.curve(t, r, H), axis=0), axis=1).sum() for r in range(rows))
+        plain = dataclasses.replace(self, band=None) if self.band else self
+        total = sum(np.linalg.norm(np.diff(plain.curve(t, r, H), axis=0), axis=1).sum() for r in range(rows))
         return float(total / (columns * rows))
 
     def loop_half_height(self, length: float | None = None) -> float:
