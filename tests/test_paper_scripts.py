@@ -59,5 +59,53 @@ def test_the_run_stop_band_table_says_whether_a_ladder_entered_and_crossed_the_b
     assert table.loc["a", "top_course"] == 10 and not table.loc["a", "entered_band"]
     assert table.loc["b", "top_course"] == 14 and table.loc["b", "crossed_band"]
     assert table.loc["a", "bottom_course"] == 6 and table.loc["a", "mu_band"] == pytest.approx(0.8)
-    points = study.by_point(table.reset_index()).set_index("factor")
-    assert points.loc[2.0, "crossed"] == 0 and points.loc[1.0, "crossed"] == 1 and points.loc[1.0, "knits"] == 1
+    points = study.by_point(table.reset_index()).set_index("band")
+    assert points.loc["friction x2", "crossed"] == 0 and points.loc["friction x1", "crossed"] == 1
+    assert points.loc["friction x1", "knits"] == 1
+
+
+def test_the_run_stop_band_table_reads_a_knitted_band_beside_the_plain_knit(tmp_path):
+    """A rib band (courses 11-12) that holds the ladder at 10 and the plain knit (no band_row) whose ladder
+    runs to 14: the plain knit is read where the band would be."""
+    import h5py
+
+    study = paper_script("run_stop_band")
+    (tmp_path / "jobs").mkdir()
+    rows = []
+    for job, top, band, row in (("rib", 10, "rib", 11), ("plain", 14, "friction", None)):
+        laddered = np.zeros((16, 16), dtype=bool)
+        laddered[6:top + 1, 8] = True
+        with h5py.File(tmp_path / "jobs" / f"{job}.h5", "w") as f:
+            f["final/laddered"] = laddered
+        rows.append({"job_id": job, "fx": 4.0, "fx_ini": 4.0, "band": band, "band_row": row, "band_courses": 2,
+                     "mu": 0.4, "band_friction_factor": 2.0, "n_lad_over_ny": (top - 5) / 16, "fx_fin": 2.0,
+                     "v_lad_over_cb": 0.3, "stop_reason": "arrested"})
+    pd.DataFrame(rows).to_csv(tmp_path / "summary.csv", index=False)
+    table = study.table(tmp_path).set_index("job_id")
+    assert table.loc["rib", "kind"] == "rib" and table.loc["rib", "mu_band"] == pytest.approx(0.4)
+    assert table.loc["plain", "kind"] == "none" and table.loc["plain", "band"] == "11-12"
+    assert not table.loc["rib", "crossed_band"] and table.loc["plain", "crossed_band"]
+
+
+def test_the_loose_to_jammed_table_averages_each_points_knits_and_counts_its_failures_apart():
+    study = paper_script("loose_to_jammed")
+    rows = []
+    for d, share in ((1 / 70, 4.0), (1 / 40, 8.0)):
+        for k, fx in enumerate((3.99, 4.01)):
+            rows.append({"d_over_l0": d, "fx_nominal": 4.0, "status": "ok", "fx_ini": fx, "lx_over_l0": 0.36,
+                         "lx_over_lx0": 1.1, "contacts_per_stitch": share, "n_lad_over_ny": 1.0 + 0.5 * k,
+                         "released_over_ny": 0.5, "v_lad_over_cb": 0.3, "fx_fin_crossed": 2.0, "reached_edge": k == 1})
+    rows.append({"d_over_l0": 1 / 25, "fx_nominal": 4.0, "status": "failed", "error": "OutOfReach"})
+    points = study.by_point(pd.DataFrame(rows)).set_index("l0_over_d")
+    assert list(points.index) == pytest.approx([70, 40, 25])  # loose to jammed
+    assert points.loc[70, "n_lad_over_ny"] == pytest.approx(1.25) and points.loc[70, "n_lad_over_ny_se"] == pytest.approx(0.25)
+    assert points.loc[40, "contacts_per_stitch"] == 8.0 and points.loc[70, "edge"] == 1
+    assert points.loc[25, "knits"] == 0 and points.loc[25, "failed"] == 1
+    assert "| 25 | - | 0 (1) |" in study.markdown(points.reset_index())
+
+
+def test_a_patterns_unloaded_width_is_where_its_loading_curve_turns_positive():
+    study = paper_script("pattern_curves")
+    curve = pd.DataFrame({"box_lx": [0.30, 0.31, 0.32, 0.33], "fx": [-2.0, -1.0, 1.0, 3.0]})
+    assert study.zero_crossing(curve) == pytest.approx(0.315)
+    assert np.isnan(study.zero_crossing(curve.assign(fx=[1.0, 2.0, 3.0, 4.0])))  # in tension from the build

@@ -1,8 +1,10 @@
-"""Does a run-stop band hold the ladder? A table from a sweep over the band's friction (configs/run_stop_band.yaml).
+"""Does a run-stop band hold the ladder? A table from a sweep over bands (configs/run_stop_band.yaml: the band's
+friction; configs/run_stop_rib_band.yaml: a band knitted in rib beside the plain knit).
 
     python scripts/paper/run_stop_band.py runs/run_stop_band [--csv FILE] [--png FILE]
 
-For each job: the band (its first course and courses, the factor on mu), f_x^ini, the damage n_lad/n_y, how
+For each job: the band (its first course and courses, what it is: friction x factor, rib, or none for the
+plain knit, read where the band would be), f_x^ini, the damage n_lad/n_y, how
 far the ladders reached above and below the cut (the highest and lowest course with an undone cell, from
 the job file's final ``laddered`` map), whether a ladder entered the band and whether one crossed it (an
 undone cell above its last course), f_x^fin and v_lad/c_b. Prints a markdown table; with ``--png`` draws
@@ -35,10 +37,16 @@ def table(folder: Path) -> pd.DataFrame:
         if job.get("status", "ok") != "ok":
             continue
         _, top, bottom = reach(folder / "jobs" / f"{job.job_id}.h5")
-        first, last = int(job.band_row), int(job.band_row + job.band_courses - 1)
+        kind = job.get("band", "friction")
+        if pd.isna(job.band_row):  # the plain knit beside a knitted band: where the band would be
+            kind, first = "none", int(summary.band_row.dropna().iloc[0])
+        else:
+            first = int(job.band_row)
+        last = first + int(job.band_courses) - 1
+        factor = job.band_friction_factor if kind == "friction" else 1.0
         out.append({"fx_nominal": job.get("fx_nominal", job.fx), "fx_ini": job.fx_ini, "band": f"{first}-{last}",
-                    "factor": job.band_friction_factor,
-                    "mu_band": job.mu * job.band_friction_factor, "n_lad_over_ny": job.n_lad_over_ny,
+                    "kind": kind if kind != "friction" else f"friction x{factor:g}", "factor": factor,
+                    "mu_band": job.mu * factor, "n_lad_over_ny": job.n_lad_over_ny,
                     "top_course": top, "bottom_course": bottom, "entered_band": top >= first,
                     "crossed_band": top > last, "fx_fin": job.fx_fin, "v_lad_over_cb": job.v_lad_over_cb,
                     "stop_reason": job.stop_reason, "job_id": job.job_id})
@@ -46,12 +54,13 @@ def table(folder: Path) -> pd.DataFrame:
 
 
 def by_point(df: pd.DataFrame) -> pd.DataFrame:
-    """Per (nominal f_x, factor): the knits, how many crossed the band, n_lad/n_y and v_lad/c_b as mean and
+    """Per (nominal f_x, band: none, friction x factor, or a knitted pattern): the knits, how many crossed the
+    band, n_lad/n_y and v_lad/c_b as mean and
     standard error over the knits (v over the runs that have a front fit)."""
     rows = []
-    for (fx, factor), g in df.groupby(["fx_nominal", "factor"]):
+    for (fx, kind), g in df.groupby(["fx_nominal", "kind"]):
         v = g.v_lad_over_cb.dropna()
-        rows.append({"fx_nominal": fx, "factor": factor, "knits": len(g), "crossed": int(g.crossed_band.sum()),
+        rows.append({"fx_nominal": fx, "band": kind, "knits": len(g), "crossed": int(g.crossed_band.sum()),
                      "n_lad_over_ny": g.n_lad_over_ny.mean(),
                      "n_lad_se": g.n_lad_over_ny.std(ddof=1) / np.sqrt(len(g)) if len(g) > 1 else np.nan,
                      "v_lad_over_cb": v.mean() if len(v) else np.nan,
@@ -72,14 +81,14 @@ def draw(folder: Path, df: pd.DataFrame, png: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    df = df.drop_duplicates(["fx_nominal", "factor"])  # one knit per point: the first
+    df = df.drop_duplicates(["fx_nominal", "kind"])  # one knit per point: the first
     fig, axes = plt.subplots(1, len(df), figsize=(2.2 * len(df), 2.8), squeeze=False)
     for ax, (_, row) in zip(axes[0], df.iterrows()):
         laddered, _, _ = reach(folder / "jobs" / f"{row.job_id}.h5")
         ax.imshow(laddered, origin="lower", cmap="Greys", vmin=0, vmax=1)
         first, last = (int(v) for v in row.band.split("-"))
         ax.axhspan(first - 0.5, last + 0.5, color="tab:orange", alpha=0.35, lw=0)
-        ax.set_title(f"f_x {row.fx_ini:.1f}, x{row.factor:g}", fontsize=8)
+        ax.set_title(f"f_x {row.fx_ini:.1f}, {row.kind}", fontsize=8)
         ax.set_xticks([])
         ax.set_yticks([])
     fig.suptitle("undone cells (black) and the band (orange)", fontsize=9)
