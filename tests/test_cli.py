@@ -39,7 +39,7 @@ def run(*args, cwd=None):
         (["cut", "--pattern", "purl"], "--pattern"),
         (["cut", "--pattern", "rib", "--stretch-start", "tiled"], "stretch_start"),
         (["cut", "--band", "rib"], "band_row"),
-        (["cut", "--band", "rib", "--band-row", "30", "--band-friction-factor", "3"], "band_friction_factor"),
+        (["cut", "--band", "rib", "--band-row", "8", "--stretch-start", "tiled"], "stretch_start"),
         (["loop", "--preset", "exact"], "--preset"),
         (["cycle", "--lx", "0.38", "--lx-max", "0.36"], "lx_max"),
         (["cycle"], "--lx-max"),

@@ -146,7 +146,8 @@ class CutConfig(_WithPreset):
     band_courses: int = Field(2, ge=1, le=200, description="courses of the run-stop band [-]")
     band: Literal["friction", "rib", "garter"] = Field("friction", description=(
         "what the run-stop band is: courses of a yarn with more friction (band_friction_factor), or courses "
-        "knitted in rib or garter (the fabric's friction; stretched affinely) [-]"))
+        "knitted in rib or garter (the fabric's friction: band_friction_factor is not used; stretched "
+        "affinely) [-]"))
     band_friction_factor: float = Field(2.0, ge=0, le=10, description=(
         "the band's yarn friction over the fabric's: a contact touching a band course has this factor x mu "
         "during the laddering [-]"))
@@ -258,8 +259,6 @@ class CutConfig(_WithPreset):
             if self.stretch_start != "affine":
                 raise ValueError(f"stretch_start: a knit with a {self.band} band is stretched affinely "
                                  "(stretch_start affine)")
-            if "band_friction_factor" in self.model_fields_set:
-                raise ValueError(f"band_friction_factor: a {self.band} band has the fabric's friction")
         if self.memory_peak_ratio is not None and self.natural_curvature == 0:
             raise ValueError("memory_peak_ratio: shapes the memory of natural_curvature > 0; the yarn has none")
         check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
