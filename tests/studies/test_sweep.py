@@ -346,12 +346,15 @@ def test_job_files_of_another_code_are_kept_counted_and_rerun_on_request(tmp_pat
 
 
 def test_every_example_and_reference_sweep_config_validates():
-    """configs/*.yaml (the examples) and docs/reference/*.yaml (the studies' sweeps) load and expand."""
+    """configs/*.yaml (the examples) and docs/reference/*.yaml (the studies' sweeps) load and expand, and each
+    job's resolved parameters (every field, defaults too) validate again as the runner reads them."""
     paths = sorted((ROOT / "configs").glob("*.yaml")) + sorted((ROOT / "docs" / "reference").glob("*.yaml"))
     assert len(paths) >= 15
     for path in paths:
         _, jobs = load_sweep(path)
         assert jobs, path
+        for job in jobs:
+            job.scene_config()
 
 
 def test_a_mistyped_key_says_which_field_it_resembles_and_every_mistake_is_said(tmp_path):
