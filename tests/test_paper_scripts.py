@@ -93,13 +93,14 @@ def test_the_loose_to_jammed_table_averages_each_points_knits_and_counts_its_fai
     for d, share in ((1 / 70, 4.0), (1 / 40, 8.0)):
         for k, fx in enumerate((3.99, 4.01)):
             rows.append({"d_over_l0": d, "fx_nominal": 4.0, "status": "ok", "fx_ini": fx, "lx_over_l0": 0.36,
-                         "lx_over_lx0": 1.1, "contacts_per_stitch": share, "n_lad_over_ny": 1.0 + 0.5 * k,
+                         "lx0_over_l0": 0.33,
+                         "lx_over_lx0": 1.1, "n_lad_over_ny": 1.0 + 0.5 * k,
                          "released_over_ny": 0.5, "v_lad_over_cb": 0.3, "fx_fin_crossed": 2.0, "reached_edge": k == 1})
     rows.append({"d_over_l0": 1 / 25, "fx_nominal": 4.0, "status": "failed", "error": "OutOfReach"})
     points = study.by_point(pd.DataFrame(rows)).set_index("l0_over_d")
     assert list(points.index) == pytest.approx([70, 40, 25])  # loose to jammed
     assert points.loc[70, "n_lad_over_ny"] == pytest.approx(1.25) and points.loc[70, "n_lad_over_ny_se"] == pytest.approx(0.25)
-    assert points.loc[40, "contacts_per_stitch"] == 8.0 and points.loc[70, "edge"] == 1
+    assert points.loc[70, "edge"] == 1
     assert points.loc[25, "knits"] == 0 and points.loc[25, "failed"] == 1
     assert "| 25 | - | 0 (1) |" in study.markdown(points.reset_index())
 

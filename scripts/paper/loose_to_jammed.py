@@ -4,52 +4,25 @@
 
 Per (d/l0, nominal f_x^ini), over the stretched knits of the point (mean +- standard error): f_x^ini, the
 knit's l_x/l0 and l_x/l_x0 (l_x0 the periodised stitch's f_x = 0 width at the knit's l_y, its unloaded
-width), the touching pairs per stitch in the stretched knit (:func:`contacts_per_stitch`), n_lad/n_y, the cells released into loaded
-courses, v_lad/c_b and f_x^fin of the courses the ladder crossed (the paper's post-arrest tension, its
-reading of f_thr). Prints a markdown table.
+width, also printed per d/l0), n_lad/n_y, the cells released into loaded courses, v_lad/c_b and f_x^fin
+of the courses the ladder crossed (the paper's post-arrest tension, its reading of f_thr). Prints a
+markdown table.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
-
-import h5py
 
 import numpy as np
 import pandas as pd
 
-from knitlad.engine.simulation import Simulation
 from knitlad.experiments.config import material_for
-from knitlad.fabric.preparation import stretch_contact, unloaded_width
-from knitlad.io.hdf5 import read_stretched_knit
-
-def contacts_per_stitch(knit) -> float:
-    """Touching yarn-yarn pairs per stitch in the stretched knit (its contact model, mu = 0): a crossing of
-    two yarns is one pair; where the loops wrap each other, as in a jammed knit, a line of them."""
-    sim = Simulation(knit.knit.rods.copy(), contact=stretch_contact(knit.settings))
-    sim.compute_forces()
-    g = knit.knit.geometry
-    return len(sim.contact_pairs().overlap_m) / (g.n_x * g.n_y)
-
-
-def stretched_knits(folder: Path) -> dict[tuple[float, float], Path]:
-    """The sweep's stretched knits by (target f_x, d/l0), read from their settings (their file names hash
-    the code that made them as well)."""
-    out = {}
-    for path in (folder / "stretched").glob("*.h5"):
-        with h5py.File(path, "r") as f:
-            s = json.loads(f.attrs["settings_json"])
-        if s.get("fx_target") is not None:
-            m = s["material"]
-            out[(round(s["fx_target"], 6), round(m["diameter"] / m["stitch_length"], 6))] = path
-    return out
+from knitlad.fabric.preparation import unloaded_width
 
 
 def table(folder: Path) -> pd.DataFrame:
     summary = pd.read_csv(folder / "summary.csv")
-    knits = stretched_knits(folder)
     rows = []
     for _, job in summary.iterrows():
         d_l0 = float(job.d_over_l0)
@@ -59,10 +32,8 @@ def table(folder: Path) -> pd.DataFrame:
         if job.status == "ok":
             m = material_for(d_l0)
             l_x0 = unloaded_width(float(job.ly), int(job.resolution), m, float(job.sagitta_radius))
-            path = knits.get((round(float(job.fx), 6), round(m.diameter / m.stitch_length, 6)))
-            contacts = contacts_per_stitch(read_stretched_knit(path)) if path is not None else np.nan
             row.update(fx_ini=job.fx_ini, lx_over_l0=job.lx_over_l0, lx0_over_l0=l_x0,
-                       lx_over_lx0=job.lx_over_l0 / l_x0, contacts_per_stitch=contacts, n_lad_over_ny=job.n_lad_over_ny,
+                       lx_over_lx0=job.lx_over_l0 / l_x0, n_lad_over_ny=job.n_lad_over_ny,
                        released_over_ny=job.n_lad_released_over_ny, v_lad_over_cb=job.v_lad_over_cb,
                        fx_fin_crossed=job.fx_fin_crossed, reached_edge=bool(job.reached_edge))
         else:
@@ -77,7 +48,7 @@ def by_point(df: pd.DataFrame) -> pd.DataFrame:
     for (d_l0, fx), g in df.groupby(["d_over_l0", "fx_nominal"]):
         ok = g[g.status == "ok"]
         row = {"l0_over_d": 1 / d_l0, "fx_nominal": fx, "knits": int(len(ok)), "failed": int(len(g) - len(ok))}
-        for name in ("fx_ini", "lx_over_l0", "lx_over_lx0", "contacts_per_stitch", "n_lad_over_ny", "released_over_ny",
+        for name in ("fx_ini", "lx_over_l0", "lx0_over_l0", "lx_over_lx0", "n_lad_over_ny", "released_over_ny",
                      "v_lad_over_cb", "fx_fin_crossed"):
             values = ok[name].dropna() if name in ok else pd.Series(dtype=float)
             row[name] = values.mean() if len(values) else np.nan
@@ -94,11 +65,12 @@ def markdown(points: pd.DataFrame) -> str:
             return "-"
         return f"{mean:.{digits}f}" + (f" +- {se:.{digits}f}" if np.isfinite(se) else "")
 
-    lines = ["| l0/d | f_x^ini | knits (failed) | l_x/l0 | l_x/l_x0 | contacts per stitch | n_lad/n_y | released/n_y "
+    lines = ["| l0/d | f_x^ini | knits (failed) | l_x/l0 | l_x0/l0 | l_x/l_x0 | n_lad/n_y | released/n_y "
              "| v_lad/c_b | f_x^fin crossed | edge |", "|" + "---|" * 11]
     for _, r in points.iterrows():
-        lines.append(f"| {r.l0_over_d:.0f} | {pm(r, 'fx_ini')} | {int(r.knits)} ({int(r.failed)}) | {pm(r, 'lx_over_l0', 3)} "
-                     f"| {pm(r, 'lx_over_lx0', 3)} | {pm(r, 'contacts_per_stitch', 1)} | {pm(r, 'n_lad_over_ny')} "
+        lines.append(f"| {r.l0_over_d:.0f} | {pm(r, 'fx_ini')} | {int(r.knits)} ({int(r.failed)}) "
+                     f"| {pm(r, 'lx_over_l0', 3)} | {pm(r, 'lx0_over_l0', 3)} "
+                     f"| {pm(r, 'lx_over_lx0', 3)} | {pm(r, 'n_lad_over_ny')} "
                      f"| {pm(r, 'released_over_ny')} | {pm(r, 'v_lad_over_cb', 3)} | {pm(r, 'fx_fin_crossed')} "
                      f"| {int(r.edge)} |")
     return "\n".join(lines)
@@ -112,7 +84,7 @@ def plot(points: pd.DataFrame, png: Path) -> None:
 
     fig, axes = plt.subplots(1, 4, figsize=(15, 3.6))
     names = [("n_lad_over_ny", "n_lad/n_y"), ("v_lad_over_cb", "v_lad/c_b"), ("fx_fin_crossed", "f_x^fin (crossed)"),
-             ("contacts_per_stitch", "contacts per stitch")]
+             ("lx_over_lx0", "l_x/l_x0")]
     for (name, label), ax in zip(names, axes):
         for fx, g in points.groupby("fx_nominal"):
             ax.errorbar(1 / g.l0_over_d, g[name], yerr=g[name + "_se"], marker="o", capsize=3,
