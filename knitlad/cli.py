@@ -576,6 +576,73 @@ def snag(
         f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/snag.csv, snag.png, ladder.h5, spatio_temporal.png")
 
 
+@app.command()
+@config_options(_config.ResistanceConfig, exclude=("n_x", "n_y"))
+def resistance(
+    stitches: str = typer.Option("16", "--stitches", help="Fabric size: N (N x N) or NXxNY.", rich_help_panel=EXPERIMENT_PANEL),
+    out: str = typer.Option(None, "--out", help="Output folder; default runs/resistance-<time>.", rich_help_panel=OUTPUT_PANEL),
+    json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object.", rich_help_panel=OUTPUT_PANEL),
+    options: dict = None,
+) -> None:
+    """A ladder-resistance test of a knit design: a snag at --fx (default 4), then the paper's cut at each of
+    --tensions (default 2, 4 and 8); the threshold is bracketed by the series.
+
+    The design is the knit's --pattern, its band (--band, --band-row), --d-over-l0 and --mu. Writes
+    resistance.h5 (the series, the snag's curve, the pictured ladder's run file), resistance.csv (the series)
+    and resistance_report.png (one page: the design, the snag, damage and velocity against tension, the
+    threshold, the arrested ladder).
+    """
+    from knitlad.experiments.resistance import run_resistance
+    from knitlad.fabric.preparation import stretch
+    from knitlad.io.hdf5 import write_resistance_result
+    from knitlad.studies.registry import draw_resistance_report
+
+    cfg, out_dir = _knit_run(_config.ResistanceConfig, options, stitches, 4.0, out, "resistance")
+    if (out_dir / "resistance.h5").exists():
+        fail(f"--out {out_dir}: holds an earlier resistance test (resistance.h5); choose another folder")
+    _say_if_compiling()
+    progress = _StageProgress()
+    knits = {}
+
+    def stretch_for(one):  # the snag and the cut at its tension share one stretched knit
+        key = (one.fx, one.lx)
+        if key not in knits:
+            knits[key] = stretch(one.stretch_settings(), progress)
+        return knits[key]
+
+    result = _experiment_or_exit(lambda: run_resistance(cfg, stretch_for, progress), progress)
+    progress.close(finished=True)
+    summary = result.summary()
+
+    def write() -> None:
+        h5 = write_resistance_result(out_dir / "resistance.h5", result, result.cuts[0].settings.stretch.material,
+                                     cfg.model_dump())
+        _write_table(out_dir / "resistance.csv", result.table(), (
+            "fx_target", "fx_ini", "n_lad_over_ny", "released_over_ny", "v_lad_over_cb", "fx_fin_crossed",
+            "reached_edge"))
+        draw_resistance_report(result, h5, out_dir / "resistance_report.png")
+
+    _files_or_exit(write, summary)
+    if json_out:
+        typer.echo(_json(summary))
+        return
+    lo, hi = result.threshold_bracket()
+    lines = [f"{cfg.n_x} x {cfg.n_y} {cfg.pattern}"
+             + ("" if cfg.band_row is None else f" with a {cfg.band} band from course {cfg.band_row}")
+             + f", d/l0 = {cfg.d_over_l0:.4g}, mu = {cfg.mu}, {cfg.resolution} nodes/stitch",
+             f"  snag at f_x^ini {summary['snag_fx_ini']:.2f}: peak pull-out force {summary['snag_peak_force_N']:.3f} N, "
+             + (f"broke after {summary['snag_pull_at_break_mm']:.2f} mm, n_lad/n_y {summary['snag_n_lad_over_ny']:.2f}"
+                if summary["snag_broke"] else "no break")]
+    for row in result.table():
+        lines.append(f"  cut at f_x^ini {row[1]:.2f}: n_lad/n_y {row[2]:.2f} ({row[3]:.2f} released), "
+                     f"v_lad/c_b {row[4]:.3f}, f_x^fin crossed {row[5]:.2f}" + (", reached an edge" if row[6] else ""))
+    lines.append(f"  threshold: between {lo:.2f} and {hi:.2f}" + ("" if summary["monotonic"] else
+                                                                   " (the series is not monotonic)"))
+    lines.append(f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/resistance.h5, resistance.csv, "
+                 "resistance_report.png")
+    typer.echo("\n".join(lines))
+
+
 def _files_or_exit(write, summary: dict):
     """``write()``'s result; on an OSError (a full disk) the summary on stdout, the failure in one line, exit 1."""
     try:

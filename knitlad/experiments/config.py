@@ -459,6 +459,26 @@ class SnagConfig(CutConfig):
                             weak_point_N=self.weak_point_force, row=self.snag_row, column=self.snag_column)
 
 
+class ResistanceConfig(SnagConfig):
+    """A ladder-resistance test of a knit design (``knitlad resistance``; knitlad.experiments.resistance): the
+    snag at ``fx`` (or ``lx``), then the paper's cut at each of ``tensions``; the design is the knit's
+    pattern, band, d/l0 and mu, every other setting as for ``knitlad cut``."""
+
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ()
+    tensions: list[float] = Field([2.0, 4.0, 8.0], min_length=2, max_length=12, description=(
+        "the cut series' f_x^ini, force control (repeat the option) [-]: the damage and velocity against "
+        "tension, and the threshold bracketed between the highest that does not ladder and the lowest that does"))
+
+    @model_validator(mode="after")
+    def tensions_in_range(self) -> "ResistanceConfig":
+        for k, fx in enumerate(self.tensions):
+            if not 0 < fx <= 40:
+                raise ValueError(f"tensions[{k}]: {fx} is not a tension f_x^ini in (0, 40]")
+        if len(set(self.tensions)) != len(self.tensions):
+            raise ValueError("tensions: a tension is given twice")
+        return self
+
+
 class LoopConfig(_WithPreset):
     """One single-loop run (``knitlad loop``, paper Fig. 5b,c)."""
 

@@ -33,3 +33,10 @@ PRESET_HELP = (
     "high, about 2 x fast's cost); accurate (96, the same: tension -3 to 0 %, width within 0.0003 l0, v_lad "
     "-4 to -8 % at low tension, +2 % at high, stepping at 0.7 x its stability limit: about 7 x fast's cost) [-]"
 )
+
+# each preset's error against the converged reference, in one line (reports; docs/accuracy.md)
+PRESET_ERRORS = {
+    "fast": "v_lad/c_b -9 to -14 %, tension at fixed geometry +33 to +136 %",
+    "default": "v_lad/c_b -12 to -18 % at low tension, +7 % at 13.6; tension at fixed geometry -3 to +6 %",
+    "accurate": "v_lad/c_b -4 to -8 % at low tension, +2 % at 13.6; tension at fixed geometry -3 to 0 %",
+}

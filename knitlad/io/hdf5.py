@@ -249,6 +249,8 @@ RUN_UNITS = {
     "obstacles/kind": "1", "obstacles/direction": "1", "obstacles/radius": "m", "obstacles/points": "m",
     "cycle/readings": "cycle, leg (1 loading, 0 hold, -1 unloading), s, l0 (the box's l_x), f0 (f_x)",
     "snag/pull": "m", "snag/force": "N",
+    "resistance/tensions": ("per cut: target f_x^ini (f0), f_x^ini (f0), n_lad/n_y (1), released cells / n_y (1), "
+                            "v_lad/c_b (1), f_x^fin of the crossed courses (f0), reached an edge course (1/0)"),
     "tensile/readings": ("leg (1 loading, 0 hold, -1 unloading), s, l0 (the box's l_x, l_y), l0 (the knit's l_x, "
                          "l_y), f0 (f_x per course, f_y per column)"),
     # the energy ledger at each observation (knitlad.engine.dissipation.EnergyLedger)
@@ -360,6 +362,20 @@ def write_snag_result(path: str | Path, result, material, config: dict, compress
     if result.ladder is None:
         return write_record(path, attrs, datasets=data)
     return write_ladder_result(path, result.ladder, compression=compression, attrs=attrs, datasets=data)
+
+
+def write_resistance_result(path: str | Path, result, material, config: dict, compression: str | None = "gzip",
+                            attrs: dict | None = None) -> Path:
+    """A ladder-resistance test's file (:class:`knitlad.experiments.resistance.ResistanceResult`): its summary as
+    ``resistance_*`` attributes, the cut series (``resistance/tensions``), the snag's pull-out curve, the config,
+    the scales and the run file of the ladder the report shows (``knitlad render`` draws it)."""
+    attrs = {**{f"resistance_{k}": v for k, v in result.summary().items()}, **scale_attributes(material),
+             "resistance_config_json": json.dumps(config, default=str), **(attrs or {})}
+    data = {"resistance/tensions": result.table(), "snag/pull": result.snag.pull_m, "snag/force": result.snag.force_N}
+    ladder = result.pictured()
+    if ladder is None:
+        return write_record(path, attrs, datasets=data)
+    return write_ladder_result(path, ladder, compression=compression, attrs=attrs, datasets=data)
 
 
 def write_record(path: str | Path, attrs: dict, datasets: dict | None = None) -> Path:

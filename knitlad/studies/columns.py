@@ -166,7 +166,26 @@ SNAG = {
     "reached_edge": ("-", "the ladder reached an edge course"),
 }
 
-RESULTS = {"ladder": LADDER, "cycle": CYCLE, "tensile": TENSILE, "snag": SNAG, "loop": LOOP, "stitch": STITCH}
+RESISTANCE = {
+    "design_pattern": ("-", "the knit's pattern"),
+    "design_band": ("-", "the run-stop band: friction, rib or garter (none: no band)"),
+    "design_d_over_l0": ("1", "the yarn's diameter over the stitch length"),
+    "design_mu": ("1", "the yarn-yarn friction coefficient"),
+    "snag_peak_force_N": ("N", "the snag's largest pull-out force"),
+    "snag_broke": ("-", "the yarn broke before the pin's max_pull_mm"),
+    "snag_pull_at_break_mm": ("mm", "the pin's travel when the yarn broke (NaN: no break)"),
+    "snag_n_lad_over_ny": ("1", "the snag's ladder: undone cells over n_y, counted from the break"),
+    "fx_thr_below": ("f0", "the highest f_x^ini of the series whose cut did not ladder (NaN: every one did)"),
+    "fx_thr_above": ("f0", "the lowest f_x^ini of the series whose cut laddered (NaN: none did)"),
+    "monotonic": ("-", "no cut laddered below a tension whose cut held"),
+    "n_lad_over_ny_lowest": ("1", "the damage of the cut at the lowest tension"),
+    "n_lad_over_ny_highest": ("1", "the damage of the cut at the highest tension"),
+    "v_lad_over_cb_highest": ("c_b", "the ladder's velocity at the highest tension"),
+    "fx_fin_crossed_highest": ("f0", "f_x^fin of the courses the ladder crossed, at the highest tension"),
+}
+
+RESULTS = {"ladder": LADDER, "cycle": CYCLE, "tensile": TENSILE, "snag": SNAG, "resistance": RESISTANCE, "loop": LOOP,
+           "stitch": STITCH}
 
 
 def unit_of(description: str) -> str:

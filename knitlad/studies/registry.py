@@ -17,7 +17,15 @@ from typing import Callable
 
 from pydantic import BaseModel
 
-from knitlad.experiments.config import CutConfig, CycleConfig, LoopConfig, SnagConfig, StitchConfig, TensileConfig
+from knitlad.experiments.config import (
+    CutConfig,
+    CycleConfig,
+    LoopConfig,
+    ResistanceConfig,
+    SnagConfig,
+    StitchConfig,
+    TensileConfig,
+)
 
 
 @dataclass(frozen=True)
@@ -130,6 +138,47 @@ def run_snag_job(cfg: SnagConfig, output, folder: Path | None = None, progress=N
     return result.summary(), write
 
 
+def run_resistance_job(cfg: ResistanceConfig, output, folder: Path | None = None, progress=None):
+    """A ladder-resistance test (`knitlad resistance`): its file holds the cut series, the snag's curve and
+    the pictured ladder's run file; its one-page report is drawn beside it (``<job>_report.png``)."""
+    from knitlad.experiments.resistance import run_resistance
+    from knitlad.fabric.preparation import stretch
+    from knitlad.io.hdf5 import write_resistance_result
+    from knitlad.io.knit_cache import cached_stretch
+
+    def stretch_for(one):
+        if folder is None:
+            return stretch(one.stretch_settings(), progress)
+        return cached_stretch(one.stretch_settings(), Path(folder) / "stretched", stretch, progress)[0]
+
+    result = run_resistance(cfg, stretch_for, progress)
+
+    def write(path: Path, record: dict) -> None:
+        write_resistance_result(path, result, result.cuts[0].settings.stretch.material, cfg.model_dump(),
+                                compression=None if output.compression == "none" else output.compression,
+                                attrs=record)
+        draw_resistance_report(result, path, path.with_name(f"{path.stem}_report.png"))
+
+    return result.summary(), write
+
+
+def draw_resistance_report(result, h5: Path, png: Path) -> Path:
+    """The report of ``result`` with a front view of the last frame of the ladder its file ``h5`` holds."""
+    import tempfile
+
+    from knitlad.viz.plots import resistance_report
+    from knitlad.viz.render import Run, render_run
+
+    if result.pictured() is None:
+        return resistance_report(result, png)
+    run, f = Run.open(h5)
+    last = float(run.times_s[-1])
+    f.close()
+    with tempfile.TemporaryDirectory() as tmp:
+        picture = render_run(h5, tmp, times_s=[last], views=("front",), size=(1400, 700))[-1]
+        return resistance_report(result, png, picture)
+
+
 def _attributes_only(result):
     """A reduced model's summary, and a writer of a file of attributes (summary, settings, scales)."""
     from knitlad.io.hdf5 import scale_attributes, write_record
@@ -182,6 +231,13 @@ SCENES: dict[str, SweepScene] = {
         "break_column", "pin_work_J", "friction_before_break_J", "ladder_released_J", "fx_ini", "n_lad_over_ny",
         "v_lad_over_cb", "fx_fin", "reached_edge", "wall_s", "job_wall_s"),
         "`knitlad snag`: a pin pulls a loop out until the yarn breaks; the ladder follows", stretch_of),
+    "resistance": SweepScene(ResistanceConfig, run_resistance_job, (
+        "design_pattern", "design_band", "design_d_over_l0", "design_mu", "snag_peak_force_N", "snag_broke",
+        "snag_pull_at_break_mm", "snag_n_lad_over_ny", "fx_thr_below", "fx_thr_above", "monotonic",
+        "n_lad_over_ny_lowest", "n_lad_over_ny_highest", "v_lad_over_cb_highest", "fx_fin_crossed_highest",
+        "wall_s", "job_wall_s"),
+        "`knitlad resistance`: a snag, then the cut at a series of tensions: a knit design's ladder resistance",
+        stretch_of),
     "loop": SweepScene(LoopConfig, run_loop_job, (
         "tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before", "steps",
         "nodes", "lx_over_l0", "lx_end_over_l0", "climb_over_ly", "wall_s", "job_wall_s"),

@@ -6,6 +6,7 @@ Every figure is written atomically (temporary file, then rename).
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -445,3 +446,74 @@ def final_tension_plot(df, path: str | Path) -> Path:
     top = float(df["fx_ini"].max())
     ax.plot([0, top], [0, top], "k:", lw=0.8, label=f"{symbol('fx_fin')} = {symbol('fx_ini')}")
     return _labelled(fig, ax, symbol("fx_ini"), symbol("fx_fin"), "tension after arrest (paper Fig. 3f)", path)
+
+
+def resistance_report(result, path: str | Path, picture: str | Path | None = None) -> Path:
+    """One page of a ladder-resistance test (:class:`knitlad.experiments.resistance.ResistanceResult`): the
+    design and what its numbers are worth, the snag's pull-out curve, the damage and the velocity against
+    f_x^ini with the threshold bracket, and ``picture`` (a render of the arrested ladder), if given."""
+    from knitlad.experiments.resistance import LADDERING_ONSET_CELLS
+    from knitlad.fabric.presets import PRESET_ERRORS
+
+    plt = _pyplot()
+    fig = plt.figure(figsize=(11, 8.5))
+    grid = fig.add_gridspec(2, 3, height_ratios=[1, 1.15], width_ratios=[1.25, 1, 1.1])
+    design, row, table = result.design, result.summary(), result.table()
+    lo, hi = result.threshold_bracket()
+    band = "no band" if design["band"] == "none" else f"a {design['band']} band from course {design['band_row']}"
+    if np.isfinite(lo) and np.isfinite(hi):
+        threshold = f"between {lo:.2f} and {hi:.2f}"
+    elif np.isfinite(hi):
+        threshold = f"below {hi:.2f} (every tension laddered)"
+    elif np.isfinite(lo):
+        threshold = f"above {lo:.2f} (no tension laddered)"
+    else:
+        threshold = "no cut run"
+    snag_line = (f"broke after {row['snag_pull_at_break_mm']:.2f} mm" if row["snag_broke"] else "no break")
+    text = [f"knit: {design['n_x']} x {design['n_y']} {design['pattern']}, {band}",
+            f"yarn: d/l0 = {design['d_over_l0']:.4g}, mu = {design['mu']}",
+            f"preset: {design['preset']} ({design['resolution']} nodes/stitch); its error:",
+            *textwrap.wrap(PRESET_ERRORS.get(design["preset"], "not measured"), 44, initial_indent="  ",
+                           subsequent_indent="  "),
+            "",
+            f"snag at f_x^ini {row['snag_fx_ini']:.2f}:",
+            f"  peak pull-out force {row['snag_peak_force_N']:.3f} N, {snag_line}",
+            f"threshold f_x^thr: {threshold}" + ("" if row["monotonic"] else " (not monotonic)"),
+            f"  (a cut ladders when it undoes {LADDERING_ONSET_CELLS} cells)",
+            "one knit per tension: one run scatters",
+            "  by about 20 % at low tension"]
+    ax = fig.add_subplot(grid[0, 0])
+    ax.axis("off")
+    ax.text(0, 1, "\n".join(text), va="top", fontsize=7, family="monospace", transform=ax.transAxes)
+    ax.set_title("the design", fontsize=9, loc="left")
+    ax = fig.add_subplot(grid[0, 1])
+    snag = result.snag
+    ax.plot(np.asarray(snag.pull_m) * 1e3, snag.force_N, lw=1.2)
+    if snag.broke and len(snag.pull_m) > 1:
+        ax.plot(snag.pull_m[-2] * 1e3, snag.force_N[-2], "x", ms=8, color="C3", label="the yarn breaks")
+        ax.legend(fontsize=7)
+    ax.set_xlabel("pin travel [mm]")
+    ax.set_ylabel("pull-out force [N]")
+    ax.set_title("the snag", fontsize=9)
+    ax = fig.add_subplot(grid[0, 2])
+    edge = table[:, 6] > 0
+    ax.plot(table[:, 1], table[:, 2], "o-", label=symbol("n_lad_over_ny"))
+    ax.plot(table[:, 1], table[:, 3], "s--", label="released into loaded courses")
+    ax.plot(table[edge, 1], table[edge, 2], "o", ms=11, mfc="none", color="0.4", label="reached an edge course")
+    for f in (lo, hi):
+        if np.isfinite(f):
+            ax.axvline(f, color="C3", lw=0.8, ls=":")
+    ax2 = ax.twinx()
+    ax2.plot(table[:, 1], table[:, 4], "^-", color="C2")
+    ax2.set_ylabel(symbol("v_lad_over_cb") + " (triangles)", color="C2")
+    ax.set_xlabel(symbol("fx_ini"))
+    ax.set_ylabel("damage")
+    ax.legend(fontsize=6.5, loc="upper left")
+    ax.set_title("the cut against tension (dotted: the threshold's bracket)", fontsize=9)
+    ax = fig.add_subplot(grid[1, :])
+    ax.axis("off")
+    if picture is not None:
+        ax.imshow(plt.imread(str(picture)))
+        ax.set_title("the arrested ladder", fontsize=9)
+    fig.tight_layout()
+    return _save(fig, Path(path))
