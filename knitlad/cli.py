@@ -324,8 +324,9 @@ def cut(
 
 
 def _damage_line(parts: dict) -> str:
+    taut = "" if parts.get("n_lad_released_taut", -1) < 0 else f", {parts['n_lad_released_taut']} of them taut"
     return (f"{parts['n_lad_released']} released by the ladder into loaded courses (Eq. 1's count: "
-            f"{parts['n_lad_released_over_ny']:.3f} n_y), {parts['n_lad_cut_row']} of the cut row, "
+            f"{parts['n_lad_released_over_ny']:.3f} n_y{taut}), {parts['n_lad_cut_row']} of the cut row, "
             f"{parts['n_lad_immediate']} undone with the cut (0.1 ms)")
 
 

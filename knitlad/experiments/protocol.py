@@ -285,6 +285,7 @@ class LadderTrace:
     peak_overlap_over_d: float
     wall_s: float
     energy: dict  # the energy ledger's series [J] (EnergyRecorder.series), one reading per observation
+    final_taut: np.ndarray | None = None  # of the undone cells, those whose bar is taut at the stop
 
 
 def cell_centres(run: Laddering) -> np.ndarray:
@@ -347,12 +348,13 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
 
     t, rule, reason = run_until(run.sim, max(1, int(round(d.observe_every_s / run.sim.dt_s))), observe, rules)
     frames.observe(t, run, undone, last=True)  # the state at the stop
+    taut = run.knit.gauge.taut(run.sim.state.x, run.knit.box_lx, run.knit.box_ly) & undone
     return LadderTrace(
         knit=run.knit, dynamics=d, cut_row=run.cut_row, columns=columns, times_s=np.array(times),
         fx=np.array(tension.fx), fx_courses=np.array(tension.fx_courses), fronts=fronts.extents(),
         column_cells=fronts.cells(), frames=frames, energy=energy.series(),
         baseline=run.baseline, final_laddered=undone, undone_at=cell_times.undone_at, stop_reason=reason,
-        reached_edge=EdgeReached.reached(undone), steps=run.sim.steps,
+        final_taut=taut, reached_edge=EdgeReached.reached(undone), steps=run.sim.steps,
         yarn_start=run.sim.model.yarn_start.copy(), peak_overlap_over_d=guard.peak_over_d,
         edges=np.column_stack([run.sim.model.edge_a, run.sim.model.edge_b]),
         cut_node=int(run.knit.knit.rods.model.edge_a[run.cut_edge]), cell_centres=cell_centres(run),
@@ -399,6 +401,7 @@ class LadderResult:
     final_laddered: np.ndarray | None = None
     baseline_laddered: np.ndarray | None = None
     undone_at: np.ndarray | None = None  # (n_y, n_x) when each cell came undone [s], NaN: never
+    final_taut: np.ndarray | None = None  # (n_y, n_x) undone cells whose bar is taut at the stop
     cut_row: int = -1
     yarn_start: np.ndarray | None = None  # topology of the frames
     nodes: int = 0
@@ -446,7 +449,7 @@ class LadderResult:
                 "column_history", "frames",
                 "frame_times_s", "final_laddered", "baseline_laddered", "yarn_start", "frame_velocities",
                 "frame_laddered", "frame_contact", "stretch_tension", "node_course", "cut_node", "cell_centres", "edges",
-                "undone_at", "energy_series"}
+                "undone_at", "final_taut", "energy_series"}
         out = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in skip}
         out["v_fit_stitches"] = list(self.v_fit_stitches)
         out["v_fit_first"], out["v_fit_last"] = (int(k) for k in self.v_fit_stitches)
@@ -467,16 +470,20 @@ class LadderResult:
     def damage_record(self) -> dict:
         """n_lad split as Eq. 1 reads it (:func:`knitlad.fabric.measure.damage_parts`): the cells of the cut row,
         those undone within 0.1 ms of the cut, and those the ladder released into loaded courses, with the last
-        over n_y (``n_lad_released_over_ny``: the damage Eq. 1 predicts, like for like)."""
+        over n_y (``n_lad_released_over_ny``: the damage Eq. 1 predicts, like for like), and of those the cells
+        whose bar is taut at the stop (``n_lad_released_taut``: each released l0 - l_x, as Eq. 1 counts; -1 and
+        NaN for a run without the final map)."""
         from knitlad.fabric.measure import damage_parts
 
         if self.undone_at is None:
-            parts = {"cut_row": self.n_lad, "immediate": 0, "released": 0}  # an older file: nothing to split by
+            parts = {"cut_row": self.n_lad, "immediate": 0, "released": 0, "released_taut": -1}  # an older file
         else:
-            parts = damage_parts(self.undone_at, self.cut_row)
+            parts = damage_parts(self.undone_at, self.cut_row, taut=self.final_taut)
         n_y = self.settings.stretch.n_y
+        taut = parts["released_taut"]
         return {"n_lad_cut_row": parts["cut_row"], "n_lad_immediate": parts["immediate"],
-                "n_lad_released": parts["released"], "n_lad_released_over_ny": parts["released"] / n_y}
+                "n_lad_released": parts["released"], "n_lad_released_over_ny": parts["released"] / n_y,
+                "n_lad_released_taut": taut, "n_lad_released_taut_over_ny": taut / n_y if taut >= 0 else math.nan}
 
     def loop_record(self) -> dict:
         """Summary of :meth:`ladders`: ladders up and down, when the first downward (loops (2)/(3)) and the
@@ -529,7 +536,7 @@ def analyse(trace: LadderTrace) -> LadderResult:
         frame_laddered=trace.frames.laddered, frame_contact=trace.frames.contact, node_course=knit.knit.node_course(), cut_node=trace.cut_node,
         cell_centres=trace.cell_centres, edges=trace.edges, stretch_tension=knit.tension_history,
         final_laddered=trace.final_laddered, baseline_laddered=trace.baseline, yarn_start=trace.yarn_start,
-        undone_at=trace.undone_at, cut_row=trace.cut_row,
+        undone_at=trace.undone_at, cut_row=trace.cut_row, final_taut=trace.final_taut,
         nodes=knit.knit.rods.model.n_nodes, steps=trace.steps, relax_steps=knit.relax_steps,
         fx_within_tolerance=knit.fx_within_tolerance, box_lx_over_l0=knit.box_lx,
         peak_overlap_over_d=max(knit.peak_overlap_over_d, trace.peak_overlap_over_d), energy_series=trace.energy,

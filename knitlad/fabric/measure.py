@@ -127,6 +127,16 @@ def laddered_cells(overlap: np.ndarray, l_y: float, margin: float = 0.25) -> np.
     return overlap < -margin * l_y
 
 
+TAUT_BAR = 0.75  # a laddered cell's bar is taut once its head has dropped this far below the sinkers [l_y]
+
+
+def taut_cells(overlap: np.ndarray, l_y: float, fraction: float = TAUT_BAR) -> np.ndarray:
+    """Boolean map of cells whose bar is taut: the head has dropped ``fraction`` l_y below the course above's
+    sinkers (a straight bar: about -l_y). A cell counts as laddered from -0.25 l_y (:func:`laddered_cells`),
+    before its bar is straight, when it may have released less than l0 - l_x: Eq. 1 counts l0 - l_x per cell."""
+    return overlap < -fraction * l_y
+
+
 def ladder_front(laddered: np.ndarray, column: int, start_row: int, max_gap: int = 2) -> tuple[int, int]:
     """(upward, downward) extent, in stitches from ``start_row``, of the ladder in ``column``.
 
@@ -266,15 +276,18 @@ def ladders_started(undone_at: np.ndarray, cut_row: int) -> list[dict]:
 IMMEDIATE_S = 1e-4  # cells undone this soon after the cut come undone with it (the cut's own damage) [s]
 
 
-def damage_parts(undone_at: np.ndarray, cut_row: int, immediate_s: float = IMMEDIATE_S) -> dict[str, int]:
+def damage_parts(undone_at: np.ndarray, cut_row: int, immediate_s: float = IMMEDIATE_S,
+                 taut: np.ndarray | None = None) -> dict[str, int]:
     """The undone cells split by what they free into the loaded knit (Eq. 1 counts l0 - l_x per cell released
     into a loaded course): ``cut_row``, the cells of the cut's own course (its yarn is cut: it frees no length
     into a loaded course); ``immediate``, the other cells undone within ``immediate_s`` of the cut (its
-    recoil, not the ladder's run); ``released``, the rest, the ladder's own. ``undone_at`` (n_rows, n_cols)
-    [s since the cut], NaN where a cell never came undone."""
+    recoil, not the ladder's run); ``released``, the rest, the ladder's own; with ``taut`` (the final map of
+    :func:`taut_cells`), ``released_taut``: those of them whose bar is taut at the end (-1 without the map).
+    ``undone_at`` (n_rows, n_cols) [s since the cut], NaN where a cell never came undone."""
     done = np.isfinite(undone_at)
     in_cut_row = np.zeros_like(done)
     in_cut_row[cut_row] = done[cut_row]
     immediate = done & ~in_cut_row & (undone_at <= immediate_s)
-    return {"cut_row": int(in_cut_row.sum()), "immediate": int(immediate.sum()),
-            "released": int((done & ~in_cut_row & ~immediate).sum())}
+    released = done & ~in_cut_row & ~immediate
+    return {"cut_row": int(in_cut_row.sum()), "immediate": int(immediate.sum()), "released": int(released.sum()),
+            "released_taut": -1 if taut is None else int((released & taut).sum())}

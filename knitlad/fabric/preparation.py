@@ -30,6 +30,7 @@ from knitlad.fabric.measure import (
     course_tensions,
     laddered_cells,
     periodicities,
+    taut_cells,
     tension_per_thread,
     transverse_tension,
 )
@@ -166,6 +167,11 @@ class KnitGauge:
         l0 = self.material.stitch_length / units.LENGTH
         overlap = cell_overlap(self.rows(x), self.column_centres(box_lx), box_lx * l0)
         return laddered_cells(overlap, box_ly * l0)
+
+    def taut(self, x: np.ndarray, box_lx: float, box_ly: float) -> np.ndarray:
+        """Cells whose bar is taut (:func:`knitlad.fabric.measure.taut_cells`)."""
+        l0 = self.material.stitch_length / units.LENGTH
+        return taut_cells(cell_overlap(self.rows(x), self.column_centres(box_lx), box_lx * l0), box_ly * l0)
 
 
 # ------------------------------------------------------------------ stage 1: stretch

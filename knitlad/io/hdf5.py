@@ -22,6 +22,7 @@ A laddering run (``ladder.h5``, a sweep's ``jobs/<id>.h5``)::
                         global_drag, material, air), start, residual, turnover; time_s [s]
     /stretch/relax_steps, box_lx_over_l0, fx   the stretch's tension readings (FIRE steps so far, box, f_x)
     /final/laddered     (n_y, n_x) bool
+    /final/taut         (n_y, n_x) bool: of those, the cells whose bar is taut at the stop
     /cells/centres      (n_y, n_x, 2) x, y of each cell at the cut [m]
     /topology/yarn_start, edges (ne, 2), node_course (n,): -1 and n_y for the held courses; attr cut_node
 
@@ -217,6 +218,8 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
                 checksummed_dataset(g, name, np.asarray(values, dtype=float))
         if result.final_laddered is not None:
             checksummed_dataset(f.require_group("final"), "laddered", result.final_laddered)
+        if getattr(result, "final_taut", None) is not None:
+            checksummed_dataset(f.require_group("final"), "taut", result.final_taut)
         if result.undone_at is not None:
             checksummed_dataset(f.require_group("final"), "undone_at", result.undone_at)
             f["final"].attrs["cut_row"] = result.cut_row
@@ -243,7 +246,7 @@ RUN_UNITS = {
     "frames/time": "s", "fields/axial_strain": "1", "fields/curvature": "1/m", "series/time": "s",
     "series/front_up": "stitches", "series/front_down": "stitches", "series/fx": "f0", "series/fx_courses": "f0",
     "series/laddering_column_cells": "1", "stretch/relax_steps": "1", "stretch/box_lx_over_l0": "l0",
-    "stretch/fx": "f0", "final/laddered": "1", "final/undone_at": "s", "cells/centres": "m", "topology/yarn_start": "1",
+    "stretch/fx": "f0", "final/laddered": "1", "final/taut": "1", "final/undone_at": "s", "cells/centres": "m", "topology/yarn_start": "1",
     "topology/edges": "1", "topology/node_course": "1", "contacts/offsets": "1", "contacts/points": "m",
     "contacts/normal_force": "N", "contacts/friction_force": "N", "contacts/sliding": "1",
     "obstacles/kind": "1", "obstacles/direction": "1", "obstacles/radius": "m", "obstacles/points": "m",

@@ -49,6 +49,9 @@ LADDER = {
     "n_lad_immediate": ("cells", "other cells undone within 0.1 ms of the cut (its recoil, not the ladder's run)"),
     "n_lad_released": ("cells", "the rest of n_lad: cells the ladder released into loaded courses (Eq. 1's count)"),
     "n_lad_released_over_ny": ("1", "n_lad_released / n_y: the damage Eq. 1 predicts, like for like"),
+    "n_lad_released_taut": ("cells", "of n_lad_released, the cells whose bar is taut at the stop (head 0.75 l_y "
+                                     "below the sinkers): each released l0 - l_x, as Eq. 1 counts"),
+    "n_lad_released_taut_over_ny": ("1", "n_lad_released_taut / n_y"),
     "box_lx_over_l0": ("l0", "the box's l_x/l0: the held ends' spacing over n_x l0"),
     "fx_within_tolerance": ("-", "force control: f_x^ini came within fx_tolerance of the target"),
     "peak_overlap_over_d": ("1", "the deepest yarn-yarn overlap at any step, over d"),
@@ -104,6 +107,8 @@ CYCLE = {
     "cut_n_lad_immediate": ("cells", "the cut copy's other cells undone within 0.1 ms of the cut"),
     "cut_n_lad_released": ("cells", "the cut copy's cells released into loaded courses (Eq. 1's count)"),
     "cut_n_lad_released_over_ny": ("1", "cut_n_lad_released / n_y: the damage to set beside Eq. 1, like for like"),
+    "cut_n_lad_released_taut": ("cells", "of cut_n_lad_released, the cells whose bar is taut at the stop"),
+    "cut_n_lad_released_taut_over_ny": ("1", "cut_n_lad_released_taut / n_y"),
     "hold_converged": ("-", "the last hold at Delta x_max settled within hold_ms"),
     "nan_reasons": ("-", "why delta l and the predicted damage are NaN, if they are ('column: reason; ...')"),
     "cut_nan_reasons": ("-", "why a result of the cut copy's ladder is NaN ('column: reason; ...')"),

@@ -209,7 +209,7 @@ SCENES: dict[str, SweepScene] = {
     "ladder": SweepScene(CutConfig, run_ladder_job, (
         "fx_ini", "fx_fin", "fx_fin_crossed", "fx_fin_intact", "n_lad", "n_lad_over_ny", "v_lad_over_cb", "natural_curvature", "lx_over_l0", "ly_over_l0",
         "ladders_up", "ladders_down", "first_down_ms", "second_up_ms", "hindered", "n_lad_cut_row", "n_lad_immediate", "n_lad_released",
-        "n_lad_released_over_ny",
+        "n_lad_released_over_ny", "n_lad_released_taut", "n_lad_released_taut_over_ny",
         "box_lx_over_l0", "fx_within_tolerance", "peak_overlap_over_d", "reached_edge", "stop_reason",
         "laddering_column", "v_fit_stitches", "v_fit_first", "v_fit_last", "energy_start_J", "energy_end_J", "dissipated_friction_J",
         "dissipated_contact_dashpot_J", "dissipated_axial_dashpot_J", "dissipated_material_J", "dissipated_air_J",
@@ -219,7 +219,8 @@ SCENES: dict[str, SweepScene] = {
         "fx_ini", "lx_over_l0", "ly_over_l0", "lx_max", "fx_thr", "delta_l_over_l0", "predicted_damage",
         "fx_thr_own", "delta_l_own_over_l0", "predicted_damage_own", "cut_n_lad_over_ny", "cut_fx_fin", "cut_fx_fin_crossed", "cut_reached_edge", "cut_ladders_up",
         "cut_ladders_down", "cut_second_up_ms", "cut_hindered", "cut_n_lad_cut_row", "cut_n_lad_immediate",
-        "cut_n_lad_released", "cut_n_lad_released_over_ny", "hold_converged", "nan_reasons", "cut_nan_reasons",
+        "cut_n_lad_released", "cut_n_lad_released_over_ny", "cut_n_lad_released_taut",
+        "cut_n_lad_released_taut_over_ny", "hold_converged", "nan_reasons", "cut_nan_reasons",
         "wall_s",
         "job_wall_s"), "`knitlad cycle`: protocol B, the damage prediction's loading", stretch_of),
     "tensile": SweepScene(TensileConfig, run_tensile_job, (

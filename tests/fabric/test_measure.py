@@ -177,9 +177,24 @@ def test_damage_is_split_into_the_cut_row_the_cut_s_recoil_and_what_the_ladder_r
                           [2e-5, 0.0, 3e-4],  # row 2: the cut row, whenever its cells go
                           [nan, 1e-4, nan],   # row 3: at 0.1 ms exactly, still the cut's
                           [nan, 4e-4, 6e-4]])  # row 4: the upward ladder
-    assert damage_parts(undone_at, cut_row=2) == {"cut_row": 3, "immediate": 2, "released": 3}
-    assert damage_parts(undone_at, cut_row=2, immediate_s=0.0) == {"cut_row": 3, "immediate": 0, "released": 5}
-    assert sum(damage_parts(undone_at, cut_row=0).values()) == np.isfinite(undone_at).sum()
+    assert damage_parts(undone_at, cut_row=2) == {"cut_row": 3, "immediate": 2, "released": 3, "released_taut": -1}
+    assert damage_parts(undone_at, cut_row=2, immediate_s=0.0) == {"cut_row": 3, "immediate": 0, "released": 5,
+                                                                   "released_taut": -1}
+    parts = damage_parts(undone_at, cut_row=0)
+    assert parts["cut_row"] + parts["immediate"] + parts["released"] == np.isfinite(undone_at).sum()
+    taut = np.zeros_like(undone_at, dtype=bool)
+    taut[0, 1] = taut[2, 0] = taut[4, 2] = True  # a released cell, a cut-row cell, a released cell
+    assert damage_parts(undone_at, cut_row=2, taut=taut)["released_taut"] == 2
+
+
+def test_a_cells_bar_is_taut_once_its_head_has_dropped_three_quarters_of_a_course():
+    """An intact cell overlaps by +0.2 to +0.4 l_y, a straight bar by about -l_y: laddered from -0.25 l_y,
+    taut from -0.75 l_y."""
+    from knitlad.fabric.measure import laddered_cells, taut_cells
+
+    overlap = np.array([[0.3, -0.3, -0.7, -0.8, -1.0]])
+    assert laddered_cells(overlap, 1.0).tolist() == [[False, True, True, True, True]]
+    assert taut_cells(overlap, 1.0).tolist() == [[False, False, False, True, True]]
 
 
 def test_the_transverse_tension_is_the_mean_pull_of_the_held_nodes_above_and_below_per_column():
