@@ -572,7 +572,8 @@ def snag(
         f"{summary['peak_force_N']:.4f} N\n"
         f"  energy: the pin put in {summary['pin_work_J']:.3e} J (friction took {summary['friction_before_break_J']:.3e}"
         f" J of it); the ladder released {summary['ladder_released_J']:.3e} J\n"
-        f"  ladder: n_lad/n_y = {summary['n_lad_over_ny']:.3f}, v_lad/c_b = {summary['v_lad_over_cb']:.3f}, "
+        f"  ladder: n_lad/n_y = {summary['n_lad_over_ny']:.3f}, v_lad/c_b = {summary['v_lad_over_cb']:.3f} up, "
+        f"{summary['v_down_over_cb']:.3f} down, "
         f"f_x^fin = {summary['fx_fin']:.3f}{' (reached an edge course)' if summary['reached_edge'] else ''}\n"
         f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/snag.csv, snag.png, ladder.h5, spatio_temporal.png")
 

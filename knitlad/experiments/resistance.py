@@ -74,6 +74,7 @@ class ResistanceResult:
         out = {**{f"design_{k}": v for k, v in self.design.items()},
                "snag_peak_force_N": snag_row["peak_force_N"], "snag_broke": snag_row["broke"],
                "snag_pull_at_break_mm": snag_row["pull_at_break_mm"], "snag_n_lad_over_ny": snag_row["n_lad_over_ny"],
+               "snag_v_down_over_cb": snag_row.get("v_down_over_cb", math.nan),
                "snag_fx_ini": snag_row["fx_ini"],
                "fx_thr_below": lo, "fx_thr_above": hi,
                "monotonic": all(not a or b for a, b in zip(lad, lad[1:])),

@@ -114,6 +114,7 @@ class SnagResult:
         out["fx_ini"] = self.fx_ini
         for key in ("n_lad_over_ny", "v_lad_over_cb", "fx_fin", "reached_edge"):
             out[key] = getattr(ladder, key) if ladder is not None else (math.nan if key != "reached_edge" else False)
+        out["v_down_over_cb"] = downward_velocity(ladder) if ladder is not None else math.nan
         if ladder is not None:
             record = ladder.energy_record()
             out["ladder_released_J"] = record.get("energy_start_J", math.nan) - record.get("energy_end_J", math.nan)
@@ -121,6 +122,21 @@ class SnagResult:
             out["ladder_released_J"] = math.nan
         out["wall_s"] = self.wall_s
         return out
+
+
+def downward_velocity(ladder: LadderResult) -> float:
+    """v/c_b of the downward front of the followed column, fitted from stitch 2 to 10 below the break (fewer
+    where the knit has fewer courses below it): a broken head frees the course below it first, so the ladder
+    from a snag may run down more than up, where the paper's v_lad is the upward front's. NaN if the front
+    does not cover the fit's range."""
+    from knitlad.fabric.measure import laddering_velocity
+
+    s = ladder.settings.stretch
+    last = min(10, ladder.cut_row - 1)
+    first = min(2, max(last - 2, 1))
+    l_y = ladder.ly_over_l0 * s.material.stitch_length
+    return laddering_velocity(np.asarray(ladder.times_s), np.asarray(ladder.front_down), l_y, first,
+                              last) / s.material.c_b
 
 
 def loop_head_node(knit: StretchedKnit, row: int, column: int) -> int:

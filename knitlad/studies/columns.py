@@ -167,6 +167,8 @@ SNAG = {
     "fx_ini": ("f0", "f_x of the stretched knit before the snag"),
     "n_lad_over_ny": ("1", "the ladder's undone cells over n_y, counted from the break"),
     "v_lad_over_cb": ("c_b", "the ladder's velocity (fit over stitches 2 to 10 above the break)"),
+    "v_down_over_cb": ("c_b", "the downward front's velocity (fit over stitches 2 to 10 below the break): a broken "
+                              "head frees the course below first"),
     "fx_fin": ("f0", "f_x after the ladder arrested"),
     "reached_edge": ("-", "the ladder reached an edge course"),
 }
@@ -180,6 +182,7 @@ RESISTANCE = {
     "snag_broke": ("-", "the yarn broke before the pin's max_pull_mm"),
     "snag_pull_at_break_mm": ("mm", "the pin's travel when the yarn broke (NaN: no break)"),
     "snag_n_lad_over_ny": ("1", "the snag's ladder: undone cells over n_y, counted from the break"),
+    "snag_v_down_over_cb": ("c_b", "the snag's ladder: its downward front's velocity"),
     "fx_thr_below": ("f0", "the highest f_x^ini of the series whose cut did not ladder (NaN: every one did)"),
     "fx_thr_above": ("f0", "the lowest f_x^ini of the series whose cut laddered (NaN: none did)"),
     "monotonic": ("-", "no cut laddered below a tension whose cut held"),

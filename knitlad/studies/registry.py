@@ -230,11 +230,11 @@ SCENES: dict[str, SweepScene] = {
     "snag": SweepScene(SnagConfig, run_snag_job, (
         "snag_row", "snag_column", "broke", "peak_force_N", "pull_at_break_mm", "break_tension_N", "break_row",
         "break_column", "pin_work_J", "friction_before_break_J", "ladder_released_J", "fx_ini", "n_lad_over_ny",
-        "v_lad_over_cb", "fx_fin", "reached_edge", "wall_s", "job_wall_s"),
+        "v_lad_over_cb", "v_down_over_cb", "fx_fin", "reached_edge", "wall_s", "job_wall_s"),
         "`knitlad snag`: a pin pulls a loop out until the yarn breaks; the ladder follows", stretch_of),
     "resistance": SweepScene(ResistanceConfig, run_resistance_job, (
         "design_pattern", "design_band", "design_d_over_l0", "design_mu", "snag_peak_force_N", "snag_broke",
-        "snag_pull_at_break_mm", "snag_n_lad_over_ny", "fx_thr_below", "fx_thr_above", "monotonic",
+        "snag_pull_at_break_mm", "snag_n_lad_over_ny", "snag_v_down_over_cb", "fx_thr_below", "fx_thr_above", "monotonic",
         "n_lad_over_ny_lowest", "n_lad_over_ny_highest", "v_lad_over_cb_highest", "fx_fin_crossed_highest",
         "wall_s", "job_wall_s"),
         "`knitlad resistance`: a snag, then the cut at a series of tensions: a knit design's ladder resistance",

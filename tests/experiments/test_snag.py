@@ -72,3 +72,19 @@ def test_a_snag_leaves_the_stretched_knit_as_it_was(knit_6x6):
     before = knit.knit.rods.state.x.copy()
     snag(knit, cfg.dynamics_settings(), SnagSettings(speed_m_s=3.0, max_pull_m=0.1e-3))
     np.testing.assert_array_equal(knit.knit.rods.state.x, before)
+
+
+def test_the_downward_velocity_is_the_slope_of_the_downward_front_over_stitches_2_to_the_last_below_the_break():
+    """A front one stitch further down every 10 us, the break at course 8 (7 courses below it): the fit over
+    stitches 2 to 7 gives l_y / 10 us."""
+    from types import SimpleNamespace
+
+    from knitlad.experiments.snag import downward_velocity
+
+    times = np.arange(12) * 1e-5
+    ladder = SimpleNamespace(settings=SimpleNamespace(stretch=SimpleNamespace(material=kl.NYLON)), cut_row=8,
+                             ly_over_l0=0.25, times_s=list(times), front_down=[min(k, 7) for k in range(12)])
+    expected = 0.25 * kl.NYLON.stitch_length / 1e-5 / kl.NYLON.c_b
+    assert downward_velocity(ladder) == pytest.approx(expected, rel=1e-9)
+    short = SimpleNamespace(**{**vars(ladder), "front_down": [min(k, 3) for k in range(12)]})
+    assert np.isnan(downward_velocity(short))
