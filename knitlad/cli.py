@@ -592,7 +592,7 @@ def resistance(
     The design is the knit's --pattern, its band (--band, --band-row), --d-over-l0 and --mu. Writes
     resistance.h5 (the series, the snag's curve, the pictured ladder's run file), resistance.csv (the series)
     and resistance_report.png (one page: the design, the snag, damage and velocity against tension, the
-    threshold, the arrested ladder).
+    threshold, the ladder where it stopped).
     """
     from knitlad.experiments.resistance import run_resistance
     from knitlad.fabric.preparation import stretch

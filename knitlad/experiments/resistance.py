@@ -13,7 +13,7 @@ takes a knit design (its pattern, a run-stop band, its yarn's d/l0 and friction)
 
 Settings: :class:`knitlad.experiments.config.ResistanceConfig` (``knitlad resistance``, sweep scene
 ``resistance``). The report (:func:`knitlad.viz.plots.resistance_report`) puts the design, the snag curve, the
-damage and velocity against tension, the threshold and a picture of the arrested ladder on one page.
+damage and velocity against tension, the threshold and a picture of the ladder where it stopped on one page.
 """
 
 from __future__ import annotations

@@ -451,7 +451,7 @@ def final_tension_plot(df, path: str | Path) -> Path:
 def resistance_report(result, path: str | Path, picture: str | Path | None = None) -> Path:
     """One page of a ladder-resistance test (:class:`knitlad.experiments.resistance.ResistanceResult`): the
     design and what its numbers are worth, the snag's pull-out curve, the damage and the velocity against
-    f_x^ini with the threshold bracket, and ``picture`` (a render of the arrested ladder), if given."""
+    f_x^ini with the threshold bracket, and ``picture`` (a render of the ladder where it stopped), if given."""
     from knitlad.experiments.resistance import LADDERING_ONSET_CELLS
     from knitlad.fabric.presets import PRESET_ERRORS
 
@@ -514,6 +514,6 @@ def resistance_report(result, path: str | Path, picture: str | Path | None = Non
     ax.axis("off")
     if picture is not None:
         ax.imshow(plt.imread(str(picture)))
-        ax.set_title("the arrested ladder", fontsize=9)
+        ax.set_title("the ladder where it stopped (the highest tension that laddered, else the snag's)", fontsize=9)
     fig.tight_layout()
     return _save(fig, Path(path))
