@@ -132,3 +132,21 @@ def test_a_breaking_force_must_be_positive():
         sim.set_breaking_force(1.0, check_every=0)
     with pytest.raises(ValueError, match="Material.breaking_force"):
         kl.Material(breaking_force=0.0)
+
+
+def test_a_segment_between_two_held_nodes_is_the_supports_and_does_not_break():
+    """Two held nodes moved apart stretch the segment between them past the breaking force (their length is
+    the supports'): it is not breakable and the run cuts nothing there; the free segments stay breakable."""
+    n = 11
+    scene = kl.Scene(kl.NYLON)
+    points = np.zeros((n, 3))
+    points[:, 0] = np.linspace(0.0, 0.01, n)
+    y = scene.add_yarn(points)
+    scene.hold(y, [0, 1, 2])
+    sim = kl.Simulation(scene.build())
+    breakable = breakable_edges(sim.model)
+    assert not breakable[:2].any() and breakable[2:n - 2].all()  # edges 0-1, 1-2 held at both ends
+    sim.state.x[1, 0] *= 1.5  # the support stretches edge 0 by 50 % (14 N in the Nylon)
+    sim.set_breaking_force(kl.NYLON.breaking_force)
+    sim.run(1e-6)
+    assert sim.breaks == ()
