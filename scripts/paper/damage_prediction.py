@@ -8,7 +8,9 @@
 Reads every finished job of a ``cycle`` sweep (``knitlad sweep configs/fig4c.yaml``): its readings
 (``cycle/readings``) and summary. delta l is read on the uncut twin's last unloading twice: at the
 sweep's f_x^thr, and at the run's own arrest tension, f_x^fin of the courses the ladder crossed (the
-threshold of the model as it ran; the paper's f_x^fin = f_x^thr, Fig. 3f). Prints a markdown table.
+threshold of the model as it ran; the paper's f_x^fin = f_x^thr, Fig. 3f). The damage is given whole and as
+Eq. 1 counts it: the cells released into loaded courses, and of those the cells whose bar is taut (runs of
+knitlad 0.8 on). Prints a markdown table.
 """
 
 from __future__ import annotations
@@ -46,10 +48,15 @@ def job_rows(folder: Path) -> list[dict]:
             "fx_ini": attrs["cycle_fx_ini"], "lx_over_l0": lx, "fx_thr": config["fx_thr"],
             "delta_l_over_l0": attrs["cycle_delta_l_over_l0"], "predicted": attrs["cycle_predicted_damage"],
             "fx_fin_crossed": own, "predicted_own": dl_own / (1 - lx),
-            "n_lad_over_ny": attrs["n_lad_over_ny"], "ladders_up": attrs["ladders_up"],
+            "n_lad_over_ny": attrs["n_lad_over_ny"],
+            # the damage as Eq. 1 counts it (runs of knitlad 0.8 on): released into loaded courses, and taut
+            "released_over_ny": attrs.get("n_lad_released_over_ny", np.nan),
+            "released_taut_over_ny": attrs.get("n_lad_released_taut_over_ny", np.nan),
+            "ladders_up": attrs["ladders_up"],
             "ladders_down": attrs["ladders_down"], "reached_edge": bool(attrs["reached_edge"]),
             "stop_reason": attrs["stop_reason"], "hold_converged": bool(attrs["cycle_hold_converged"]),
             "wall_min": attrs.get("job_wall_s", np.nan) / 60, "readings": readings, "n_x": config["n_x"],
+            "n_y": config["n_y"],
         })
     return rows
 
@@ -71,11 +78,13 @@ def main() -> None:
             raise SystemExit(f"{folder}: no finished cycle job")
         rows += [{**r, "series": label or Path(folder).name} for r in found]
     table = pd.DataFrame([{k: v for k, v in r.items() if k != "readings"} for r in rows])
-    table = table.sort_values(["series", "ly", "lx_max", "bar_speed"], kind="stable")
+    table = table.sort_values(["series", "ly", "lx_max", "n_y", "bar_speed"], kind="stable")
     if len(args.folders) == 1:
         table = table.drop(columns=["series"])
-    shown = (["series"] if "series" in table else []) + ["ly", "lx_max", "bar_speed", "fx_ini", "lx_over_l0", "delta_l_over_l0", "predicted", "fx_fin_crossed",
-             "predicted_own", "n_lad_over_ny", "ladders_up", "ladders_down", "reached_edge", "wall_min"]
+    shown = (["series"] if "series" in table else []) + [
+        "n_y", "ly", "lx_max", "bar_speed", "fx_ini", "lx_over_l0", "delta_l_over_l0", "predicted", "fx_fin_crossed",
+        "predicted_own", "n_lad_over_ny", "released_over_ny", "released_taut_over_ny", "ladders_up", "ladders_down",
+        "reached_edge", "wall_min"]
     print("| " + " | ".join(shown) + " |\n|" + "---|" * len(shown))
     for _, row in table[shown].iterrows():
         print("| " + " | ".join(f"{v:.3f}" if isinstance(v, float) else str(v) for v in row) + " |")
