@@ -359,7 +359,10 @@ def write_snag_result(path: str | Path, result, material, config: dict, compress
     """A snag's file (:class:`knitlad.experiments.snag.SnagResult`): the pull-out curve (``snag/pull`` [m],
     ``snag/force`` [N]), its summary as ``snag_*`` attributes, the config, the scales and, after a break,
     the ladder's run file."""
-    attrs = {**{f"snag_{k}": v for k, v in result.summary().items()}, **scale_attributes(material),
+    summary = result.summary()
+    # the summary twice: prefixed (the file's own record) and as the sweep's summary columns, which a
+    # rerun reads back from the file
+    attrs = {**{f"snag_{k}": v for k, v in summary.items()}, **summary, **scale_attributes(material),
              "snag_config_json": json.dumps(config, default=str), **(attrs or {})}
     data = {"snag/pull": result.pull_m, "snag/force": result.force_N}
     if result.ladder is None:
@@ -372,7 +375,8 @@ def write_resistance_result(path: str | Path, result, material, config: dict, co
     """A ladder-resistance test's file (:class:`knitlad.experiments.resistance.ResistanceResult`): its summary as
     ``resistance_*`` attributes, the cut series (``resistance/tensions``), the snag's pull-out curve, the config,
     the scales and the run file of the ladder the report shows (``knitlad render`` draws it)."""
-    attrs = {**{f"resistance_{k}": v for k, v in result.summary().items()}, **scale_attributes(material),
+    summary = result.summary()
+    attrs = {**{f"resistance_{k}": v for k, v in summary.items()}, **summary, **scale_attributes(material),
              "resistance_config_json": json.dumps(config, default=str), **(attrs or {})}
     data = {"resistance/tensions": result.table(), "snag/pull": result.snag.pull_m, "snag/force": result.snag.force_N}
     ladder = result.pictured()

@@ -91,3 +91,8 @@ def test_a_resistance_sweep_writes_each_designs_report(tmp_path):
     assert (out / "jobs" / f"{job}_report.png").exists()
     with h5py.File(out / "jobs" / f"{job}.h5") as f:
         assert f["resistance/tensions"].shape == (2, 7)
+    p = subprocess.run([*KNITLAD, "sweep", str(config), "--out", str(out)], capture_output=True, text=True, cwd=ROOT)
+    assert p.returncode == 0 and "already done" in p.stdout + p.stderr
+    again = pd.read_csv(out / "summary.csv")  # the rerun reads the finished job's row back from its file
+    for key in ("snag_peak_force_N", "fx_thr_above", "n_lad_over_ny_highest"):
+        assert again[key][0] == pytest.approx(df[key][0], rel=1e-9), key

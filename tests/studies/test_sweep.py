@@ -438,6 +438,10 @@ def test_a_snag_sweep_breaks_worn_loops_and_writes_the_curve_and_the_ladder(tmp_
     with h5py.File(out / "jobs" / f"{df['job_id'][0]}.h5") as f:
         assert f["snag/force"].attrs["unit"] == "N" and f["snag/pull"].shape == f["snag/force"].shape
         assert "series/front_up" in f and f.attrs["scale_f0_N"] > 0
+    assert knitlad("sweep", str(config), "--out", str(out)).returncode == 0
+    again = read_summary(out)  # the rerun reads the finished job's row back from its file
+    for key in ("peak_force_N", "pull_at_break_mm", "break_row"):
+        assert again[key][0] == pytest.approx(df[key][0], rel=1e-9), key
 
 
 def test_a_sweep_over_patterns_ladders_each_and_tabulates_its_pattern(tmp_path):
