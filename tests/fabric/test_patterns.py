@@ -13,6 +13,7 @@ from knitlad.engine.kernels.contact import refresh_contacts, segment_distance
 from knitlad.fabric.patterns import FACE_SWITCH, KNIT, PATTERNS, PURL, KnitPattern, fabric_pattern, knit_pattern
 from knitlad.fabric.scenes.knit import KnitGeometry, build_knit, build_loop_overlap, widest_fitting_width
 from knitlad.fabric.topology import piercings, threading_direction
+from tests.fabric.test_knit import head_ring, loop_arc
 
 D = kl.NYLON.diameter
 L0 = kl.NYLON.stitch_length
@@ -53,20 +54,6 @@ def test_the_face_takes_the_stitch_above_on_a_head_and_the_stitch_below_on_a_sin
     assert rib.face(off, 0) == pytest.approx(-rib.face(sinkers - 3 * FACE_SWITCH, 0), abs=1e-12)
     assert np.all(np.abs(rib.face(off, 0)) > 0.99)
     assert knit_pattern("jersey").face(np.linspace(-3, 30, 50), 4).tolist() == [1.0] * 50
-
-
-def head_ring(knit, row, col):
-    nodes = knit.course_nodes(row)
-    t = knit.node_t[nodes]
-    sel = (t >= 2 * math.pi * col - math.pi / 2) & (t <= 2 * math.pi * col + math.pi / 2)
-    return knit.rods.state.x[nodes][sel]
-
-
-def loop_arc(knit, row, col):
-    nodes = knit.course_nodes(row)
-    t = knit.node_t[nodes]
-    sel = (t >= 2 * math.pi * col - math.pi) & (t <= 2 * math.pi * col + math.pi)
-    return knit.rods.state.x[nodes][sel]
 
 
 @pytest.fixture(scope="module", params=list(PATTERNS))
