@@ -64,25 +64,27 @@ def test_the_run_stop_band_table_says_whether_a_ladder_entered_and_crossed_the_b
     assert points.loc["friction x1", "knits"] == 1
 
 
-def test_the_run_stop_band_table_reads_a_knitted_band_beside_the_plain_knit(tmp_path):
-    """A rib band (courses 11-12) that holds the ladder at 10 and the plain knit (no band_row) whose ladder
-    runs to 14: the plain knit is read where the band would be."""
+@pytest.mark.parametrize("band, kind", [("rib", "rib"), ("curvature", "curvature K3")])
+def test_the_run_stop_band_table_reads_a_knitted_band_beside_the_plain_knit(tmp_path, band, kind):
+    """A rib band or a band of a yarn with memory (K 3; courses 11-12) that holds the ladder at 10 and the
+    plain knit (no band_row) whose ladder runs to 14: the plain knit is read where the band would be."""
     import h5py
 
     study = paper_script("run_stop_band")
     (tmp_path / "jobs").mkdir()
     rows = []
-    for job, top, band, row in (("rib", 10, "rib", 11), ("plain", 14, "friction", None)):
+    for job, top, band, row in (("rib", 10, band, 11), ("plain", 14, "friction", None)):
         laddered = np.zeros((16, 16), dtype=bool)
         laddered[6:top + 1, 8] = True
         with h5py.File(tmp_path / "jobs" / f"{job}.h5", "w") as f:
             f["final/laddered"] = laddered
         rows.append({"job_id": job, "fx": 4.0, "fx_ini": 4.0, "band": band, "band_row": row, "band_courses": 2,
-                     "mu": 0.4, "band_friction_factor": 2.0, "n_lad_over_ny": (top - 5) / 16, "fx_fin": 2.0,
+                     "mu": 0.4, "band_friction_factor": 2.0, "band_curvature": 3.0, "n_lad_over_ny": (top - 5) / 16,
+                     "fx_fin": 2.0,
                      "v_lad_over_cb": 0.3, "stop_reason": "arrested"})
     pd.DataFrame(rows).to_csv(tmp_path / "summary.csv", index=False)
     table = study.table(tmp_path).set_index("job_id")
-    assert table.loc["rib", "kind"] == "rib" and table.loc["rib", "mu_band"] == pytest.approx(0.4)
+    assert table.loc["rib", "kind"] == kind and table.loc["rib", "mu_band"] == pytest.approx(0.4)
     assert table.loc["plain", "kind"] == "none" and table.loc["plain", "band"] == "11-12"
     assert not table.loc["rib", "crossed_band"] and table.loc["plain", "crossed_band"]
 

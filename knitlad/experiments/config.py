@@ -82,6 +82,8 @@ ContactLawName = Annotated[str, AfterValidator(_known_law)]
 
 
 PatternName = Literal[tuple(PATTERNS)]  # the knit patterns' names (knitlad.fabric.patterns)
+KNITTED_BANDS = tuple(name for name in PATTERNS if name != "jersey")  # a band knitted in another pattern
+BandName = Literal[("friction", "curvature") + KNITTED_BANDS]
 
 
 def _contact_law():
@@ -106,7 +108,7 @@ class CutConfig(_WithPreset):
         "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor",
         "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
         "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches", "contact_law",
-        "band_row", "band_courses", "band_friction_factor", "pattern", "band")
+        "band_row", "band_courses", "band_friction_factor", "pattern", "band", "band_curvature")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -144,13 +146,16 @@ class CutConfig(_WithPreset):
     band_row: int | None = Field(None, ge=0, le=199, description=(
         "a run-stop band: its first course, counted from the bottom (the cut is at n_y // 2) [-]; none: no band"))
     band_courses: int = Field(2, ge=1, le=200, description="courses of the run-stop band [-]")
-    band: Literal["friction", "rib", "garter"] = Field("friction", description=(
-        "what the run-stop band is: courses of a yarn with more friction (band_friction_factor), or courses "
-        "knitted in rib or garter (the fabric's friction: band_friction_factor is not used; stretched "
-        "affinely) [-]"))
+    band: BandName = Field("friction", description=(
+        "what the run-stop band is: courses of a yarn with more friction (band_friction_factor), of a yarn "
+        "that remembers its knitted shape (band_curvature; twist on, tiled stretch), or courses knitted in rib "
+        "or garter (the fabric's friction: band_friction_factor is not used; stretched affinely) [-]"))
     band_friction_factor: float = Field(2.0, ge=0, le=10, description=(
         "the band's yarn friction over the fabric's: a contact touching a band course has this factor x mu "
         "during the laddering [-]"))
+    band_curvature: float = Field(1.0, gt=0, le=20, description=(
+        "a curvature band's memory: mean (kappa_bar/kappa0)^2 of its courses' natural curvature, as "
+        "natural_curvature is the rest of the knit's [-]"))
     # --- the model's choices
     d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description=(
         "yarn diameter over stitch length d/l0 [-]; 1/70, the paper's rounded value and the default, means its "
@@ -224,7 +229,7 @@ class CutConfig(_WithPreset):
     @classmethod
     def patterns_stretch_affinely(cls, data):
         """A pattern with purl stitches has no periodised stitch to tile: its knit is stretched affinely."""
-        knitted_band = isinstance(data, dict) and data.get("band", "friction") != "friction"
+        knitted_band = isinstance(data, dict) and data.get("band", "friction") in KNITTED_BANDS
         if isinstance(data, dict) and (data.get("pattern", "jersey") != "jersey" or knitted_band) \
                 and "stretch_start" not in data:
             data = {**data, "stretch_start": "affine"}
@@ -234,10 +239,15 @@ class CutConfig(_WithPreset):
     @classmethod
     def natural_curvature_carries_twist(cls, data):
         """A yarn with natural curvature carries twist (its curvature lives in its material frame)."""
-        if isinstance(data, dict) and isinstance(data.get("natural_curvature"), (int, float)) \
-                and not isinstance(data.get("natural_curvature"), bool) and data["natural_curvature"] > 0:
+        if not isinstance(data, dict):
+            return data
+        k = data.get("natural_curvature")
+        remembers = isinstance(k, (int, float)) and not isinstance(k, bool) and k > 0
+        banded = data.get("band") == "curvature" and data.get("band_row") is not None
+        if remembers or banded:
             if data.get("twist") is False:
-                raise ValueError("natural_curvature: a yarn with natural curvature carries twist (twist: true)")
+                name = "natural_curvature" if remembers else "band"
+                raise ValueError(f"{name}: a yarn with natural curvature carries twist (twist: true)")
             data = {**data, "twist": True}
         return data
 
@@ -250,16 +260,21 @@ class CutConfig(_WithPreset):
         if self.natural_curvature > 0 and (self.stretch_start, self.edge) != ("tiled", "clamped"):
             raise ValueError("natural_curvature: set in the periodised stitch and tiled over the knit, it needs "
                              "stretch_start tiled and edge clamped")
+        if self.memory_band is not None and (self.stretch_start, self.edge) != ("tiled", "clamped"):
+            raise ValueError("band: a curvature band is set in the periodised stitch and tiled over the knit; it "
+                             "needs stretch_start tiled and edge clamped")
         if self.pattern != "jersey" and self.stretch_start != "affine":
             raise ValueError(f"stretch_start: the periodised stitch is jersey's; a {self.pattern} knit is stretched "
                              "affinely (stretch_start affine)")
-        if self.band != "friction":
+        if self.band != "friction" and self.band_row is None:
+            raise ValueError(f"band: a {self.band} band needs its first course (band_row)")
+        if self.knitted_band:
             if self.band_row is None:
                 raise ValueError(f"band: a {self.band} band needs its first course (band_row)")
             if self.stretch_start != "affine":
                 raise ValueError(f"stretch_start: a knit with a {self.band} band is stretched affinely "
                                  "(stretch_start affine)")
-        if self.memory_peak_ratio is not None and self.natural_curvature == 0:
+        if self.memory_peak_ratio is not None and self.natural_curvature == 0 and self.memory_band is None:
             raise ValueError("memory_peak_ratio: shapes the memory of natural_curvature > 0; the yarn has none")
         check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
         if self.band_row is not None and self.band_row + self.band_courses > self.n_y:
@@ -295,12 +310,20 @@ class CutConfig(_WithPreset):
             material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
             contact_law=self.contact_law, pattern=self.pattern,
             pattern_band=(self.band, self.band_row, self.band_courses) if self.knitted_band else None,
+            memory_band=self.memory_band,
         )
 
     @property
     def knitted_band(self) -> bool:
-        """A run-stop band knitted in another pattern (not a band of friction)."""
-        return self.band_row is not None and self.band != "friction"
+        """A run-stop band knitted in another pattern (not a band of friction or of memory)."""
+        return self.band_row is not None and self.band in KNITTED_BANDS
+
+    @property
+    def memory_band(self) -> tuple[int, int, float] | None:
+        """(first course, courses, K) of a band of yarn that remembers its knitted shape, or None."""
+        if self.band_row is None or self.band != "curvature":
+            return None
+        return (self.band_row, self.band_courses, self.band_curvature)
 
     def dynamics_settings(self):
         from knitlad.engine.contact import Counting
@@ -318,8 +341,8 @@ class CutConfig(_WithPreset):
             frame_every_s=None if self.frame_every_us is None else self.frame_every_us * 1e-6,
             stop_at_edge=self.stop_at_edge, loss_factor=self.loss_factor, loss_peak_hz=self.loss_peak_hz,
             air_drag=self.air_drag, stop_after_stitches=self.stop_after_stitches,
-            friction_band=None if self.band_row is None or self.knitted_band else (
-                self.band_row, self.band_courses, self.band_friction_factor),
+            friction_band=(self.band_row, self.band_courses, self.band_friction_factor)
+            if self.band_row is not None and self.band == "friction" else None,
         )
 
     def settings(self):

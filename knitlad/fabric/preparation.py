@@ -14,6 +14,7 @@ other test of the fabric start from a :class:`StretchedKnit`.
 from __future__ import annotations
 
 import functools
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -107,16 +108,31 @@ class StretchSettings:
     memory_peak_ratio: float | None = None  # max/mean of (kappa_bar/kappa0)^2 (None: the scaled copy's own)
     pattern: str = "jersey"  # the knit's pattern (knitlad.fabric.patterns.PATTERNS)
     pattern_band: tuple[str, int, int] | None = None  # (pattern, first course, courses) knitted in another pattern
+    # (first course, courses, K): a run-stop band of courses whose yarn remembers K instead of natural_curvature
+    memory_band: tuple[int, int, float] | None = None
 
     def __post_init__(self) -> None:
         if (self.lx_over_l0 is None) == (self.fx_target is None):
             raise ValueError("give exactly one of lx_over_l0 (position control) and fx_target (force control)")
-        if self.natural_curvature > 0 and (self.start, self.edge) != ("tiled", "clamped"):
-            raise ValueError("natural_curvature needs the tiled stretch and clamped ends: it is set in the "
+        if self.remembers and (self.start, self.edge) != ("tiled", "clamped"):
+            raise ValueError("natural_curvature (or a memory band) needs the tiled stretch and clamped ends: it is set in the "
                              "periodised stitch and tiled over the knit")
         if (self.pattern != "jersey" or self.pattern_band is not None) and self.start != "affine":
             raise ValueError(f"pattern {self.pattern} (band {self.pattern_band}): the periodised stitch is "
                              "jersey's; this knit is stretched affinely (start='affine')")
+        if self.memory_band is not None and self.memory_band[2] <= 0:
+            raise ValueError(f"memory_band: the band's K must be above 0, not {self.memory_band[2]}")
+
+    @property
+    def remembers(self) -> bool:
+        """Some yarn of the knit has natural curvature (the whole knit, or a memory band)."""
+        return self.natural_curvature > 0 or self.memory_band is not None
+
+    @property
+    def cell_memory(self) -> float:
+        """K the periodised stitch remembers: the band's, if there is one (the other courses take theirs
+        from it by scaling, :meth:`KnitBox.tile_frames`), else the knit's."""
+        return self.natural_curvature if self.memory_band is None else self.memory_band[2]
 
 
 @dataclass(frozen=True)
@@ -310,9 +326,24 @@ class KnitBox:
             state.ref_twist[hinges] = src.ref_twist[jh]
             kappa_bar[hinges] = src_model.kappa_bar[jh]
             twist_bar[hinges] = src_model.twist_bar[jh]
+        if self.s.memory_band is not None:
+            self.scale_memory_outside_band(model.hinge_e1, edge_yarn, kappa_bar, twist_bar)
         rods = rods.replace_model(kappa_bar=kappa_bar, twist_bar=twist_bar, framed=cell.sim.rods.framed)
         self.knit.rods = rods
         self.sim = Simulation(rods, contact=self.sim.contact_model)
+
+    def scale_memory_outside_band(self, hinge_e1, edge_yarn, kappa_bar, twist_bar) -> None:
+        """The courses outside the memory band (and the held bars) remember the knit's K instead of the
+        band's: their natural curvature, tiled from the stitch that remembered the band's K, is scaled by
+        sqrt(K / K_band) (the memory is proportional to alpha, :mod:`knitlad.fabric.shape_memory`, and a
+        uniform scale keeps its max/mean peak ratio); a yarn that remembers nothing (K = 0) has no natural
+        twist either. In place."""
+        first, courses, k_band = self.s.memory_band
+        band = set(self.knit.courses[first:first + courses])
+        outside = np.isin(edge_yarn[hinge_e1], [y for y in self.knit.courses + self.knit.bars if y not in band])
+        kappa_bar[outside] *= math.sqrt(self.s.natural_curvature / k_band)
+        if self.s.natural_curvature == 0:
+            twist_bar[outside] = 0.0
 
     def stretched(self, fx: float, within_tolerance: bool, wall_s: float) -> StretchedKnit:
         """The knit as it is now, as a :class:`StretchedKnit` (its f_x measured: ``fx``); stops on a deep overlap."""
@@ -338,7 +369,7 @@ def stretch(s: StretchSettings, progress: Callable[[str, float], None] | None = 
         except CourseTooWide:
             # thick yarns (d/l0 = 1/20): no periodised stitch whose loops interlock by d fits, so
             # the knit, built narrower, is stretched affinely (natural curvature needs the stitch)
-            if s.natural_curvature > 0:
+            if s.remembers:
                 raise
     if fx is None and s.lx_over_l0 is not None:
         stretch_to(box, s.lx_over_l0, s.ly_over_l0, s.stretch_increment, progress=report)
@@ -401,7 +432,7 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
         # from the knit's build width: tall cells are built narrower (build_width)
         cell = stitch_of(s, box.build_lx)
         stretch_to(cell, cell.lx, s.ly_over_l0, s.stretch_increment, min_increments=0)
-        if s.natural_curvature > 0:
+        if s.remembers:
             remember_unloaded_shape(cell, s)
         if s.lx_over_l0 is not None:
             stretch_to(cell, s.lx_over_l0, s.ly_over_l0, s.stretch_increment, min_increments=0)
@@ -459,12 +490,13 @@ def unloaded_width(ly_over_l0: float, nodes_per_stitch: int, material: Material,
 
 def remember_unloaded_shape(cell: StitchRun, s: StretchSettings) -> None:
     """The stitch is taken to the f_x = 0 curve (the unloaded fabric), relaxed, and remembers that shape
-    with mean (kappa_bar/kappa0)^2 = K (:mod:`knitlad.fabric.shape_memory`); relaxed again, twist on."""
+    with mean (kappa_bar/kappa0)^2 = K (:mod:`knitlad.fabric.shape_memory`; K the band's if the knit has a
+    memory band, :attr:`StretchSettings.cell_memory`); relaxed again, twist on."""
     stretch_to(cell, unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material, s.sagitta_radius_d, s.contact_law),
                s.ly_over_l0, s.stretch_increment, min_increments=0)
     cell.settle()
     try:
-        cell.remember_shape(s.natural_curvature, s.memory_peak_ratio)
+        cell.remember_shape(s.cell_memory, s.memory_peak_ratio)
     except ValueError as e:  # a peak the stitch's hinges cannot give: the settings ask the impossible
         raise InfeasibleRun(f"memory_peak_ratio: {e}") from None
     cell.settle()

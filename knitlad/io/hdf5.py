@@ -473,8 +473,9 @@ def read_stretched_knit(path: str | Path):
         settings.setdefault("natural_curvature", 0.0)
         settings.setdefault("sagitta_radius_d", 0.0)  # knits stretched before the sagitta correction had none
         settings.setdefault("contact_law", "linear")  # and before the contact laws, the linear one
-        if settings.get("pattern_band") is not None:  # JSON has lists, the frozen settings tuples
-            settings["pattern_band"] = tuple(settings["pattern_band"])
+        for band in ("pattern_band", "memory_band"):  # JSON has lists, the frozen settings tuples
+            if settings.get(band) is not None:
+                settings[band] = tuple(settings[band])
         geometry = json.loads(f.attrs["geometry_json"])
         geometry["material"] = material
         if geometry.get("band") is not None:

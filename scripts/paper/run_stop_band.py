@@ -1,9 +1,10 @@
 """Does a run-stop band hold the ladder? A table from a sweep over bands (configs/run_stop_band.yaml: the band's
-friction; configs/run_stop_rib_band.yaml: a band knitted in rib beside the plain knit).
+friction; configs/run_stop_rib_band.yaml: a band knitted in rib beside the plain knit;
+configs/run_stop_curvature_band.yaml: a band of a yarn with memory beside the plain knit).
 
     python scripts/paper/run_stop_band.py runs/run_stop_band [--csv FILE] [--png FILE]
 
-For each job: the band (its first course and courses, what it is: friction x factor, rib, or none for the
+For each job: the band (its first course and courses, what it is: friction x factor, rib, curvature K, or none for the
 plain knit, read where the band would be), f_x^ini, the damage n_lad/n_y, how
 far the ladders reached above and below the cut (the highest and lowest course with an undone cell, from
 the job file's final ``laddered`` map), whether a ladder entered the band and whether one crossed it (an
@@ -44,6 +45,8 @@ def table(folder: Path) -> pd.DataFrame:
             first = int(job.band_row)
         last = first + int(job.band_courses) - 1
         factor = job.band_friction_factor if kind == "friction" else 1.0
+        if kind == "curvature":  # a band of a yarn with memory: its K
+            kind = f"curvature K{job.band_curvature:g}"
         out.append({"fx_nominal": job.get("fx_nominal", job.fx), "fx_ini": job.fx_ini, "band": f"{first}-{last}",
                     "kind": kind if kind != "friction" else f"friction x{factor:g}", "factor": factor,
                     "mu_band": job.mu * factor, "n_lad_over_ny": job.n_lad_over_ny,

@@ -30,6 +30,10 @@ def test_replace_validates_as_a_new_config_does():
     ({"fx": 4.0, "memory_peak_ratio": 3.5}, "memory_peak_ratio"),
     ({"fx": 4.0, "memory_peak_ratio": 0.5, "natural_curvature": 1.0}, "memory_peak_ratio"),
     ({"fx": 4.0, "no_such_field": 1}, "no_such_field"),
+    ({"fx": 4.0, "band": "curvature"}, "band_row"),
+    ({"fx": 4.0, "band": "curvature", "band_row": 30, "twist": False}, "carries twist"),
+    ({"fx": 4.0, "band": "curvature", "band_row": 30, "stretch_start": "affine"}, "tiled"),
+    ({"fx": 4.0, "band": "curvature", "band_row": 30, "band_curvature": 0}, "band_curvature"),
 ])
 def test_a_bad_config_is_one_line_naming_what_is_wrong(fields, says):
     with pytest.raises(ValidationError) as info:
@@ -43,6 +47,14 @@ def test_natural_curvature_turns_twist_on_and_reaches_the_stretch_with_its_shape
     s = cfg.stretch_settings()
     assert cfg.twist and s.natural_curvature == 1.0 and s.memory_peak_ratio == 3.5
     assert cfg.dynamics_settings().mu == cfg.mu
+
+
+def test_a_curvature_band_turns_twist_on_and_reaches_the_stretch_not_the_friction():
+    cfg = CutConfig(fx=4.0, band="curvature", band_row=30, band_courses=3, band_curvature=2.0)
+    assert cfg.twist and not cfg.knitted_band and cfg.stretch_start == "tiled"
+    assert cfg.stretch_settings().memory_band == (30, 3, 2.0)
+    assert cfg.dynamics_settings().friction_band is None
+    assert CutConfig(fx=4.0, band_row=30).stretch_settings().memory_band is None
 
 
 def test_replacing_the_preset_brings_its_settings_and_keeps_those_given():
