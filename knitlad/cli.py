@@ -735,8 +735,8 @@ def stitch(
         typer.echo(_json(result.summary()))
     else:
         m = settings.material
-        typer.echo(f"periodised stitch at l_x/l0 = {cfg.lx}, l_y/l0 = {cfg.ly} (d/l0 = {m.diameter / m.stitch_length:.4g}, "
-                   f"{cfg.resolution} nodes/stitch): f_x = {result.fx:.4f}, f_y = {result.fy:.4f}"
+        typer.echo(f"periodised {cfg.pattern} stitch at l_x/l0 = {cfg.lx}, l_y/l0 = {cfg.ly} "
+                   f"(d/l0 = {m.diameter / m.stitch_length:.4g}, {cfg.resolution} nodes/stitch): f_x = {result.fx:.4f}, f_y = {result.fy:.4f}"
                    f"{'' if result.converged else ' (relaxation NOT converged)'}  [{result.wall_s:.2f} s]")
     if not result.converged:  # its tensions are no equilibrium's: a failed run, whatever was printed
         typer.echo("knitlad: run failed: the stitch's relaxation did not converge, so f_x and f_y are not the "

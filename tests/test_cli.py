@@ -324,3 +324,12 @@ def test_a_stitch_that_does_not_converge_fails_instead_of_printing_its_tensions_
     p = subprocess.run([*KNITLAD, "stitch", "--d-over-l0", "1e-9", "--preset", "fast", "--resolution", "12",
                         "--lx", "0.35"], capture_output=True, text=True)
     assert p.returncode == 1 and "did not converge" in p.stderr.strip().splitlines()[-1], p.stderr
+
+
+def test_the_stitch_of_a_pattern_is_one_repeat_and_says_which():
+    """`stitch --pattern garter`: the cell of a knit and a purl course, its tensions per thread and stitch."""
+    p = subprocess.run([*KNITLAD, "stitch", "--pattern", "garter", "--preset", "fast", "--resolution", "16",
+                        "--lx", "0.36"], capture_output=True, text=True)
+    assert p.returncode == 0 and p.stdout.startswith("periodised garter stitch"), p.stderr
+    fx = float(p.stdout.split("f_x = ")[1].split(",")[0])
+    assert fx > 0  # in tension at 0.36 (docs/patterns.md: garter's f_x = 0 width is below it)

@@ -107,8 +107,29 @@ def test_the_loose_to_jammed_table_averages_each_points_knits_and_counts_its_fai
     assert "| 25 | - | 0 (1) |" in study.markdown(points.reset_index())
 
 
+def test_the_threshold_bracket_per_thickness_needs_every_knit_to_agree():
+    """Held: no knit undid 4.2 cells or more; laddered: every knit did; a point whose knits disagree brackets
+    nothing (the bracket then spans it)."""
+    study = paper_script("loose_to_jammed")
+    cells = {(1 / 50, 5.0): (4, 4), (1 / 50, 6.0): (8, 9), (1 / 40, 4.0): (3, 4), (1 / 40, 5.0): (4, 7),
+             (1 / 40, 6.0): (8, 8)}
+    rows = [{"d_over_l0": d, "fx_nominal": fx, "status": "ok", "n_lad": n}
+            for (d, fx), ns in cells.items() for n in ns]
+    brackets = study.thresholds(pd.DataFrame(rows)).set_index("l0_over_d")
+    assert (brackets.loc[50, "held_up_to"], brackets.loc[50, "laddered_from"]) == (5.0, 6.0)
+    assert (brackets.loc[40, "held_up_to"], brackets.loc[40, "laddered_from"]) == (4.0, 6.0)
+    assert brackets.loc[40, "cells_per_knit"] == "4: 3, 4; 5: 4, 7; 6: 8, 8"
+
+
 def test_a_patterns_unloaded_width_is_where_its_loading_curve_turns_positive():
     study = paper_script("pattern_curves")
     curve = pd.DataFrame({"box_lx": [0.30, 0.31, 0.32, 0.33], "fx": [-2.0, -1.0, 1.0, 3.0]})
     assert study.zero_crossing(curve) == pytest.approx(0.315)
     assert np.isnan(study.zero_crossing(curve.assign(fx=[1.0, 2.0, 3.0, 4.0])))  # in tension from the build
+
+
+def test_a_periodised_patterns_unloaded_width_is_where_its_curve_turns_positive():
+    study = paper_script("pattern_stitch_curves")
+    curve = pd.DataFrame({"lx_over_l0": [0.16, 0.18, 0.20, 0.22], "fx": [-2.0, -1.0, 1.0, 3.0]})
+    assert study.zero_width(curve) == pytest.approx(0.19)
+    assert np.isnan(study.zero_width(curve.assign(fx=[-1.0, -1.0, -1.0, -1.0])))  # never in tension

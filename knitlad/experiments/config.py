@@ -553,7 +553,7 @@ class StitchConfig(_WithPreset):
     """One periodised stitch (``knitlad stitch``): tensions at imposed (l_x, l_y)."""
 
     PRESETS: ClassVar[dict[str, dict]] = STITCH_PRESETS
-    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law",)
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law", "pattern")
 
     lx: float = Field(0.35, gt=0.2, lt=0.6, description="cell width l_x/l0 [-]")
     ly: float = Field(0.25, gt=0.15, lt=0.4, description="cell height l_y/l0 [-]")
@@ -564,6 +564,9 @@ class StitchConfig(_WithPreset):
         "yarn diameter over stitch length d/l0 [-]; 1/70, the paper's rounded value and the default, means its "
         "Nylon itself: d = 0.14 mm with l0 = 9.74 mm, d/l0 = 0.01437 (knitlad.experiments.config.material_for)"))
     contact_law: ContactLawName = _contact_law()
+    pattern: PatternName = Field("jersey", description=(
+        "the knit's pattern: the cell holds one repeat (jersey 1 x 1, rib 2 x 1, garter 1 x 2 stitches) and the "
+        "tensions are per thread and per stitch [-]"))
 
     @model_validator(mode="after")
     def sagitta_within_reach(self) -> "StitchConfig":
@@ -576,7 +579,7 @@ class StitchConfig(_WithPreset):
 
         return StitchSettings(lx_over_l0=self.lx, ly_over_l0=self.ly, nodes_per_stitch=self.resolution,
                               material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
-                              contact_law=self.contact_law, **model_choices)
+                              contact_law=self.contact_law, pattern=self.pattern, **model_choices)
 
 
 # the longest segment, over the correction's radius of curvature R, at which the sagitta correction

@@ -1,4 +1,4 @@
-"""Tensions of the periodised jersey stitch at imposed (l_x, l_y), and the f_x = 0 curve.
+"""Tensions of the periodised stitch (one repeat of a knit pattern) at imposed (l_x, l_y), and the f_x = 0 curve.
 
 The stitch (:mod:`knitlad.fabric.scenes.stitch`) is built at l_x = min(l_x, 0.30 l0),
 l_y = min(l_y, 0.25 l0) (wider or taller, Crane's loops of successive courses
@@ -12,10 +12,12 @@ The tensions are derivatives of the energy of one cell at equilibrium,
 
 taken by central differences under an affine deformation of the relaxed cell:
 at equilibrium the internal relaxation does not change E to first order, so
-this is the total derivative (the virial tension). One cell holds one course
-and one column, so these are the forces per thread. E_cell counts the yarn's
+this is the total derivative (the virial tension). A jersey cell holds one course
+and one column, so these are the forces per thread; a pattern's repeat of n_c columns
+and n_r courses is n_c l_x wide and carried by n_r threads, so f_x = dE_cell/dl_x / (n_c n_r f0),
+the derivative by one stitch's periodicity per stitch (and f_y alike). E_cell counts the yarns'
 own stretching and bending (and twisting, with natural curvature: framed DER),
-its contacts with itself, and half of each contact with an image (the other
+their contacts with each other, and half of each contact with an image (the other
 half belongs to the neighbouring cell).
 """
 
@@ -32,6 +34,7 @@ from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP, ContactM
 from knitlad.engine.kernels.contact import contact_energy
 from knitlad.engine.kernels.elastic import bending_energy, edge_vectors, framed_bending_twisting_energy, stretching_energy
 from knitlad.engine.kernels.frames import material_frames, transport_reference_frames, update_reference_twist
+from knitlad.fabric.patterns import knit_pattern
 from knitlad.fabric.shape_memory import remember_shape
 from knitlad.fabric.presets import STITCH_PRESETS
 from knitlad.fabric.scenes.knit import BUILD_LX, KnitGeometry, build_loop_overlap, widest_fitting_width
@@ -56,6 +59,7 @@ class StitchSettings:
     overlap_fraction: float = KNIT_OVERLAP
     sagitta_radius_d: float = 0.0  # the contact's sagitta correction (knitlad.engine.contact.sagitta_corrected_radius), in d; 0: none
     contact_law: str = "linear"  # the contact's normal law (knitlad.engine.kernels.contact_law)
+    pattern: str = "jersey"  # the knit pattern whose repeat the cell holds (knitlad.fabric.patterns)
     stretch_increment: float = 0.005
     relax_steps: int = 20_000  # per increment
     force_tol_f0: float = 1e-4  # final relaxation: max |F| on a node, in f0
@@ -95,9 +99,11 @@ class StitchRun:
         (:func:`~knitlad.fabric.scenes.knit.build_loop_overlap`: they need narrower cells)."""
         s, m = self.s, self.s.material
         lx = widest_fitting_width(min(s.lx_over_l0, BUILD_LX), self.ly, m, s.nodes_per_stitch,
-                                  min_loop_overlap=max(m.diameter, build_loop_overlap(m)))
-        return lx, KnitGeometry(n_x=1, n_y=1, l_x=lx * m.stitch_length, l_y=self.ly * m.stitch_length,
-                          nodes_per_stitch=s.nodes_per_stitch, material=m)
+                                  min_loop_overlap=max(m.diameter, build_loop_overlap(m, s.pattern)),
+                                  pattern=s.pattern)
+        columns, courses = knit_pattern(s.pattern).period
+        return lx, KnitGeometry(n_x=columns, n_y=courses, l_x=lx * m.stitch_length, l_y=self.ly * m.stitch_length,
+                                nodes_per_stitch=s.nodes_per_stitch, material=m, pattern=s.pattern)
 
     def _relax(self, steps: int, tol_f0: float) -> dict:
         info = self.sim.relax(force_tol_N=tol_f0 * self.s.material.f0, max_steps=steps)
@@ -156,16 +162,17 @@ class StitchRun:
 
 def stitch_tensions(lx_over_l0: float, ly_over_l0: float, nodes_per_stitch: int | None = None,
                     material: Material = NYLON, sagitta_radius_d: float | None = None,
-                    contact_law: str = "linear") -> StitchResult:
-    """The stitch at (l_x, l_y) [l/l0]; the resolution and the sagitta correction default to the
-    default preset's (:mod:`knitlad.fabric.presets`)."""
+                    contact_law: str = "linear", pattern: str = "jersey") -> StitchResult:
+    """The stitch (one repeat of ``pattern``) at (l_x, l_y) [l/l0]; the resolution and the sagitta correction
+    default to the default preset's (:mod:`knitlad.fabric.presets`)."""
     preset = STITCH_PRESETS["default"]
     if nodes_per_stitch is None:
         nodes_per_stitch = preset["resolution"]
     if sagitta_radius_d is None:
         sagitta_radius_d = preset["sagitta_radius"]
     return StitchRun(StitchSettings(lx_over_l0, ly_over_l0, nodes_per_stitch, material,
-                                    sagitta_radius_d=sagitta_radius_d, contact_law=contact_law)).run()
+                                    sagitta_radius_d=sagitta_radius_d, contact_law=contact_law,
+                                    pattern=pattern)).run()
 
 
 def zero_tension_lx(ly_over_l0: float, lo: float = 0.22, hi: float = 0.40, tol: float = 1e-3, **kwargs) -> float:
@@ -242,6 +249,6 @@ def cell_tensions(sim: Simulation, cell: PeriodicStitch, f0_N: float, rel_step: 
             sim.replace_model(edge_shift=model_saved.edge_shift, image_shift=model_saved.image_shift)
             cell.lx, cell.ly = lx, ly
         length = lx if axis == 0 else ly
-        out.append((energies[0] - energies[1]) / (2 * rel_step * length) / f0)
+        out.append((energies[0] - energies[1]) / (2 * rel_step * length) / (cell.stitches * f0))
     sim.fresh_contacts()
     return out[0], out[1]

@@ -1,12 +1,17 @@
-"""Loose to jammed: laddering against the yarn's thickness d/l0 (docs/reference/loose_to_jammed16.yaml).
+"""Loose to jammed: laddering against the yarn's thickness d/l0 (docs/reference/loose_to_jammed16.yaml), and the
+threshold against it (docs/reference/threshold_thickness16.yaml).
 
     python scripts/paper/loose_to_jammed.py runs/loose_to_jammed16 [--csv FILE] [--png FILE]
+    python scripts/paper/loose_to_jammed.py runs/threshold_thickness16 --threshold [--csv FILE]
 
 Per (d/l0, nominal f_x^ini), over the stretched knits of the point (mean +- standard error): f_x^ini, the
 knit's l_x/l0 and l_x/l_x0 (l_x0 the periodised stitch's f_x = 0 width at the knit's l_y, its unloaded
 width, also printed per d/l0), n_lad/n_y, the cells released into loaded courses, v_lad/c_b and f_x^fin
 of the courses the ladder crossed (the paper's post-arrest tension, its reading of f_thr). Prints a
-markdown table.
+markdown table. With --threshold, per d/l0: the threshold bracketed between the highest nominal tension at
+which no knit laddered and the lowest at which every knit did (a cut ladders from
+knitlad.experiments.resistance.LADDERING_ONSET_CELLS undone cells, the threshold study's criterion), with
+each point's cells per knit.
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ import numpy as np
 import pandas as pd
 
 from knitlad.experiments.config import material_for
+from knitlad.experiments.resistance import LADDERING_ONSET_CELLS
 from knitlad.fabric.preparation import unloaded_width
 
 
@@ -32,7 +38,7 @@ def table(folder: Path) -> pd.DataFrame:
         if job.status == "ok":
             m = material_for(d_l0)
             l_x0 = unloaded_width(float(job.ly), int(job.resolution), m, float(job.sagitta_radius))
-            row.update(fx_ini=job.fx_ini, lx_over_l0=job.lx_over_l0, lx0_over_l0=l_x0,
+            row.update(fx_ini=job.fx_ini, n_lad=job.n_lad, lx_over_l0=job.lx_over_l0, lx0_over_l0=l_x0,
                        lx_over_lx0=job.lx_over_l0 / l_x0, n_lad_over_ny=job.n_lad_over_ny,
                        released_over_ny=job.n_lad_released_over_ny, v_lad_over_cb=job.v_lad_over_cb,
                        fx_fin_crossed=job.fx_fin_crossed, reached_edge=bool(job.reached_edge))
@@ -56,6 +62,27 @@ def by_point(df: pd.DataFrame) -> pd.DataFrame:
         row["edge"] = int(ok.reached_edge.astype(bool).sum()) if "reached_edge" in ok else 0
         out.append(row)
     return pd.DataFrame(out).sort_values(["fx_nominal", "l0_over_d"], ascending=[True, False])
+
+
+def thresholds(df: pd.DataFrame) -> pd.DataFrame:
+    """Per d/l0: the cells each knit undid at each nominal tension, and the threshold's bracket (NaN where
+    no tension held on every knit, or none laddered on every knit; a point whose knits disagree brackets
+    nothing)."""
+    out = []
+    for d_l0, g in df[df.status == "ok"].groupby("d_over_l0"):
+        held, laddered, cells = [], [], []
+        for fx, p in g.groupby("fx_nominal"):
+            ladders = p.n_lad >= LADDERING_ONSET_CELLS
+            if not ladders.any():
+                held.append(fx)
+            elif ladders.all():
+                laddered.append(fx)
+            cells.append(f"{fx:g}: " + ", ".join(f"{n:.0f}" for n in p.n_lad))
+        below = max(held) if held else np.nan
+        above = min([f for f in laddered if not f < below]) if laddered else np.nan
+        out.append({"l0_over_d": 1 / d_l0, "held_up_to": below, "laddered_from": above,
+                    "cells_per_knit": "; ".join(cells)})
+    return pd.DataFrame(out).sort_values("l0_over_d", ascending=False)
 
 
 def markdown(points: pd.DataFrame) -> str:
@@ -102,7 +129,14 @@ def main() -> None:
     parser.add_argument("folder", type=Path)
     parser.add_argument("--csv", type=Path)
     parser.add_argument("--png", type=Path)
+    parser.add_argument("--threshold", action="store_true", help="bracket the threshold per d/l0")
     args = parser.parse_args()
+    if args.threshold:
+        brackets = thresholds(table(args.folder))
+        print(brackets.to_string(index=False))
+        if args.csv:
+            brackets.to_csv(args.csv, index=False)
+        return
     points = by_point(table(args.folder))
     print(markdown(points))
     if args.csv:

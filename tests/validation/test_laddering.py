@@ -89,3 +89,17 @@ def test_a_run_stop_band_of_three_times_the_friction_holds_the_ladder_at_low_ten
         laddered = run_ladder(cfg.settings()).final_laddered
         reach[fx] = int(np.flatnonzero(laddered.any(axis=1)).max())
     assert reach[4.0] < 11 <= reach[8.0]
+
+
+@pytest.mark.slow
+def test_a_run_stop_band_knitted_in_rib_holds_the_ladder_that_crosses_the_plain_knit():
+    """docs/snag.md (2026-12-06, 16 x 16, default preset, three knits per point): two courses of 1x1 rib
+    (courses 11-12) stop the upward ladder at course 10 on every knit at f_x^ini 4, where the plain jersey,
+    stretched affinely to the same target, ladders to course 14. One knit each here (the middle target)."""
+    reach = {}
+    for band in (None, 11):
+        cfg = CutConfig(n_x=16, n_y=16, fx=4.0, band="rib" if band else "friction", band_row=band,
+                        band_courses=2, stretch_start="affine")
+        laddered = run_ladder(cfg.settings()).final_laddered
+        reach[band] = int(np.flatnonzero(laddered.any(axis=1)).max())
+    assert reach[11] < 11 <= reach[None]

@@ -9,6 +9,7 @@ import pytest
 import knitlad as kl
 from knitlad.engine import units
 from knitlad.engine.contact import ContactModel
+from knitlad.fabric.patterns import KNIT
 from knitlad.fabric.scenes.stitch import PeriodicStitch
 from knitlad.fabric.stitch_model import cell_tensions, stitch_tensions, zero_tension_lx
 
@@ -78,6 +79,37 @@ def test_the_zero_tension_point_is_converged_in_the_resolution():
     """l_x/l0 at f_x = 0 for l_y/l0 = 0.25: 0.3366 (36 nodes/stitch) and 0.3345 (48); 24 gives 0.3304."""
     assert zero_tension_lx(0.25, nodes_per_stitch=36) == pytest.approx(zero_tension_lx(0.25, nodes_per_stitch=48),
                                                                         abs=0.005)
+
+
+@pytest.mark.parametrize("repeat", [((KNIT, KNIT),), ((KNIT,), (KNIT,))], ids=["two_columns", "two_courses"])
+def test_a_cell_of_two_jersey_stitches_carries_the_tensions_of_one(monkeypatch, repeat):
+    """The tensions of a repeat of n_c x n_r stitches are per thread and per stitch (dE_cell/dl_x over
+    n_c n_r f0, knitlad.fabric.stitch_model): jersey written as a 2 x 1 or a 1 x 2 repeat is the same fabric,
+    so its cell, twice the yarn with images a repeat apart, must carry the 1 x 1 cell's f_x and f_y."""
+    from knitlad.fabric import patterns, stitch_model
+
+    monkeypatch.setitem(patterns.PATTERNS, "jersey2", patterns.KnitPattern("jersey2", repeat))
+    # built as jersey is (not with the deeper interlock of patterns that purl): the same stretch path
+    jersey_overlap = stitch_model.build_loop_overlap
+    monkeypatch.setattr(stitch_model, "build_loop_overlap", lambda material, pattern: jersey_overlap(material))
+    one, two = (stitch_tensions(0.36, 0.25, nodes_per_stitch=16, sagitta_radius_d=0.0, pattern=p)
+                for p in ("jersey", "jersey2"))
+    assert two.fx == pytest.approx(one.fx, rel=1e-3) and two.fy == pytest.approx(one.fy, rel=1e-3)
+    assert one.fx > 1  # in tension: the comparison is not of two zeros
+
+
+@pytest.mark.parametrize("pattern", ["rib", "garter"])
+def test_a_patterns_cell_holds_one_repeat_one_yarn_per_course(pattern):
+    from knitlad.fabric.patterns import knit_pattern
+    from knitlad.fabric.stitch_model import StitchRun, StitchSettings
+
+    run = StitchRun(StitchSettings(0.34, 0.25, 16, M, pattern=pattern))
+    columns, courses = knit_pattern(pattern).period
+    m = run.cell.rods.model
+    real = np.unique(m.edge_yarn[run.cell.real_edges])
+    assert run.cell.repeat == (columns, courses) and real.size == courses
+    assert m.edge_yarn[run.cell.real_edges].size == columns * courses * 16  # a closed yarn: an edge per node
+    assert not np.isin(real, m.node_yarn[m.image_node]).any()  # the real yarns are no image
 
 
 @pytest.mark.slow
