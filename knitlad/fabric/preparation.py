@@ -115,8 +115,8 @@ class StretchSettings:
         if (self.lx_over_l0 is None) == (self.fx_target is None):
             raise ValueError("give exactly one of lx_over_l0 (position control) and fx_target (force control)")
         if self.remembers and (self.start, self.edge) != ("tiled", "clamped"):
-            raise ValueError("natural_curvature (or a memory band) needs the tiled stretch and clamped ends: it is set in the "
-                             "periodised stitch and tiled over the knit")
+            raise ValueError("natural_curvature (or a memory band) needs the tiled stretch and clamped ends: it is "
+                             "set in the periodised stitch and tiled over the knit")
         if (self.pattern != "jersey" or self.pattern_band is not None) and self.start != "affine":
             raise ValueError(f"pattern {self.pattern} (band {self.pattern_band}): the periodised stitch is "
                              "jersey's; this knit is stretched affinely (start='affine')")
