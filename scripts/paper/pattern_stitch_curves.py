@@ -2,7 +2,7 @@
 of each pattern at each l_y (docs/patterns.md).
 
     python scripts/paper/pattern_stitch_curves.py [--ly 0.22 0.25 0.28] [--step 0.01] [--csv FILE] [--png FILE]
-        [--knit-csv docs/reference/pattern_curves10.csv]
+        [--knit-csv docs/reference/pattern_curves10.csv] [--replot CSV]
 
 Each pattern's cell is one repeat (jersey 1 x 1, rib 2 x 1, garter 1 x 2 stitches: knitlad.fabric.scenes.stitch),
 built where its loops interlock (knitlad.fabric.stitch_model.StitchRun), narrowed affinely to --lx-bottom,
@@ -84,7 +84,7 @@ def plot(curves: pd.DataFrame, knit: pd.DataFrame | None, png: Path) -> None:
     ax.set_title("l_y/l0 = 0.25, mu = 0")
     ax.legend(fontsize=7)
     zero = curves.groupby(["pattern", "ly_over_l0"], sort=False).apply(zero_width).rename("lx0").reset_index()
-    for pattern, g in zero.groupby("pattern", sort=False):
+    for pattern, g in zero.sort_values("ly_over_l0").groupby("pattern", sort=False):
         az.plot(g.lx0, g.ly_over_l0, "s-", color=colours[pattern], label=pattern)
     az.set_xlabel("l_x/l0 at f_x = 0")
     az.set_ylabel("l_y/l0")
@@ -104,9 +104,13 @@ def main() -> None:
     parser.add_argument("--csv", type=Path)
     parser.add_argument("--png", type=Path)
     parser.add_argument("--knit-csv", type=Path)
+    parser.add_argument("--replot", type=Path, help="read the curves from this CSV (of --csv) instead of computing")
     args = parser.parse_args()
-    curves = pd.concat([stitch_loading_curve(p, ly, args.lx_bottom, args.lx_top, args.step)
-                        for p in args.patterns for ly in args.ly], ignore_index=True)
+    if args.replot:
+        curves = pd.read_csv(args.replot)
+    else:
+        curves = pd.concat([stitch_loading_curve(p, ly, args.lx_bottom, args.lx_top, args.step)
+                            for p in args.patterns for ly in args.ly], ignore_index=True)
     for (pattern, ly), g in curves.groupby(["pattern", "ly_over_l0"], sort=False):
         print(f"{pattern}: l_y/l0 {ly:.3f}: f_x = 0 at l_x/l0 = {zero_width(g):.3f}; f_x at 0.30 / 0.36: "
               f"{np.interp(0.30, g.lx_over_l0, g.fx):.2f} / {np.interp(0.36, g.lx_over_l0, g.fx):.2f}")
