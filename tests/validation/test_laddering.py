@@ -103,3 +103,17 @@ def test_a_run_stop_band_knitted_in_rib_holds_the_ladder_that_crosses_the_plain_
         laddered = run_ladder(cfg.settings()).final_laddered
         reach[band] = int(np.flatnonzero(laddered.any(axis=1)).max())
     assert reach[11] < 11 <= reach[None]
+
+
+@pytest.mark.slow
+def test_a_run_stop_band_of_a_yarn_with_memory_holds_the_ladder_at_low_tension_not_at_high():
+    """docs/snag.md (2026-12-06, 16 x 16, default preset, twist on, two knits per point): two courses (11-12)
+    of a yarn that remembers its knitted shape with K = 3, in a jersey of straight yarn, stop the upward
+    ladder at course 10 at f_x^ini 4 on both knits; at 8 it crosses them to course 14. One knit each here."""
+    reach = {}
+    for fx in (4.0, 8.0):
+        cfg = CutConfig(n_x=16, n_y=16, fx=fx, band="curvature", band_row=11, band_courses=2, band_curvature=3.0,
+                        max_time_ms=10)
+        laddered = run_ladder(cfg.settings()).final_laddered
+        reach[fx] = int(np.flatnonzero(laddered.any(axis=1)).max())
+    assert reach[4.0] < 11 <= reach[8.0]
