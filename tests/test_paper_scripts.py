@@ -133,3 +133,12 @@ def test_a_periodised_patterns_unloaded_width_is_where_its_curve_turns_positive(
     curve = pd.DataFrame({"lx_over_l0": [0.16, 0.18, 0.20, 0.22], "fx": [-2.0, -1.0, 1.0, 3.0]})
     assert study.zero_width(curve) == pytest.approx(0.19)
     assert np.isnan(study.zero_width(curve.assign(fx=[-1.0, -1.0, -1.0, -1.0])))  # never in tension
+
+
+def test_the_tensile_stretch_at_a_tension_is_read_on_the_loading_from_the_start():
+    study = paper_script("tensile_patterns")
+    # leg, t, box l_x, box l_y, l_x, l_y, f_x, f_y: loading 0.20 -> 0.30, then unloading
+    r = np.array([[1, 0, 0.20, 0.25, 0, 0, 1.0, 0], [1, 0, 0.25, 0.25, 0, 0, 3.0, 0],
+                  [1, 0, 0.30, 0.25, 0, 0, 5.0, 0], [-1, 0, 0.25, 0.25, 0, 0, 4.5, 0]])
+    assert study.stretch_at(r, 4.0) == pytest.approx(0.275 / 0.20 - 1)  # not the unloading's 4.5 at 0.25
+    assert study.stretch_at(r, 0.5) == 0.0 and np.isnan(study.stretch_at(r, 6.0))
