@@ -17,6 +17,14 @@ from knitlad.io.atomic import atomic_path
 TIMING_COLUMNS = ("wall_s", "job_wall_s", "wall_stretch_s", "wall_propagate_s")  # differ from run to run
 
 
+def markdown_table(df: pd.DataFrame) -> str:
+    """``df`` as a markdown table, its floats to 3 significant digits (the tables of docs/ and the paper scripts)."""
+    lines = ["| " + " | ".join(str(c) for c in df.columns) + " |", "|" + "---|" * len(df.columns)]
+    for _, row in df.iterrows():
+        lines.append("| " + " | ".join(f"{v:.3g}" if isinstance(v, float) else str(v) for v in row) + " |")
+    return "\n".join(lines)
+
+
 def summary_frame(rows: list[dict]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 

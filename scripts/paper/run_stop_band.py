@@ -22,6 +22,8 @@ import h5py
 import numpy as np
 import pandas as pd
 
+from knitlad.io.summary import markdown_table
+
 
 def reach(h5: Path) -> tuple[np.ndarray, int, int]:
     """(the final laddered map (rows, columns), the highest and the lowest course with an undone cell)."""
@@ -71,13 +73,6 @@ def by_point(df: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def markdown(df: pd.DataFrame) -> str:
-    lines = ["| " + " | ".join(df.columns) + " |", "|" + "---|" * len(df.columns)]
-    for _, row in df.iterrows():
-        lines.append("| " + " | ".join(f"{v:.3g}" if isinstance(v, float) else str(v) for v in row) + " |")
-    return "\n".join(lines)
-
-
 def draw(folder: Path, df: pd.DataFrame, png: str) -> None:
     import matplotlib
 
@@ -106,9 +101,9 @@ def main() -> None:
     p.add_argument("--png")
     args = p.parse_args()
     df = table(args.folder)
-    print(markdown(df.drop(columns=["job_id"])))
+    print(markdown_table(df.drop(columns=["job_id"])))
     print()
-    print(markdown(by_point(df)))
+    print(markdown_table(by_point(df)))
     if args.csv:
         df.to_csv(args.csv, index=False)
     if args.png:

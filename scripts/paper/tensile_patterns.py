@@ -19,6 +19,8 @@ import h5py
 import numpy as np
 import pandas as pd
 
+from knitlad.io.summary import markdown_table
+
 LEG, BOX_LX, FX = 0, 2, 6  # columns of knitlad.experiments.tensile.COLUMNS
 LOADING, UNLOADING = 1, -1
 
@@ -56,13 +58,6 @@ def table(folder: Path, fx_mark: float = 4.0) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def markdown(df: pd.DataFrame) -> str:
-    lines = ["| " + " | ".join(df.columns) + " |", "|" + "---|" * len(df.columns)]
-    for _, row in df.iterrows():
-        lines.append("| " + " | ".join(f"{v:.3g}" if isinstance(v, float) else str(v) for v in row) + " |")
-    return "\n".join(lines)
-
-
 def draw(folder: Path, df: pd.DataFrame, png: str) -> None:
     import matplotlib
 
@@ -91,7 +86,7 @@ def main() -> None:
     p.add_argument("--png")
     args = p.parse_args()
     df = table(args.folder)
-    print(markdown(df.drop(columns=["job_id"])))
+    print(markdown_table(df.drop(columns=["job_id"])))
     if args.csv:
         df.to_csv(args.csv, index=False)
     if args.png:

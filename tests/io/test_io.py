@@ -84,3 +84,12 @@ def test_outputs_name_the_commit_of_the_checkout_they_came_from():
                           text=True).stdout.strip()
     assert code_commit().startswith(head)
     assert code_identity().startswith(f"{__version__}+{head}")
+
+
+def test_a_markdown_table_has_a_header_a_rule_and_floats_to_three_digits():
+    import pandas as pd
+
+    from knitlad.io.summary import markdown_table
+
+    text = markdown_table(pd.DataFrame({"band": ["rib", "none"], "n_lad_over_ny": [0.75, 1.166666]}))
+    assert text.splitlines() == ["| band | n_lad_over_ny |", "|---|---|", "| rib | 0.75 |", "| none | 1.17 |"]
