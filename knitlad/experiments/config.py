@@ -109,6 +109,9 @@ class CutConfig(_WithPreset):
         "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
         "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches", "contact_law",
         "band_row", "band_courses", "band_friction_factor", "pattern", "band", "band_curvature")
+    # fields added here after the experiments built on this config (cycle, tensile, snag, resistance) had run
+    # sweeps: at their default they stay out of those scenes' job ids too (their ADDED_LATER lists their own)
+    ADDED_LATER_FOR_ALL: ClassVar[tuple[str, ...]] = ("band_curvature",)
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")

@@ -178,7 +178,8 @@ class Job(BaseModel):
 def job_id(scene: str, params: dict, output: Output) -> str:
     """Hash of the resolved parameters, less those a scene added later left at their neutral value."""
     model = SCENES[scene].config
-    neutral = {name: model.model_fields[name].default for name in getattr(model, "ADDED_LATER", ())}
+    later = getattr(model, "ADDED_LATER", ()) + getattr(model, "ADDED_LATER_FOR_ALL", ())
+    neutral = {name: model.model_fields[name].default for name in later}
     params = {k: v for k, v in params.items() if not (k in neutral and v == neutral[k])}
     blob = json.dumps({"scene": scene, "params": params, "output": output.model_dump()}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]

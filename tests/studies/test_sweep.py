@@ -458,3 +458,17 @@ def test_a_sweep_over_patterns_ladders_each_and_tabulates_its_pattern(tmp_path):
     assert (df["n_lad"] >= 1).all() and (abs(df["fx_ini"] - 3.0) < 0.06).all()
     plain = [j for j in load_sweep(config)[1] if j.params["pattern"] == "jersey"][0]
     assert plain.id == job_id("ladder", {k: v for k, v in plain.params.items() if k != "pattern"}, plain.output)
+
+
+@pytest.mark.parametrize("scene, fixed", [
+    ("ladder", {"fx": 3.0}), ("cycle", {"fx": 0.68, "lx_max": 0.36}), ("tensile", {"lx": 0.34, "lx_max": 0.36}),
+    ("snag", {"fx": 3.0}), ("resistance", {"fx": 3.0})])
+def test_a_field_added_to_the_laddering_config_later_keeps_every_scenes_ids(scene, fixed):
+    """band_curvature came after the cycle, tensile, snag and resistance scenes had run sweeps on the laddering
+    config: at its default their jobs keep the ids computed without it (a protocol B sweep of 2026-12-06 lost
+    its two finished jobs to it)."""
+    job = expand(SweepConfig.model_validate({"scene": scene, "fixed": {"n_x": 6, "n_y": 6, **fixed},
+                                             "sweep": {"axes": {"mu": [0.4]}}}))[0]
+    before = {k: v for k, v in job.params.items() if k != "band_curvature"}
+    assert job.id == job_id(scene, before, job.output)
+    assert job_id(scene, {**job.params, "band_curvature": 2.0}, job.output) != job.id
