@@ -263,28 +263,13 @@ class CutConfig(_WithPreset):
         if self.natural_curvature > 0 and (self.stretch_start, self.edge) != ("tiled", "clamped"):
             raise ValueError("natural_curvature: set in the periodised stitch and tiled over the knit, it needs "
                              "stretch_start tiled and edge clamped")
-        if self.memory_band is not None and (self.stretch_start, self.edge) != ("tiled", "clamped"):
-            raise ValueError("band: a curvature band is set in the periodised stitch and tiled over the knit; it "
-                             "needs stretch_start tiled and edge clamped")
         if self.pattern != "jersey" and self.stretch_start != "affine":
             raise ValueError(f"stretch_start: the periodised stitch is jersey's; a {self.pattern} knit is stretched "
                              "affinely (stretch_start affine)")
-        if self.band != "friction" and self.band_row is None:
-            raise ValueError(f"band: a {self.band} band needs its first course (band_row)")
-        if self.knitted_band:
-            if self.band_row is None:
-                raise ValueError(f"band: a {self.band} band needs its first course (band_row)")
-            if self.stretch_start != "affine":
-                raise ValueError(f"stretch_start: a knit with a {self.band} band is stretched affinely "
-                                 "(stretch_start affine)")
         if self.memory_peak_ratio is not None and self.natural_curvature == 0 and self.memory_band is None:
             raise ValueError("memory_peak_ratio: shapes the memory of natural_curvature > 0; the yarn has none")
         check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
-        if self.band_row is not None and self.band_row + self.band_courses > self.n_y:
-            raise ValueError(f"band_row: a band of {self.band_courses} courses from course {self.band_row} ends "
-                             f"past the knit's {self.n_y} courses")
-        if self.band_row is not None and self.band_row <= self.n_y // 2 < self.band_row + self.band_courses:
-            raise ValueError(f"band_row: the band holds the cut course {self.n_y // 2}; put it above or below")
+        check_band(self)
         if self.frame_every_us is not None and self.frame_every_us < self.observe_every_us:
             raise ValueError(f"frame_every_us: {self.frame_every_us:g} is shorter than observe_every_us "
                              f"({self.observe_every_us:g}): frames are taken at observations")
@@ -588,6 +573,23 @@ class StitchConfig(_WithPreset):
 # the longest segment, over the correction's radius of curvature R, at which the sagitta correction
 # is taken: it is l^2/(12 R) to leading order in l/R, measured from 24 nodes per stitch up (l = 0.27 R)
 SAGITTA_MAX_SEGMENT = 0.3
+
+
+def check_band(cfg: CutConfig) -> None:
+    """Refuse a run-stop band that is not one (one line naming the field): a band needs its first course and
+    must lie inside the knit, off the cut course; a knitted band is stretched affinely, a curvature band tiled."""
+    if cfg.band != "friction" and cfg.band_row is None:
+        raise ValueError(f"band: a {cfg.band} band needs its first course (band_row)")
+    if cfg.knitted_band and cfg.stretch_start != "affine":
+        raise ValueError(f"stretch_start: a knit with a {cfg.band} band is stretched affinely (stretch_start affine)")
+    if cfg.memory_band is not None and (cfg.stretch_start, cfg.edge) != ("tiled", "clamped"):
+        raise ValueError("band: a curvature band is set in the periodised stitch and tiled over the knit; it needs "
+                         "stretch_start tiled and edge clamped")
+    if cfg.band_row is not None and cfg.band_row + cfg.band_courses > cfg.n_y:
+        raise ValueError(f"band_row: a band of {cfg.band_courses} courses from course {cfg.band_row} ends past the "
+                         f"knit's {cfg.n_y} courses")
+    if cfg.band_row is not None and cfg.band_row <= cfg.n_y // 2 < cfg.band_row + cfg.band_courses:
+        raise ValueError(f"band_row: the band holds the cut course {cfg.n_y // 2}; put it above or below")
 
 
 def check_sagitta(resolution: int, d_over_l0: float, sagitta_radius: float) -> None:
