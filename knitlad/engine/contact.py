@@ -132,6 +132,9 @@ class ContactModel:
                                 A yarn's material is known to the contact by its diameter and Young's
                                 modulus (what sets a contact's stiffness); a material that no edge has
                                 is refused (an EA softened by ``with_axial_stiffness`` hides a material)
+    friction_every  [-]         a touching pair's friction is computed once every this many steps and held in
+                                between (1, the default: every step): a study of the step the friction needs,
+                                as an implicit step with explicit friction would see it (docs/performance.md)
     """
 
     stiffness: float
@@ -149,6 +152,7 @@ class ContactModel:
     law: str = "linear"
     reference_overlap: float | None = None
     yarn_friction: tuple = ()
+    friction_every: int = 1
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "pair_stiffness", tuple(tuple(entry) for entry in self.pair_stiffness))
@@ -174,6 +178,8 @@ class ContactModel:
         if self.sagitta_radius is not None and not (self.sagitta_radius > 0 and math.isfinite(self.sagitta_radius)):
             raise ValueError(f"sagitta_radius must be > 0 m or None, got {self.sagitta_radius!r}")
         check_contact_law(self.law, self.reference_overlap)
+        if not (isinstance(self.friction_every, (int, np.integer)) and self.friction_every >= 1):
+            raise ValueError(f"friction_every must be a whole number of steps >= 1, got {self.friction_every!r}")
         object.__setattr__(self, "yarn_friction", tuple((int(y), float(f)) for y, f in self.yarn_friction))
         for yarn, factor in self.yarn_friction:
             if yarn < 0 or not (factor >= 0 and math.isfinite(factor)):
@@ -385,6 +391,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
             mu=float(model.mu),
             skin=float(skin),
             lookahead_steps=float(LIST_LOOKAHEAD_STEPS),
+            friction_every=float(model.friction_every),
         )
         # exclusion: edges within `exclusion_diameters` d of arc, and always the adjacent edge
         # (per state yarn: an image is a copy of its master, whose id it carries as its physical yarn)

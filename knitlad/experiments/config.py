@@ -108,10 +108,10 @@ class CutConfig(_WithPreset):
         "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor",
         "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
         "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches", "contact_law",
-        "band_row", "band_courses", "band_friction_factor", "pattern", "band", "band_curvature")
+        "band_row", "band_courses", "band_friction_factor", "pattern", "band", "band_curvature", "friction_every")
     # fields added here after the experiments built on this config (cycle, tensile, snag, resistance) had run
     # sweeps: at their default they stay out of those scenes' job ids too (their ADDED_LATER lists their own)
-    ADDED_LATER_FOR_ALL: ClassVar[tuple[str, ...]] = ("band_curvature",)
+    ADDED_LATER_FOR_ALL: ClassVar[tuple[str, ...]] = ("band_curvature", "friction_every")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -223,6 +223,9 @@ class CutConfig(_WithPreset):
     stop_at_edge: bool = Field(True, description=(
         "stop the run when a ladder reaches an edge course (its damage and f_x^fin are then those of that moment); "
         "false: go on until every front has stopped (or max_time_ms) [-]"))
+    friction_every: int = Field(1, ge=1, description=(
+        "each contact's friction is computed once every this many steps and held in between (1: every step): "
+        "the friction an implicit step that long would see if it kept the friction explicit [steps]"))
     predicted_dashpots: bool = Field(False, description=(
         "the laddering dynamics' dashpots (axial and contact) act on the velocity at the end of each step, "
         "predicted from the last forces (second order in dt), instead of the half-step velocity (first order); "
@@ -323,7 +326,7 @@ class CutConfig(_WithPreset):
             dt_safety=self.dt_safety, drag_per_s=self.drag_per_s, twist=self.twist,
             axial_stiffness_factor=self.axial_stiffness_factor, twist_inertia_factor=self.twist_inertia_factor,
             framed_twist=self.framed_twist, implicit_axial=self.implicit_axial,
-            predicted_dashpots=self.predicted_dashpots,
+            predicted_dashpots=self.predicted_dashpots, friction_every=self.friction_every,
             observe_every_s=self.observe_every_us * 1e-6, arrest_s=self.arrest_ms * 1e-3,
             max_time_s=self.max_time_ms * 1e-3,
             frame_every_s=None if self.frame_every_us is None else self.frame_every_us * 1e-6,

@@ -94,6 +94,7 @@ class DynamicsSettings:
     air_drag: bool = False  # still air around the yarns
     stop_after_stitches: int | None = None  # stop once a front has run this many stitches (enough for v_lad)
     friction_band: tuple[int, int, float] | None = None  # (first course, courses, factor on mu): a run-stop band
+    friction_every: int = 1  # each contact's friction computed once every this many steps, held between (a study)
 
     @property
     def material_damping(self) -> MaterialDamping | None:
@@ -201,7 +202,8 @@ def dynamics_simulation(rods: Rods, knit: StretchedKnit, dynamics: DynamicsSetti
     ``obstacles`` (a snag's pin) if any."""
     contact = stretch_contact(knit.settings, mu=dynamics.mu, damping_ratio=dynamics.contact_damping_ratio,
                               tangential_damping_ratio=dynamics.contact_damping_ratio,
-                              counting=dynamics.contact_counting, yarn_friction=band_yarns(knit, dynamics))
+                              counting=dynamics.contact_counting, yarn_friction=band_yarns(knit, dynamics),
+                              friction_every=dynamics.friction_every)
     # a cut frees two end nodes: keep the smaller of the stretch's step (of a yarn as soft) and the new stable step
     stretch_step = math.inf if dynamics.implicit_axial else knit.dt_s / math.sqrt(dynamics.axial_stiffness_factor)
     sim = Simulation(rods, contact=contact, dt_s=min(stretch_step, laddering_time_step(rods, contact, dynamics)),

@@ -96,6 +96,9 @@ def test_models_refuse_values_that_would_break_later_naming_them():
         kl.ContactModel(stiffness=100.0, tangential_stiffness_ratio=math.inf)
     with pytest.raises(ValueError, match="damping_ratio"):
         kl.ContactModel(stiffness=100.0, damping_ratio=math.nan)
+    for every in (0, 1.5):
+        with pytest.raises(ValueError, match="friction_every"):
+            kl.ContactModel(stiffness=100.0, friction_every=every)
     with pytest.raises(ValueError, match="point_m"):
         kl.Plane(stiffness=100.0, point_m=(0.0, math.nan, 0.0))
     with pytest.raises(ValueError, match="point_m"):

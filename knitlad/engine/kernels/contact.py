@@ -64,6 +64,7 @@ class ContactParams(NamedTuple):
     skin: float  # neighbour-list margin [mm]
     lookahead_steps: float = 0.0  # a fast edge's allowance lasts it this many steps (0: half the skin for all)
     max_allowance: float = 3.0  # the largest allowance of a fast edge, in skins (at least half a skin)
+    friction_every: float = 1.0  # a pair's friction is computed once every this many steps and held between
 
 
 class ListScratch(NamedTuple):
@@ -115,9 +116,11 @@ PAIR_RESULTS = 11
 
 # columns of a pair's history (Contacts.slip): the tangential spring u_t in 0..2, then the union rule's last
 # verdict on the pair, COUNTED (+1), CEDED_TO_NEIGHBOUR (-1: touching, but the contact is a neighbouring edge's)
-# or 0 (apart, or new), and its overlap then (counted or ceded)
+# or 0 (apart, or new), and its overlap then (counted or ceded); the friction force last computed (HELD_X..Z)
+# and the steps it has acted since (HELD_STEPS, 0: none yet), for a friction held over several steps
 VERDICT, DEPTH = 3, 4
-HISTORY_COLUMNS = 5
+HELD_X, HELD_Y, HELD_Z, HELD_STEPS = 5, 6, 7, 8
+HISTORY_COLUMNS = 9
 COUNTED, CEDED_TO_NEIGHBOUR = 1.0, -1.0
 # columns of a touching pair's share on one of its edges (Contacts.shares: one 64-byte row): the pair's force on
 # its first edge, that edge's lever parameter (s, or t on the second edge), its friction couple, and for the
@@ -655,11 +658,25 @@ def coulomb_spring(ux, uy, uz, nx, ny, nz, vtx, vty, vtz, sx, sy, sz, dt, k_t, g
     return ftx, fty, ftz, ux, uy, uz, sliding
 
 
+@njit(**INLINE_OPTS)
+def held_friction(fx, fy, fz, nx, ny, nz, limit):
+    """A friction force held from an earlier step, turned into the tangent plane of normal n (its length kept)
+    and capped at ``limit`` = mu f_n. Returns (f_t, capped)."""
+    f_len = math.sqrt(fx * fx + fy * fy + fz * fz)
+    fn = dot(fx, fy, fz, nx, ny, nz)
+    fx -= fn * nx
+    fy -= fn * ny
+    fz -= fn * nz
+    f_new = math.sqrt(fx * fx + fy * fy + fz * fz)
+    scale = min(f_len, limit) / f_new if f_new > 0.0 else 0.0
+    return fx * scale, fy * scale, fz * scale, f_len > limit
+
+
 @njit(**NUMBA_OPTS)
 def pair_contact_forces(
     lo, hi, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
     edge_prev, edge_next, union, pairs, slip, edge_class, pair_law, damping_n, damping_t, mu, dt, out, mode, gap_ref,
-    edge_moved, blk, edge_rod, bucket_fill, shares, share_edge, ledger,
+    edge_moved, blk, edge_rod, bucket_fill, shares, share_edge, ledger, friction_every=1.0,
 ):
     """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``
     (the narrow phase in ``mode``, :func:`counted_overlaps`).
@@ -698,6 +715,12 @@ def pair_contact_forces(
     the union rule puts in when a touching pair's contact passes to a neighbouring edge or back (the counted
     energy jumps by U(delta) there, with no force doing work): +U(delta) for a pair that takes a contact,
     -U(delta) for one that cedes it, U the mean of its values at the step's two ends.
+
+    ``friction_every`` > 1 (a study of the step friction needs, docs/performance.md): a touching pair computes
+    its friction once every that many steps, its slip grown over the time since the last one, and holds the
+    force in between (turned into the new tangent plane, capped at mu f_n): the friction an implicit step
+    of that many explicit steps would see if it kept the friction explicit. The ledger then books the held
+    force's work on the slip, not its spring's energy (it closes only at 1).
     """
     counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out,
                      mode, gap_ref, edge_moved)
@@ -730,6 +753,7 @@ def pair_contact_forces(
             slip[p, 0] = 0.0
             slip[p, 1] = 0.0
             slip[p, 2] = 0.0
+            slip[p, HELD_STEPS] = 0.0
             continue
         s = out[p, S_PAIR]
         t = out[p, T_PAIR]
@@ -802,9 +826,20 @@ def pair_contact_forces(
         else:
             sx, sy, sz = vtx, vty, vtz
         gamma_t = 2.0 * damping_t * math.sqrt(k_t * m_eff)
-        ftx, fty, ftz, ux, uy, uz, slides = coulomb_spring(slip[p, 0], slip[p, 1], slip[p, 2], nx, ny, nz, vtx, vty,
-                                                           vtz, sx, sy, sz, dt, k_t, gamma_t,
-                                                           mu * pair_law[ci, cj, FRICTION_FACTOR] * fn)
+        limit = mu * pair_law[ci, cj, FRICTION_FACTOR] * fn
+        held = slip[p, HELD_STEPS]
+        if 0.0 < held < friction_every:
+            ftx, fty, ftz, slides = held_friction(slip[p, HELD_X], slip[p, HELD_Y], slip[p, HELD_Z], nx, ny, nz, limit)
+            ux, uy, uz = slip[p, 0], slip[p, 1], slip[p, 2]
+            slip[p, HELD_STEPS] = held + 1.0
+        else:
+            ftx, fty, ftz, ux, uy, uz, slides = coulomb_spring(slip[p, 0], slip[p, 1], slip[p, 2], nx, ny, nz, vtx,
+                                                               vty, vtz, sx, sy, sz, dt * max(held, 1.0), k_t,
+                                                               gamma_t, limit)
+            slip[p, HELD_X] = ftx
+            slip[p, HELD_Y] = fty
+            slip[p, HELD_Z] = ftz
+            slip[p, HELD_STEPS] = 1.0
         sliding = 1.0 if slides else 0.0
         dashpot -= (fn - spring) * vn * dt
         friction -= (ftx * sx + fty * sy + ftz * sz) * dt + 0.5 * k_t * (
@@ -846,14 +881,14 @@ def pair_contact_forces(
 def _pair_contact_forces_in_blocks(
     n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
     edge_prev, edge_next, union, pairs, slip, edge_class, pair_law, damping_n, damping_t, mu, dt, out, mode, gap_ref,
-    edge_moved, edge_rod, bucket_fill, shares, share_edge, ledger,
+    edge_moved, edge_rod, bucket_fill, shares, share_edge, ledger, friction_every,
 ):
     for blk in prange(n_blocks):
         pair_contact_forces(
             blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, omega, v_damp, omega_damp, predicted,
             spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, slip, edge_class,
             pair_law, damping_n, damping_t, mu, dt, out, mode, gap_ref, edge_moved, blk, edge_rod, bucket_fill, shares,
-            share_edge, ledger,
+            share_edge, ledger, friction_every,
         )
 
 
@@ -1001,7 +1036,7 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
             n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
             c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.pair_law, p.damping_n,
             p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, c.edge_rod, c.bucket_fill, c.shares,
-            c.share_edge, ledger,
+            c.share_edge, ledger, p.friction_every,
         )
         contact_sums_by_rod(n_blocks, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b, spin, F,
                             torque, c.rod_stats)
@@ -1010,7 +1045,7 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
             0, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
             c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.pair_law, p.damping_n,
             p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, 0, c.edge_rod, c.bucket_fill,
-            c.shares, c.share_edge, ledger,
+            c.shares, c.share_edge, ledger, p.friction_every,
         )
         for r in range(c.rod_stats.shape[0]):
             rod_contact_sum(r, 1, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b, spin, F,
