@@ -659,24 +659,38 @@ def coulomb_spring(ux, uy, uz, nx, ny, nz, vtx, vty, vtz, sx, sy, sz, dt, k_t, g
 
 
 @njit(**INLINE_OPTS)
-def held_friction(fx, fy, fz, nx, ny, nz, limit):
-    """A friction force held from an earlier step, turned into the tangent plane of normal n (its length kept)
-    and capped at ``limit`` = mu f_n. Returns (f_t, capped)."""
-    f_len = math.sqrt(fx * fx + fy * fy + fz * fz)
-    fn = dot(fx, fy, fz, nx, ny, nz)
-    fx -= fn * nx
-    fy -= fn * ny
-    fz -= fn * nz
-    f_new = math.sqrt(fx * fx + fy * fy + fz * fz)
-    scale = min(f_len, limit) / f_new if f_new > 0.0 else 0.0
-    return fx * scale, fy * scale, fz * scale, f_len > limit
+def held_or_new_friction(slip, p, nx, ny, nz, vtx, vty, vtz, sx, sy, sz, dt, k_t, gamma_t, limit, every):
+    """Pair p's friction computed once every ``every`` steps (:func:`coulomb_spring`, its slip grown over the
+    time since the last computation) and held in between: turned into the tangent plane of normal n, its
+    length kept, capped at ``limit`` = mu f_n. The friction an implicit step of ``every`` explicit steps would
+    see if it kept the friction explicit. The force and the steps it has acted are kept in the pair's history
+    (HELD_X..Z, HELD_STEPS; 0: none yet). Returns (f_t, u, sliding) as :func:`coulomb_spring`."""
+    held = slip[p, HELD_STEPS]
+    if 0.0 < held < every:
+        fx, fy, fz = slip[p, HELD_X], slip[p, HELD_Y], slip[p, HELD_Z]
+        f_len = math.sqrt(fx * fx + fy * fy + fz * fz)
+        fn = dot(fx, fy, fz, nx, ny, nz)
+        fx -= fn * nx
+        fy -= fn * ny
+        fz -= fn * nz
+        f_new = math.sqrt(fx * fx + fy * fy + fz * fz)
+        scale = min(f_len, limit) / f_new if f_new > 0.0 else 0.0
+        slip[p, HELD_STEPS] = held + 1.0
+        return fx * scale, fy * scale, fz * scale, slip[p, 0], slip[p, 1], slip[p, 2], f_len > limit
+    fx, fy, fz, ux, uy, uz, sliding = coulomb_spring(slip[p, 0], slip[p, 1], slip[p, 2], nx, ny, nz, vtx, vty, vtz,
+                                                     sx, sy, sz, dt * max(held, 1.0), k_t, gamma_t, limit)
+    slip[p, HELD_X] = fx
+    slip[p, HELD_Y] = fy
+    slip[p, HELD_Z] = fz
+    slip[p, HELD_STEPS] = 1.0
+    return fx, fy, fz, ux, uy, uz, sliding
 
 
 @njit(**NUMBA_OPTS)
 def pair_contact_forces(
     lo, hi, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
     edge_prev, edge_next, union, pairs, slip, edge_class, pair_law, damping_n, damping_t, mu, dt, out, mode, gap_ref,
-    edge_moved, blk, edge_rod, bucket_fill, shares, share_edge, ledger, friction_every=1.0,
+    edge_moved, blk, edge_rod, bucket_fill, shares, share_edge, ledger, friction_every=None,
 ):
     """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``
     (the narrow phase in ``mode``, :func:`counted_overlaps`).
@@ -716,11 +730,10 @@ def pair_contact_forces(
     energy jumps by U(delta) there, with no force doing work): +U(delta) for a pair that takes a contact,
     -U(delta) for one that cedes it, U the mean of its values at the step's two ends.
 
-    ``friction_every`` > 1 (a study of the step friction needs, docs/performance.md): a touching pair computes
-    its friction once every that many steps, its slip grown over the time since the last one, and holds the
-    force in between (turned into the new tangent plane, capped at mu f_n): the friction an implicit step
-    of that many explicit steps would see if it kept the friction explicit. The ledger then books the held
-    force's work on the slip, not its spring's energy (it closes only at 1).
+    ``friction_every`` (None: every step): a touching pair computes its friction once every that many steps
+    and holds it in between (:func:`held_or_new_friction`), a study of the step friction needs
+    (docs/performance.md). The ledger then books the held force's work on the slip, not its spring's energy
+    (it closes only without).
     """
     counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out,
                      mode, gap_ref, edge_moved)
@@ -753,7 +766,8 @@ def pair_contact_forces(
             slip[p, 0] = 0.0
             slip[p, 1] = 0.0
             slip[p, 2] = 0.0
-            slip[p, HELD_STEPS] = 0.0
+            if friction_every is not None:
+                slip[p, HELD_STEPS] = 0.0
             continue
         s = out[p, S_PAIR]
         t = out[p, T_PAIR]
@@ -827,19 +841,12 @@ def pair_contact_forces(
             sx, sy, sz = vtx, vty, vtz
         gamma_t = 2.0 * damping_t * math.sqrt(k_t * m_eff)
         limit = mu * pair_law[ci, cj, FRICTION_FACTOR] * fn
-        held = slip[p, HELD_STEPS]
-        if 0.0 < held < friction_every:
-            ftx, fty, ftz, slides = held_friction(slip[p, HELD_X], slip[p, HELD_Y], slip[p, HELD_Z], nx, ny, nz, limit)
-            ux, uy, uz = slip[p, 0], slip[p, 1], slip[p, 2]
-            slip[p, HELD_STEPS] = held + 1.0
-        else:
+        if friction_every is None:  # every step (compiled apart: the default keeps its bits)
             ftx, fty, ftz, ux, uy, uz, slides = coulomb_spring(slip[p, 0], slip[p, 1], slip[p, 2], nx, ny, nz, vtx,
-                                                               vty, vtz, sx, sy, sz, dt * max(held, 1.0), k_t,
-                                                               gamma_t, limit)
-            slip[p, HELD_X] = ftx
-            slip[p, HELD_Y] = fty
-            slip[p, HELD_Z] = ftz
-            slip[p, HELD_STEPS] = 1.0
+                                                               vty, vtz, sx, sy, sz, dt, k_t, gamma_t, limit)
+        else:
+            ftx, fty, ftz, ux, uy, uz, slides = held_or_new_friction(slip, p, nx, ny, nz, vtx, vty, vtz, sx, sy, sz,
+                                                                     dt, k_t, gamma_t, limit, friction_every)
         sliding = 1.0 if slides else 0.0
         dashpot -= (fn - spring) * vn * dt
         friction -= (ftx * sx + fty * sy + ftz * sz) * dt + 0.5 * k_t * (
@@ -1023,6 +1030,19 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
     n_pairs = c.n_pairs[0]
     n_blocks = max(1, min(c.threads[0], n_pairs // MIN_PAIRS_PER_THREAD))
     p = c.params
+    if p.friction_every > 1.0:
+        _contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F, torque, v_damp, omega_damp,
+                        predicted, ledger, n_pairs, n_blocks, p.friction_every)
+    else:  # None: the pair kernel compiled without the held friction
+        _contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F, torque, v_damp, omega_damp,
+                        predicted, ledger, n_pairs, n_blocks, None)
+
+
+@njit(**NUMBA_OPTS)
+def _contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F, torque, v_damp, omega_damp,
+                    predicted, ledger, n_pairs, n_blocks, friction_every):
+    """:func:`contact_forces` for one ``friction_every`` (None, or the steps a pair's friction is held)."""
+    p = c.params
     if c.status[GAPS_KNOWN] == 0 or c.share_layout[0] != n_blocks:  # a new list, or new blocks
         share_buckets(c.pairs, n_pairs, c.edge_rod, n_blocks, c.bucket_start)
         c.share_layout[0] = n_blocks
@@ -1036,7 +1056,7 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
             n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
             c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.pair_law, p.damping_n,
             p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, c.edge_rod, c.bucket_fill, c.shares,
-            c.share_edge, ledger, p.friction_every,
+            c.share_edge, ledger, friction_every,
         )
         contact_sums_by_rod(n_blocks, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b, spin, F,
                             torque, c.rod_stats)
@@ -1045,7 +1065,7 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
             0, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
             c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.pair_law, p.damping_n,
             p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, 0, c.edge_rod, c.bucket_fill,
-            c.shares, c.share_edge, ledger, p.friction_every,
+            c.shares, c.share_edge, ledger, friction_every,
         )
         for r in range(c.rod_stats.shape[0]):
             rod_contact_sum(r, 1, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b, spin, F,
