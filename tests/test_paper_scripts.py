@@ -36,6 +36,9 @@ def test_the_paired_step_study_pairs_each_knit_with_itself_at_the_reference_fact
     against_035 = study.paired_changes(pd.DataFrame(rows), reference=0.35).set_index(["fx_nominal", "dt_safety"])
     assert against_035.loc[(13.6, 0.175)].v_lad_over_cb_change_pct == pytest.approx(0.0)
     assert "| 4.00 | 0.7 | 3 |" in study.markdown(study.paired_changes(pd.DataFrame(rows)))
+    held = pd.DataFrame(rows).rename(columns={"dt_safety": "friction_every"})  # another factor, the same pairing
+    by_friction = study.paired_changes(held, factor="friction_every").set_index(["fx_nominal", "friction_every"])
+    assert by_friction.loc[(4.0, 0.7)].v_lad_over_cb_change_pct == pytest.approx(2.0)
 
 
 def test_the_run_stop_band_table_says_whether_a_ladder_entered_and_crossed_the_band(tmp_path):

@@ -22,6 +22,8 @@ CONTACT_SKIPPED = ("params", "list_scratch", "union", "pair_law")
 OBSTACLE_SKIPPED = ("law", "reference_overlap")  # settings no run changes (release zeroes the stiffnesses)
 # arrays that gained columns (the ledger's owner_changes, a pair's union verdict): an older checkpoint's are padded
 WIDENED = ("work/ledger", "contacts/slip", "contacts/pair_results")
+# arrays added later (the rails' reactions): an older checkpoint has none, and they start at 0
+ADDED_LATER = ("work/rail_reaction",)
 
 
 class Checkpointing:
@@ -51,6 +53,8 @@ class Checkpointing:
         from knitlad.engine.contact import make_contacts
 
         def fit(name: str, like: np.ndarray) -> np.ndarray:
+            if name not in checkpoint and name in ADDED_LATER:
+                return np.zeros_like(like)
             if name not in checkpoint:
                 raise ValueError(f"the checkpoint has no {name}: it was made by another kind of simulation")
             value = np.asarray(checkpoint[name])

@@ -227,15 +227,15 @@ def axial_wave_speed(m) -> float:
 
 def check_open_chains(model, implicit_axial: bool) -> bool:
     """``implicit_axial``, refused for a model whose axial springs cannot be implicit: a ring (its closing
-    node couples two edges that are not consecutive), a rail or a periodic image (not free masses)."""
+    node couples two edges that are not consecutive) or a periodic image (not a free mass)."""
     if not implicit_axial:
         return False
     shared = np.intersect1d(model.edge_a, model.edge_b).size
     chained = int(np.sum(model.edge_b[:-1] == model.edge_a[1:]))
     if shared != chained:
         raise ValueError("implicit_axial: the axial springs can be implicit on open yarns only (this scene has a ring)")
-    if model.rail_node.size or model.image_node.size:
-        raise ValueError("implicit_axial: not with rails or periodic images")
+    if model.image_node.size:
+        raise ValueError("implicit_axial: not with periodic images")
     return True
 
 
@@ -300,11 +300,11 @@ class SupportControl:
         evaluation would also advance the friction history by a step)."""
         f = finite_vectors("forces_N", forces_N, self.model.f_ext.shape) / units.FORCE
         self.work.force[:] += f - self.model.f_ext
-        rail_forces(self.model.rail_node, self.model.rail_axis, self.work.force)
+        rail_forces(self.model.rail_node, self.model.rail_axis, self.work.force, self.work.rail_reaction)
         self.replace_model(f_ext=f)
 
     def reaction_forces_N(self) -> np.ndarray:
-        """Force [N] the supports exert on each held node (zero on free nodes).
+        """Force [N] the supports exert on each held node, and each rail on its node (zero on free nodes).
 
         A held node moves at constant prescribed velocity, so the support
         balances every other force on it: R = -F_rest. Read while held nodes move under a global drag
@@ -313,6 +313,7 @@ class SupportControl:
         """
         r = -self.work.force * units.FORCE
         r[~self.model.held] = 0.0
+        r[self.model.rail_node] = -self.work.rail_reaction * units.FORCE
         bias = self.reaction_bias_N()
         if np.any(bias):
             total = float(np.linalg.norm(r.sum(axis=0)))

@@ -183,6 +183,7 @@ class Workspace(NamedTuple):
     # state of the material, kept with the simulation that advances it and relaxed when it starts
     branch_ext: np.ndarray  # (ne,) the extension each edge's branch has relaxed to [mm]
     branch_kb: np.ndarray  # (nh, 3) the curvature binormal each hinge's branch has relaxed to [-]
+    rail_reaction: np.ndarray  # (rails, 3) what each rail took from its node's force at the last evaluation
 
     @staticmethod
     def for_model(model: RodModel) -> "Workspace":
@@ -197,6 +198,7 @@ class Workspace(NamedTuple):
             np.searchsorted(edge_yarn, yarns).astype(np.int64), np.searchsorted(hinge_yarn, yarns).astype(np.int64),
             np.zeros((ne, 4)), np.zeros((n, 3)), np.zeros(ne), frame_anchors(model),
             np.zeros((rows, N_LEDGER)), np.zeros(ne), np.zeros((model.hinge_e0.shape[0], 3)),
+            np.zeros((model.rail_node.shape[0], 3)),
         )
 
 

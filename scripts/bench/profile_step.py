@@ -2,7 +2,7 @@
 
     python scripts/bench/profile_step.py [--fx 13.6] [--stitches 42] [--preset default]
                                    [--twist on] [--threads 2] [--warm-steps 2000]
-                                   [--implicit-axial]
+                                   [--implicit-axial] [--banded-solve]
 
 Stretches the knit, cuts it and runs ``--warm-steps`` steps (so the ladder runs and the
 cut ends whip), then times each part of a step on that state, as the median of repeated
@@ -10,14 +10,21 @@ calls: the whole step, the yarns' elastic forces (twist-free or framed), the par
 framed path, the contact pair forces, the per-node kicks and drifts, and a contact-list
 rebuild. The reference frames are transported between two states one step apart, so
 every call rotates them as a real step does.
+
+``--banded-solve`` also times what a linearly implicit bending step adds at the least: a Cholesky
+factorisation and a solve of (M + dt^2 K) dv = r per yarn, K banded as the bending Hessian (three
+coordinates per node, neighbours two nodes away: half-bandwidth 8), the yarns in parallel. The assembly of
+the Hessian and any coupling of the yarns by contact come on top (docs/performance.md).
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import statistics
 import time
 
+import numpy as np
 from numba import njit, prange
 
 from knitlad.experiments.config import CutConfig
@@ -112,6 +119,55 @@ def framed_bending_by_yarn(m, s, w):
         )
 
 
+BAND = 8  # half-bandwidth of the bending Hessian in dofs: 3 coordinates, neighbours two nodes away
+
+
+@njit(**PARALLEL_OPTS)
+def banded_cholesky_by_yarn(band, yarn_dof, factor, rhs):
+    """Per yarn (dofs [yarn_dof[y], yarn_dof[y+1])): ``band[i, k]`` holds A[i, i-k] (k = 0..BAND) of an SPD
+    band matrix. ``factor``: overwrite it with its Cholesky factor L first; then solve L L^T x = rhs in place."""
+    for y in prange(yarn_dof.shape[0] - 1):
+        lo, hi = yarn_dof[y], yarn_dof[y + 1]
+        b = band.shape[1] - 1
+        if factor:
+            for j in range(lo, hi):
+                s = band[j, 0]
+                for k in range(1, min(b, j - lo) + 1):
+                    s -= band[j, k] * band[j, k]
+                d = math.sqrt(s)
+                band[j, 0] = d
+                for i in range(j + 1, min(hi, j + b + 1)):
+                    s = band[i, i - j]
+                    for k in range(max(lo, i - b), j):
+                        s -= band[i, i - k] * band[j, j - k]
+                    band[i, i - j] = s / d
+        for i in range(lo, hi):  # L z = r
+            s = rhs[i]
+            for k in range(max(lo, i - b), i):
+                s -= band[i, i - k] * rhs[k]
+            rhs[i] = s / band[i, 0]
+        for i in range(hi - 1, lo - 1, -1):  # L^T x = z
+            s = rhs[i]
+            for k in range(i + 1, min(hi, i + b + 1)):
+                s -= band[k, k - i] * rhs[k]
+            rhs[i] = s / band[i, 0]
+
+
+def banded_system(yarn_start: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """An SPD band matrix (M + dt^2 K, K the straight rod's bending stencil 1, -4, 6, -4, 1 in each coordinate
+    with a weaker coupling of the coordinates, at dt^2 K / M = 20) of the yarns' sizes, and the yarns' dof
+    offsets. The solve's cost does not depend on the values; the values only keep it positive definite."""
+    n = 3 * int(yarn_start[-1])
+    band = np.zeros((n, BAND + 1))
+    stiff = 20.0
+    band[:, 0] = 1.0 + 6.0 * stiff + 0.5
+    band[:, 3] = -4.0 * stiff
+    band[:, 6] = 1.0 * stiff
+    for k in (1, 2, 4, 5, 7, 8):
+        band[:, k] = 0.5 / 12.0
+    return band, 3 * yarn_start.astype(np.int64)
+
+
 def median_ms(fn, repeats: int = 30) -> float:
     fn()
     times = []
@@ -131,6 +187,8 @@ def main() -> None:
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--warm-steps", type=int, default=2000)
     p.add_argument("--implicit-axial", action="store_true", help="the axial springs implicit (implicit_axial)")
+    p.add_argument("--banded-solve", action="store_true", help="also time a banded Cholesky factor and solve per "
+                   "yarn, the least a linearly implicit bending step adds")
     args = p.parse_args()
     cfg = CutConfig(n_x=args.stitches, n_y=args.stitches, fx=args.fx, preset=args.preset, twist=args.twist == "on",
                     implicit_axial=args.implicit_axial)
@@ -197,6 +255,25 @@ def main() -> None:
             refresh_contacts(s.x, m.edge_a, m.edge_b, m.edge_shift, c, s.v, lookahead)
 
         rows.append(("contact-list rebuild (one, with the fast edges' pass)", median_ms(rebuild, 10)))
+        if args.banded_solve:
+            band, yarn_dof = banded_system(m.yarn_start)
+            rhs = np.ones(band.shape[0])
+            work = band.copy()
+
+            def factor_and_solve():
+                work[...] = band
+                banded_cholesky_by_yarn(work, yarn_dof, True, rhs)
+
+            banded_cholesky_by_yarn(work, yarn_dof, True, rhs)
+            check = rhs.copy()  # the factor reproduces the system: A x = 1 to round-off
+            rhs[:] = 1.0
+            factor_and_solve()
+            assert np.allclose(rhs, check)
+            rows.append(("banded Cholesky of (M + dt^2 K), factor + solve per yarn", median_ms(factor_and_solve)))
+            rows.append(("  its solve alone (a Jacobian kept from an earlier step)", median_ms(
+                lambda: banded_cholesky_by_yarn(work, yarn_dof, False, rhs))))
+            rows.append(("  its copy of the band (part of the factor + solve above)", median_ms(
+                lambda: work.__setitem__(Ellipsis, band))))
         rows.append(("displacement check (no rebuild)", median_ms(
             lambda: refresh_contacts(s.x, m.edge_a, m.edge_b, m.edge_shift, c, s.v, lookahead))))
     width = max(len(r[0]) for r in rows)

@@ -2,10 +2,12 @@
 
     python scripts/paper/paired_step_factor.py runs/step_factor_accurate [--reference 0.35] [--csv FILE]
     python scripts/paper/paired_step_factor.py docs/reference/step_factor_accurate_summary.csv
+    python scripts/paper/paired_step_factor.py runs/friction_every_accurate --factor friction_every
 
 Reads a sweep over (f_x target, ``dt_safety``) (``docs/reference/step_factor_accurate.yaml``): the knits of one
 nominal tension are targets a fraction of a percent apart, and every knit is laddered at every factor from the
-same stretch. Per nominal tension and factor it prints the mean observables and, per knit, the change against
+same stretch (``--factor``: another column of the sweep that every knit was laddered at, such as
+``friction_every``, ``docs/reference/friction_every_accurate.yaml``). Per nominal tension and factor it prints the mean observables and, per knit, the change against
 the smallest factor (the reference): mean +- standard error over the knits. A factor may replace the reference
 only where its paired change lies within two standard errors of zero and under the preset's stated error.
 """
@@ -32,7 +34,7 @@ def nominal_tensions(targets: np.ndarray, spread: float = 0.02) -> dict[float, f
     return {fx: g[len(g) // 2] for g in groups for fx in g}
 
 
-def paired_changes(df: pd.DataFrame, reference: float | None = None) -> pd.DataFrame:
+def paired_changes(df: pd.DataFrame, reference: float | None = None, factor: str = "dt_safety") -> pd.DataFrame:
     """One row per (nominal tension, factor): means, and the paired relative change of each observable
     against the ``reference`` factor (default: the smallest), mean and standard error over the knits that
     ran at both."""
@@ -40,12 +42,12 @@ def paired_changes(df: pd.DataFrame, reference: float | None = None) -> pd.DataF
     df["nominal"] = df["fx"].map(nominal_tensions(df["fx"].to_numpy()))
     rows = []
     for nominal, group in df.groupby("nominal"):
-        ref = group["dt_safety"].min() if reference is None else reference
-        base = group[group["dt_safety"] == ref].set_index("fx")
-        for factor, at in group.groupby("dt_safety"):
+        ref = group[factor].min() if reference is None else reference
+        base = group[group[factor] == ref].set_index("fx")
+        for value, at in group.groupby(factor):
             at = at.set_index("fx")
             knits = at.index.intersection(base.index)
-            row = {"fx_nominal": nominal, "dt_safety": factor, "reference": ref, "knits": len(knits),
+            row = {"fx_nominal": nominal, factor: value, "reference": ref, "knits": len(knits),
                    "fx_ini": at["fx_ini"].mean(), "steps": at["steps"].mean(),
                    "wall_propagate_s": at["wall_propagate_s"].mean()}
             for col in OBSERVABLES:
@@ -54,17 +56,17 @@ def paired_changes(df: pd.DataFrame, reference: float | None = None) -> pd.DataF
                 row[f"{col}_change_pct"] = change.mean()
                 row[f"{col}_change_se"] = change.std(ddof=1) / np.sqrt(len(knits)) if len(knits) > 1 else np.nan
             rows.append(row)
-    return pd.DataFrame(rows).sort_values(["fx_nominal", "dt_safety"], ascending=[True, False])
+    return pd.DataFrame(rows).sort_values(["fx_nominal", factor], ascending=[True, factor != "dt_safety"])
 
 
-def markdown(table: pd.DataFrame) -> str:
-    head = "| f_x^ini | dt_safety | knits | steps | propagate [s] | " + " | ".join(
+def markdown(table: pd.DataFrame, factor: str = "dt_safety") -> str:
+    head = f"| f_x^ini | {factor} | knits | steps | propagate [s] | " + " | ".join(
         f"{name} | change" for name in OBSERVABLES.values()) + " |"
     lines = [head, "|" + "---|" * (5 + 2 * len(OBSERVABLES))]
     for _, r in table.iterrows():
-        cells = [f"{r.fx_ini:.2f}", f"{r.dt_safety:g}", f"{int(r.knits)}", f"{r.steps:,.0f}", f"{r.wall_propagate_s:.0f}"]
+        cells = [f"{r.fx_ini:.2f}", f"{r[factor]:g}", f"{int(r.knits)}", f"{r.steps:,.0f}", f"{r.wall_propagate_s:.0f}"]
         for col in OBSERVABLES:
-            change = "" if r.dt_safety == r.reference else f"{r[col + '_change_pct']:+.1f} +- {r[col + '_change_se']:.1f} %"
+            change = "" if r[factor] == r.reference else f"{r[col + '_change_pct']:+.1f} +- {r[col + '_change_se']:.1f} %"
             cells += [f"{r[col]:.3f}", change]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
@@ -75,11 +77,15 @@ def main() -> None:
     p.add_argument("run", type=Path, help="the sweep's output folder (its summary.csv), or a summary CSV")
     p.add_argument("--reference", type=float, default=None, help="the factor changes are taken against "
                    "(default: the smallest)")
+    p.add_argument("--factor", default="dt_safety", help="the column the knits were laddered at (default: dt_safety)")
     p.add_argument("--csv", type=Path, default=None, help="also write the table here")
     args = p.parse_args()
     summary = args.run if args.run.is_file() else args.run / "summary.csv"
-    table = paired_changes(pd.read_csv(summary), args.reference)
-    print(markdown(table))
+    frame = pd.read_csv(summary)
+    if args.factor not in frame.columns:
+        p.error(f"--factor: the summary has no column {args.factor!r}")
+    table = paired_changes(frame, args.reference, args.factor)
+    print(markdown(table, args.factor))
     if args.csv is not None:
         table.to_csv(args.csv, index=False, float_format="%.6g")
 

@@ -6,6 +6,7 @@ import functools
 import math
 
 import numpy as np
+import pytest
 
 import knitlad as kl
 from knitlad.fabric.scenes.rod import Cantilever
@@ -190,6 +191,31 @@ def test_implicit_axial_springs_stretch_a_pulled_yarn_by_FL_over_EA():
     extension = sim.positions_m()[-1, 0] - length
     assert abs(extension / (force * length / ea) - 1.0) < 1e-6
     np.testing.assert_allclose(sim.reaction_forces_N().sum(axis=0), [-force, 0.0, 0.0], atol=force * 1e-9)
+
+
+@pytest.mark.parametrize("implicit_axial", [False, True])
+def test_a_yarn_whose_end_slides_on_a_rail_extends_by_FL_over_EA_and_the_rail_carries_the_load_across_it(
+        implicit_axial):
+    """A yarn held at one end, its other end on a rail along the yarn (a clip sliding along a bar), pulled by
+    F along the rail and by P across it: at rest (drag) it extends by F L / EA (to 1e-6), and the reactions
+    are those of statics: the support carries -F along, the rail -P across (to 1e-9), with explicit or
+    implicit axial springs."""
+    n, length, force, across = 41, 0.05, 1e-2, 3e-3
+    pts = np.zeros((n, 3))
+    pts[:, 0] = np.linspace(0.0, length, n)
+    scene = kl.Scene()
+    y = scene.add_yarn(pts)
+    scene.hold(y, [0])
+    scene.slide(y, [n - 1], (1.0, 0.0, 0.0))
+    scene.apply_force(y, -1, (force, 0.0, across))
+    sim = kl.Simulation(scene.build(), implicit_axial=implicit_axial, drag_per_s=2e3)
+    sim.run(0.02)
+    ea = kl.NYLON.young_modulus * math.pi * kl.NYLON.diameter**2 / 4
+    assert abs((sim.positions_m()[-1, 0] - length) / (force * length / ea) - 1.0) < 1e-6
+    assert abs(sim.positions_m()[-1, 2]) < 1e-12  # on its rail
+    reactions = sim.reaction_forces_N()
+    np.testing.assert_allclose(reactions[0], [-force, 0.0, 0.0], atol=force * 1e-9)
+    np.testing.assert_allclose(reactions[-1], [0.0, 0.0, -across], atol=force * 1e-9)
 
 
 def test_implicit_axial_springs_damp_axial_vibration_and_never_add_energy():

@@ -83,9 +83,18 @@ def stretching_forces(e, elen, v, edge_a, edge_b, rest_length, EA, damping, F, f
         loss[0] += dt * power
 
 
+@njit(inline="always", **NUMBA_OPTS)
+def rail_share(rail, rail_axis, ux, uy, uz, wx, wy, wz):
+    """u . P w, P the projector of a node's motion: a a^T on rail ``rail`` of axis a, the identity off rails (-1)."""
+    if rail < 0:
+        return ux * wx + uy * wy + uz * wz
+    ax, ay, az = rail_axis[rail, 0], rail_axis[rail, 1], rail_axis[rail, 2]
+    return (ux * ax + uy * ay + uz * az) * (wx * ax + wy * ay + wz * az)
+
+
 @njit(**NUMBA_OPTS)
 def implicit_stretching_forces(e, elen, v, held, mass, edge_a, edge_b, rest_length, EA, damping, dt, F, sweep,
-                               first, last, loss=None):
+                               first, last, loss=None, rail_of_node=None, rail_axis=None):
     """Axial springs and dashpots of edges [first, last) at the end of the step (linearly implicit).
 
     The tension of :func:`stretching_forces`, T = g/eps + c dg/dt with g = |e| - |e_bar| and the
@@ -110,6 +119,9 @@ def implicit_stretching_forces(e, elen, v, held, mass, edge_a, edge_b, rest_leng
     sum (T - EA g/|e_bar|) dg/dt dt at the half-step velocity [uJ]: the dashpot and the scheme's own damping
     of the axial waves (a caller's slice of the ledger: a value returned into a parallel loop's array costs
     the solve a fifth).
+    With ``rail_of_node`` (n,: the row of ``rail_axis`` of each node on a rail, -1 elsewhere), a node on a rail of
+    axis a moves only along it: its inverse mass is (a a^T)/m, so it enters the diagonal as (t.a)^2/m and the
+    coupling as (t_k.a)(a.t_k+1)/m; the caller projects its forces onto the rail after the solve.
     """
     if last <= first:
         return
@@ -133,14 +145,23 @@ def implicit_stretching_forces(e, elen, v, held, mass, edge_a, edge_b, rest_leng
         accel = ((inv_b * F[b, 0] - inv_a * F[a, 0]) * tx + (inv_b * F[b, 1] - inv_a * F[a, 1]) * ty
                  + (inv_b * F[b, 2] - inv_a * F[a, 2]) * tz)
         rhs = (elen[k] - rest_length[k]) * EA[k] * r + rate * inv_dt + accel
-        inv_denom = 1.0 / (inv_a + inv_b + inv_beta - couple * previous_c)
+        if rail_of_node is None:
+            inv_denom = 1.0 / (inv_a + inv_b + inv_beta - couple * previous_c)
+        else:
+            inv_denom = 1.0 / (inv_a * rail_share(rail_of_node[a], rail_axis, tx, ty, tz, tx, ty, tz)
+                               + inv_b * rail_share(rail_of_node[b], rail_axis, tx, ty, tz, tx, ty, tz)
+                               + inv_beta - couple * previous_c)
         # the coupling to the next edge, through node b
         nxt = 0.0
         inv_l_next = 0.0
         if k + 1 < last:
             inv_l_next = 1.0 / elen[k + 1]
             if edge_a[k + 1] == b:
-                nxt = -inv_b * (tx * e[k + 1, 0] + ty * e[k + 1, 1] + tz * e[k + 1, 2]) * inv_l_next
+                if rail_of_node is None:
+                    nxt = -inv_b * (tx * e[k + 1, 0] + ty * e[k + 1, 1] + tz * e[k + 1, 2]) * inv_l_next
+                else:
+                    nxt = -inv_b * rail_share(rail_of_node[b], rail_axis, tx, ty, tz, e[k + 1, 0], e[k + 1, 1],
+                                              e[k + 1, 2]) * inv_l_next
         previous_c = nxt * inv_denom  # kept in registers: the recurrence is the kernel's critical path
         previous_d = (rhs - couple * previous_d) * inv_denom
         sweep[k, 0] = previous_c

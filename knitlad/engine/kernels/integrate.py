@@ -20,6 +20,7 @@ before they return (:func:`complete_frames`), so the state they hand back is com
 
 import math
 
+import numpy as np
 from numba import njit, prange
 
 from knitlad.engine.kernels.options import NUMBA_OPTS, PARALLEL_OPTS
@@ -211,7 +212,8 @@ def compute_forces(m, s, w, c, twist, contact, damping, dt, axial=AXIAL_EXPLICIT
     if obstacles is not None:
         w.ledger[0, OBSTACLE_WORK] += dt * obstacle_forces(s.x, v_damp, m.mass, m.radius, m.held, obstacles, dt,
                                                            w.force)
-    rail_forces(m.rail_node, m.rail_axis, w.force)
+    w.rail_reaction[:] = 0.0
+    rail_forces(m.rail_node, m.rail_axis, w.force, w.rail_reaction)
     if not explicit:
         implicit_stretching_by_yarn(m, s, w, dt)  # last: its tensions balance every other force
     if damping.supports_moving:  # every force on the held nodes is known: the supports' work
@@ -223,10 +225,24 @@ def compute_forces(m, s, w, c, twist, contact, damping, dt, axial=AXIAL_EXPLICIT
 def implicit_stretching_by_yarn(m, s, w, dt):
     """The axial forces at the end of the coming kick (AXIAL_IMPLICIT), yarn by yarn in parallel:
     a yarn's tridiagonal system couples only its own edges and nodes."""
+    if m.rail_node.shape[0] == 0:
+        for y in prange(w.yarn_edges.shape[0] - 1):
+            implicit_stretching_forces(
+                w.e, w.elen, s.v, m.held, m.mass, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, dt,
+                w.force, w.axial_sweep, w.yarn_edges[y], w.yarn_edges[y + 1],
+                w.ledger[y, AXIAL_DASHPOT:AXIAL_DASHPOT + 1])
+        return
+    # nodes on rails move along them only: the solve sees their projected inverse mass, then their forces are
+    # projected (what the rail takes is added to its reaction)
+    rail_of_node = np.full(m.mass.shape[0], -1, dtype=np.int64)
+    for r in range(m.rail_node.shape[0]):
+        rail_of_node[m.rail_node[r]] = r
     for y in prange(w.yarn_edges.shape[0] - 1):
         implicit_stretching_forces(
             w.e, w.elen, s.v, m.held, m.mass, m.edge_a, m.edge_b, m.rest_length, m.EA, m.stretch_damping, dt, w.force,
-            w.axial_sweep, w.yarn_edges[y], w.yarn_edges[y + 1], w.ledger[y, AXIAL_DASHPOT:AXIAL_DASHPOT + 1])
+            w.axial_sweep, w.yarn_edges[y], w.yarn_edges[y + 1], w.ledger[y, AXIAL_DASHPOT:AXIAL_DASHPOT + 1],
+            rail_of_node, m.rail_axis)
+    rail_forces(m.rail_node, m.rail_axis, w.force, w.rail_reaction)
 
 
 @njit(**PARALLEL_OPTS)
@@ -250,13 +266,15 @@ def follow_images(x, v, image_node, image_master, image_shift):
 
 
 @njit(**NUMBA_OPTS)
-def rail_forces(rail_node, rail_axis, force):
+def rail_forces(rail_node, rail_axis, force, taken):
     """Keep only the component along its rail of the force on each rail node (the rail
-    takes the rest), so a node starting at rest on its rail moves along it."""
+    takes the rest, added to ``taken[r]``: the rail's reaction is -taken), so a node starting at rest on its
+    rail moves along it."""
     for r in range(rail_node.shape[0]):
         i = rail_node[r]
         f = force[i, 0] * rail_axis[r, 0] + force[i, 1] * rail_axis[r, 1] + force[i, 2] * rail_axis[r, 2]
         for k in range(3):
+            taken[r, k] += force[i, k] - f * rail_axis[r, k]
             force[i, k] = f * rail_axis[r, k]
 
 
