@@ -108,10 +108,11 @@ class CutConfig(_WithPreset):
         "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor",
         "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
         "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches", "contact_law",
-        "band_row", "band_courses", "band_friction_factor", "pattern", "band", "band_curvature", "friction_every")
+        "band_row", "band_courses", "band_friction_factor", "pattern", "band", "band_curvature", "friction_every",
+        "bars")
     # fields added here after the experiments built on this config (cycle, tensile, snag, resistance) had run
     # sweeps: at their default they stay out of those scenes' job ids too (their ADDED_LATER lists their own)
-    ADDED_LATER_FOR_ALL: ClassVar[tuple[str, ...]] = ("band_curvature", "friction_every")
+    ADDED_LATER_FOR_ALL: ClassVar[tuple[str, ...]] = ("band_curvature", "friction_every", "bars")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -175,6 +176,8 @@ class CutConfig(_WithPreset):
         "contact counting of the laddering dynamics: union (exact friction) or all_pairs (conserves energy) [-]"))
     edge: Literal["clamped", "tail"] = Field("clamped", description=(
         "course ends: clamped at the edge sinkers (position and tangent) or held at straight tails [-]"))
+    bars: Literal["held", "sliding"] = Field("held", description=(
+        "the courses below and above: held, or sliding along x (the experiment's clips on its bars) [-]"))
     contact_damping_ratio: float = Field(0.3, ge=0, description=(
         "normal and tangential contact dashpots of the laddering dynamics, fraction of critical [-]"))
     stretch_damping_ratio: float = Field(0.2, ge=0, description=(
@@ -299,7 +302,7 @@ class CutConfig(_WithPreset):
             steps_per_increment=self.steps_per_increment, fx_tolerance=self.fx_tolerance, start=self.stretch_start,
             natural_curvature=self.natural_curvature, memory_peak_ratio=self.memory_peak_ratio,
             material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
-            contact_law=self.contact_law, pattern=self.pattern,
+            contact_law=self.contact_law, pattern=self.pattern, bars=self.bars,
             pattern_band=(self.band, self.band_row, self.band_courses) if self.knitted_band else None,
             memory_band=self.memory_band,
         )
@@ -430,6 +433,8 @@ class TensileConfig(CutConfig):
             raise ValueError("lx_max: give lx_max, ly_max or both (the box must move)")
         if self.lx is not None and self.lx_max is not None and self.lx_max == self.lx:
             raise ValueError(f"lx_max: {self.lx_max:g} is the start lx (the box must move)")
+        if self.bars == "sliding" and self.ly_max is not None:
+            raise ValueError("ly_max: sliding bars are moved along x only; pull along y with held bars")
         return self
 
     def tensile_settings(self):

@@ -110,6 +110,7 @@ class StretchSettings:
     pattern_band: tuple[str, int, int] | None = None  # (pattern, first course, courses) knitted in another pattern
     # (first course, courses, K): a run-stop band of courses whose yarn remembers K instead of natural_curvature
     memory_band: tuple[int, int, float] | None = None
+    bars: str = "held"  # how the edge courses below and above are held (knitlad.fabric.scenes.knit.BARS)
 
     def __post_init__(self) -> None:
         if (self.lx_over_l0 is None) == (self.fx_target is None):
@@ -152,7 +153,7 @@ class KnitGauge:
 
     def tension_y(self, sim: Simulation) -> float:
         """f_y per column (:func:`knitlad.fabric.measure.transverse_tension`)."""
-        held = np.flatnonzero(sim.model.held)
+        held = np.union1d(np.flatnonzero(sim.model.held), sim.model.rail_node)  # sliding bars: their rails
         return transverse_tension(sim.reaction_forces_N(), held, sim.state.x[held, 1], self.knit.geometry.n_x,
                                   self.material.f0)
 
@@ -249,7 +250,7 @@ class KnitBox:
             self.lx = self.build_lx = lx
         self.knit = build_knit(KnitGeometry(
             n_x=s.n_x, n_y=s.n_y, l_x=self.lx * m.stitch_length, l_y=self.ly * m.stitch_length,
-            nodes_per_stitch=s.nodes_per_stitch, material=m, edge=s.edge, pattern=s.pattern,
+            nodes_per_stitch=s.nodes_per_stitch, material=m, edge=s.edge, bars=s.bars, pattern=s.pattern,
             band=None if s.pattern_band is None else tuple(s.pattern_band),
         ), stretch_damping_ratio=STRETCH_AXIAL_DAMPING)
         self.sim = Simulation(self.knit.rods, contact=stretch_contact(s))

@@ -67,3 +67,10 @@ def test_pulled_along_x_between_held_bars_the_courses_draw_together_and_pull_on_
 def test_the_box_must_move():
     with pytest.raises(ValueError, match="lx_max"):
         config(lx_max=None)
+
+
+def test_sliding_bars_are_pulled_along_x_only():
+    """A bar whose yarn slides along x cannot be moved along y by its end nodes: refused, naming ly_max."""
+    with pytest.raises(ValueError, match="ly_max"):
+        config(bars="sliding", lx_max=None, ly_max=0.3)
+    assert config(bars="sliding").bars == "sliding"

@@ -3,10 +3,14 @@ control, the edges."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
+from knitlad.engine import units as kl_units
+from knitlad.engine.simulation import Simulation
 from knitlad.experiments.config import CutConfig
-from knitlad.fabric.preparation import KnitBox, build_width, stretch
+from knitlad.experiments.protocol import cut
+from knitlad.fabric.preparation import KnitBox, build_width, stretch, stretch_contact
 from knitlad.fabric.scenes.knit import BUILD_LX
 from knitlad.fabric.stretching import OutOfReach, stretch_to
 from knitlad.engine.units import NYLON
@@ -111,3 +115,31 @@ def test_a_memory_band_remembers_its_own_curvature_and_the_rest_of_the_knit_its_
             assert not model.twist_bar[h].any()
     assert knit.knit.rods.twist and knit.fx_within_tolerance
     assert knit.fx_ini == pytest.approx(4.0, rel=cfg.fx_tolerance)
+
+
+def test_sliding_bars_let_the_edge_courses_slide_along_x_and_carry_their_share_of_the_load():
+    """bars="sliding" (the experiment's clips): a bar's two end nodes held at each end, every other node on a
+    rail along x. Stretched to f_x 4 at mu 0, the knit reaches its target, and the supports and rails together
+    balance it: the sum of every reaction vanishes to 2e-3 of the pull F_y across the courses (measured
+    7e-4; without the rails' share the sum is 0.2 F_y). Laddered with implicit axial springs, the bars' rail nodes keep their y and z
+    to round-off while they slide along x."""
+    cfg = config(n_x=6, n_y=6, fx=4.0, resolution=16, bars="sliding")
+    knit = stretch(cfg.stretch_settings())
+    assert knit.fx_within_tolerance
+    rails = knit.knit.rods.model.rail_node
+    starts = knit.knit.rods.model.yarn_start
+    assert rails.size == sum(starts[b + 1] - starts[b] - 4 for b in knit.knit.bars)
+    sim = Simulation(knit.knit.rods.copy(), contact=stretch_contact(knit.settings))
+    reactions = sim.reaction_forces_N()
+    supports = np.union1d(np.flatnonzero(sim.model.held), rails)
+    y = sim.state.x[supports, 1]
+    above = y > 0.5 * (y.min() + y.max())
+    pull_y = 0.5 * (reactions[supports[above], 1].sum() - reactions[supports[~above], 1].sum())
+    assert pull_y > 0 and np.abs(reactions.sum(axis=0)).max() < 2e-3 * pull_y
+    run = cut(knit, config(n_x=6, n_y=6, fx=4.0, resolution=16, bars="sliding", implicit_axial=True,
+                           twist=False).dynamics_settings())
+    before = run.sim.state.x[rails].copy()
+    run.sim.step(3000)
+    after = run.sim.state.x[rails]
+    assert np.abs(after[:, 1:] - before[:, 1:]).max() < 1e-9 * np.abs(before).max()
+    assert np.abs(after[:, 0] - before[:, 0]).max() > 1e-4 * knit.settings.material.diameter / kl_units.LENGTH

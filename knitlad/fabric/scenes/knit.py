@@ -16,6 +16,13 @@ of column n_x - 1: on the box edges x = +-n_x l_x / 2. One extra course below
 (r = -1) and above (r = n_y), entirely held, secure the bottom and top edges so
 that a ladder reaching them stops there.
 
+How those edge courses, the bars, are held (``KnitGeometry.bars``):
+
+* ``"held"`` (default): every node of a bar is held, as the paper's simulations fix the yarn.
+* ``"sliding"``: a bar's two end nodes at each end are held and every other node slides along x on a rail
+  through its place, as the experiment's clips slide along the bars of its biaxial machine: the bar holds
+  the yarn in y and z, and the edge stitches are free to shift sideways along it.
+
 How the course ends are held (``KnitGeometry.edge``):
 
 * ``"clamped"`` (default): the last two nodes at each end are held, fixing the
@@ -50,6 +57,7 @@ class CourseTooWide(ValueError):
 
 CRANE_A = 1.5
 EDGES = ("clamped", "tail")  # how the course ends are held: see the module docstring
+BARS = ("held", "sliding")  # how the edge courses below and above are held: see the module docstring
 # widest l_x/l0 at which the knit and the periodised stitch are built: wider, Crane's loops
 # of successive courses barely overlap; they are stretched from there
 BUILD_LX = 0.30
@@ -91,6 +99,7 @@ class KnitGeometry:
     depth: float | None = None  # c, default 2 d
     tail: float = 0.5  # straight tail beyond the last sinker, in l_x (edge "tail" only)
     edge: str = "clamped"  # how the course ends are held: EDGES
+    bars: str = "held"  # how the edge courses below and above are held: BARS
     width: float = CRANE_A  # a: how far the head bulges sideways (Crane: 3/2)
     pattern: str = "jersey"  # which stitches are knit and which purl (knitlad.fabric.patterns)
     band: tuple[str, int, int] | None = None  # (pattern, first course, courses) knitted in another pattern
@@ -102,6 +111,8 @@ class KnitGeometry:
             raise ValueError(f"nodes_per_stitch must be >= 8, got {self.nodes_per_stitch}")
         if self.edge not in EDGES:
             raise ValueError(f"edge must be one of {', '.join(EDGES)}, got {self.edge!r}")
+        if self.bars not in BARS:
+            raise ValueError(f"bars must be one of {', '.join(BARS)}, got {self.bars!r}")
         fabric_pattern(self.pattern, self.band)
         l0 = self.material.stitch_length
         if not 0 < self.l_x < l0 or not 0 < self.l_y < l0:
@@ -250,7 +261,8 @@ def discrete_loop_half_height(geometry: KnitGeometry) -> float:
 
 
 def build_knit(geometry: KnitGeometry, stretch_damping_ratio: float = 0.2) -> KnitScene:
-    """A jersey knit at (l_x, l_y), every course held at its two ends (``geometry.edge``), edge courses held whole.
+    """A jersey knit at (l_x, l_y), every course held at its two ends (``geometry.edge``), edge courses held whole
+    or sliding along x (``geometry.bars``).
 
     ``stretch_damping_ratio``: each edge's axial dashpot as a fraction of critical (``Scene.build``).
     """
@@ -264,7 +276,12 @@ def build_knit(geometry: KnitGeometry, stretch_damping_ratio: float = 0.2) -> Kn
         y = scene.add_yarn(pts)
         ts.append(t)
         if row in (-1, geometry.n_y):
-            scene.hold(y, range(pts.shape[0]))
+            if geometry.bars == "sliding":
+                last = pts.shape[0] - 1
+                scene.hold(y, [0, 1, last - 1, last])
+                scene.slide(y, range(2, last - 1), (1.0, 0.0, 0.0))
+            else:
+                scene.hold(y, range(pts.shape[0]))
             bars.append(y)
         else:
             held = 2 if geometry.edge == "clamped" else 1
