@@ -64,7 +64,7 @@ def markdown(table: pd.DataFrame, factor: str = "dt_safety") -> str:
         f"{name} | change" for name in OBSERVABLES.values()) + " |"
     lines = [head, "|" + "---|" * (5 + 2 * len(OBSERVABLES))]
     for _, r in table.iterrows():
-        cells = [f"{r.fx_ini:.2f}", f"{r[factor]:g}", f"{int(r.knits)}", f"{r.steps:,.0f}", f"{r.wall_propagate_s:.0f}"]
+        cells = [f"{r.fx_ini:.2f}", f"{r[factor]}" if isinstance(r[factor], str) else f"{r[factor]:g}", f"{int(r.knits)}", f"{r.steps:,.0f}", f"{r.wall_propagate_s:.0f}"]
         for col in OBSERVABLES:
             change = "" if r[factor] == r.reference else f"{r[col + '_change_pct']:+.1f} +- {r[col + '_change_se']:.1f} %"
             cells += [f"{r[col]:.3f}", change]
@@ -75,8 +75,8 @@ def markdown(table: pd.DataFrame, factor: str = "dt_safety") -> str:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("run", type=Path, help="the sweep's output folder (its summary.csv), or a summary CSV")
-    p.add_argument("--reference", type=float, default=None, help="the factor changes are taken against "
-                   "(default: the smallest)")
+    p.add_argument("--reference", default=None, help="the factor changes are taken against (default: the "
+                   "smallest; a word for a column of words, such as bars: held)")
     p.add_argument("--factor", default="dt_safety", help="the column the knits were laddered at (default: dt_safety)")
     p.add_argument("--csv", type=Path, default=None, help="also write the table here")
     args = p.parse_args()
@@ -84,7 +84,10 @@ def main() -> None:
     frame = pd.read_csv(summary)
     if args.factor not in frame.columns:
         p.error(f"--factor: the summary has no column {args.factor!r}")
-    table = paired_changes(frame, args.reference, args.factor)
+    reference = args.reference
+    if reference is not None and pd.api.types.is_numeric_dtype(frame[args.factor]):
+        reference = float(reference)
+    table = paired_changes(frame, reference, args.factor)
     print(markdown(table, args.factor))
     if args.csv is not None:
         table.to_csv(args.csv, index=False, float_format="%.6g")
