@@ -39,6 +39,10 @@ def test_the_paired_step_study_pairs_each_knit_with_itself_at_the_reference_fact
     held = pd.DataFrame(rows).rename(columns={"dt_safety": "friction_every"})  # another factor, the same pairing
     by_friction = study.paired_changes(held, factor="friction_every").set_index(["fx_nominal", "friction_every"])
     assert by_friction.loc[(4.0, 0.7)].v_lad_over_cb_change_pct == pytest.approx(2.0)
+    words = pd.DataFrame(rows).replace({"dt_safety": {0.175: "held", 0.7: "sliding"}})  # a factor of words
+    words = words[words["dt_safety"] != 0.35].rename(columns={"dt_safety": "bars"})
+    by_bars = study.paired_changes(words, reference="held", factor="bars")
+    assert "| 4.00 | sliding | 3 |" in study.markdown(by_bars, "bars")
 
 
 def test_the_run_stop_band_table_says_whether_a_ladder_entered_and_crossed_the_band(tmp_path):
