@@ -20,6 +20,7 @@ from knitlad.engine import units
 from knitlad.engine.deprecation import renamed_field
 from knitlad.engine.kernels.contact import (
     GAPS_KNOWN,
+    HELD_HISTORY_COLUMNS,
     HISTORY_COLUMNS,
     MAX_OVERLAP,
     N_STATS,
@@ -240,7 +241,7 @@ class Contacts(NamedTuple):
 
     pairs: np.ndarray  # (cap, 2) candidate edge pairs, i < j, sorted
     keys: np.ndarray  # (cap,) i * ne + j
-    slip: np.ndarray  # (cap, HISTORY_COLUMNS) per pair: tangential spring u_t, the union rule's verdict, overlap
+    slip: np.ndarray  # (cap, HISTORY_COLUMNS or HELD_...) per pair: tangential spring u_t, union verdict, overlap
     n_pairs: np.ndarray  # (1,) valid pairs
     status: np.ndarray  # (N_STATUS,) slots STALE (the list must be rebuilt), PAIRS_NEEDED (at the last overflow), ...
     x_ref: np.ndarray  # (n, 3) positions at the last rebuild
@@ -375,6 +376,8 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
     edge_radius = yarn_radius  # what the contact sees; the skin and the exclusion keep the yarn's
     if model is not None and model.sagitta_radius is not None:
         edge_radius = sagitta_corrected_radius(yarn_radius, m.rest_length, model.sagitta_radius / units.LENGTH)
+    # a friction held over several steps keeps its force in the pairs' history: wider rows only then
+    history_columns = HELD_HISTORY_COLUMNS if model is not None and model.friction_every > 1 else HISTORY_COLUMNS
     if model is None:
         cap = 0
         params = ContactParams(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -402,7 +405,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
     contacts = Contacts(
         pairs=np.zeros((cap, 2), dtype=np.int64),
         keys=np.zeros(cap, dtype=np.int64),
-        slip=np.zeros((cap, HISTORY_COLUMNS)),
+        slip=np.zeros((cap, history_columns)),
         n_pairs=np.zeros(1, dtype=np.int64),
         status=np.array([1, 0, 0, 0], dtype=np.int64),  # STALE, PAIRS_NEEDED, GAPS_KNOWN, REBUILDS
         x_ref=rods.state.x.copy(),
@@ -424,7 +427,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         edge_moved=np.zeros(ne),
         **pair_law_table(m, model, params),
         edge_allowance=np.full(ne, 0.5 * params.skin),
-        list_scratch=list_scratch(ne, cap),
+        list_scratch=list_scratch(ne, cap, history_columns),
         **share_buffers(m, cap),
     )
     if previous is not None:

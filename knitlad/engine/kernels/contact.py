@@ -74,7 +74,7 @@ class ListScratch(NamedTuple):
 
     old_pairs: np.ndarray  # (cap, 2) the list before the rebuild (its slip is carried over)
     old_keys: np.ndarray  # (cap,)
-    old_slip: np.ndarray  # (cap, HISTORY_COLUMNS)
+    old_slip: np.ndarray  # (cap, the history's columns)
     mid: np.ndarray  # (ne, 3) edge midpoints
     reach: np.ndarray  # (ne,) bounding-sphere radius of each capsule plus half the skin
     cells: np.ndarray  # (ne, 3) int64 grid cell of each midpoint
@@ -85,12 +85,13 @@ class ListScratch(NamedTuple):
 
 
 @njit(**NUMBA_OPTS)
-def list_scratch(n_edges, capacity):
-    """The work arrays of a rebuild of a list of ``capacity`` pairs over ``n_edges`` edges (:class:`ListScratch`)."""
+def list_scratch(n_edges, capacity, history_columns=5):
+    """The work arrays of a rebuild of a list of ``capacity`` pairs over ``n_edges`` edges (:class:`ListScratch`),
+    for a history of ``history_columns`` (HISTORY_COLUMNS, or HELD_HISTORY_COLUMNS)."""
     max_cells = MAX_CELLS_PER_EDGE * n_edges + 64
     return ListScratch(
         np.empty((capacity, 2), dtype=np.int64), np.empty(capacity, dtype=np.int64),
-        np.empty((capacity, HISTORY_COLUMNS)),
+        np.empty((capacity, history_columns)),
         np.empty((n_edges, 3)), np.empty(n_edges), np.empty((n_edges, 3), dtype=np.int64),
         np.empty(n_edges, dtype=np.int64), np.empty(n_edges, dtype=np.int64),
         np.empty(max_cells + 1, dtype=np.int64), np.empty(max_cells, dtype=np.int64),
@@ -116,11 +117,13 @@ PAIR_RESULTS = 11
 
 # columns of a pair's history (Contacts.slip): the tangential spring u_t in 0..2, then the union rule's last
 # verdict on the pair, COUNTED (+1), CEDED_TO_NEIGHBOUR (-1: touching, but the contact is a neighbouring edge's)
-# or 0 (apart, or new), and its overlap then (counted or ceded); the friction force last computed (HELD_X..Z)
-# and the steps it has acted since (HELD_STEPS, 0: none yet), for a friction held over several steps
+# or 0 (apart, or new), and its overlap then (counted or ceded); with a friction held over several steps
+# (ContactParams.friction_every > 1) also the force last computed (HELD_X..Z) and the steps it has acted since
+# (HELD_STEPS, 0: none yet): the default's history stays 5 columns wide (the rebuild copies every column)
 VERDICT, DEPTH = 3, 4
+HISTORY_COLUMNS = 5
 HELD_X, HELD_Y, HELD_Z, HELD_STEPS = 5, 6, 7, 8
-HISTORY_COLUMNS = 9
+HELD_HISTORY_COLUMNS = 9
 COUNTED, CEDED_TO_NEIGHBOUR = 1.0, -1.0
 # columns of a touching pair's share on one of its edges (Contacts.shares: one 64-byte row): the pair's force on
 # its first edge, that edge's lever parameter (s, or t on the second edge), its friction couple, and for the
@@ -582,7 +585,7 @@ def carry_history(old_keys, old_slip, n_old, new_keys, new_slip, n_new, n_blocks
             while p < n_old and old_keys[p] < new_keys[q]:
                 p += 1
             found = p < n_old and old_keys[p] == new_keys[q]
-            for k in range(HISTORY_COLUMNS):
+            for k in range(new_slip.shape[1]):
                 new_slip[q, k] = old_slip[p, k] if found else 0.0
 
 
