@@ -149,3 +149,19 @@ def test_the_tensile_stretch_at_a_tension_is_read_on_the_loading_from_the_start(
                   [1, 0, 0.30, 0.25, 0, 0, 5.0, 0], [-1, 0, 0.25, 0.25, 0, 0, 4.5, 0]])
     assert study.stretch_at(r, 4.0) == pytest.approx(0.275 / 0.20 - 1)  # not the unloading's 4.5 at 0.25
     assert study.stretch_at(r, 0.5) == 0.0 and np.isnan(study.stretch_at(r, 6.0))
+
+
+def test_the_eq1_ensemble_takes_each_protocols_knits_together():
+    """Three knits of one protocol (and one of another): each count of the damage over Eq. 1 at the run's own
+    arrest tension, mean and standard error over the knits of a group."""
+    study = paper_script("damage_prediction")
+    rows = [{"n_y": 16, "ly": 0.25, "lx_max": 0.36, "bar_speed": 0.5, "fx_fin_crossed": f, "predicted_own": 0.5,
+             "n_lad_over_ny": 1.0, "released_over_ny": r, "released_taut_over_ny": 0.25}
+            for f, r in ((1.0, 0.4), (1.1, 0.5), (1.2, 0.6))]
+    rows.append({**rows[0], "lx_max": 0.38})
+    table = study.ensemble_table(pd.DataFrame(rows)).set_index("lx_max")
+    assert table.loc[0.36].knits == 3 and table.loc[0.38].knits == 1
+    assert table.loc[0.36].released_over_eq1 == pytest.approx(1.0)  # 0.4, 0.5, 0.6 over 0.5
+    assert table.loc[0.36].released_over_eq1_se == pytest.approx(0.2 / np.sqrt(3))
+    assert table.loc[0.36].taut_over_eq1 == pytest.approx(0.5) and table.loc[0.36].taut_over_eq1_se == 0
+    assert np.isnan(table.loc[0.38].fx_fin_crossed_se)

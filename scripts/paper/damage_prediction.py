@@ -4,6 +4,7 @@
                                              [--png docs/fig4c.png] [--curve docs/fig4a.png [--curve-at 0.25 0.38]]
     python scripts/paper/damage_prediction.py runs/fig4c:"fast, 16 wide" runs/fig4c_default:"default, 16 wide" \
                                              --png docs/fig4c_compared.png      # sweeps compared, one series each
+    python scripts/paper/damage_prediction.py runs/eq1_ensemble16 --ensemble   # knits of one protocol together
 
 Reads every finished job of a ``cycle`` sweep (``knitlad sweep configs/fig4c.yaml``): its readings
 (``cycle/readings``) and summary. delta l is read on the uncut twin's last unloading twice: at the
@@ -61,11 +62,34 @@ def job_rows(folder: Path) -> list[dict]:
     return rows
 
 
+# the damage counted three ways, each over Eq. 1 at the run's own arrest tension
+RATIOS = {"every": "n_lad_over_ny", "released": "released_over_ny", "taut": "released_taut_over_ny"}
+
+
+def ensemble_table(table: pd.DataFrame) -> pd.DataFrame:
+    """Knits of one protocol (the same n_y, l_y, Delta x_max, bars' speed; f_x targets a fraction of a percent
+    apart) taken together: per group, the number of knits, and the mean and standard error over them of f_x^fin
+    and of each count of the damage over Eq. 1 at the run's own f_x^fin (:data:`RATIOS`)."""
+    keys = [k for k in ("series", "n_y", "ly", "lx_max", "bar_speed") if k in table]
+    rows = []
+    for group, at in table.groupby(keys):
+        row = dict(zip(keys, group if isinstance(group, tuple) else (group,)), knits=len(at))
+        columns = {"fx_fin_crossed": at["fx_fin_crossed"]}
+        columns |= {f"{name}_over_eq1": at[col] / at["predicted_own"] for name, col in RATIOS.items()}
+        for name, values in columns.items():
+            row[name] = values.mean()
+            row[f"{name}_se"] = values.std(ddof=1) / np.sqrt(len(values)) if len(values) > 1 else np.nan
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("folders", nargs="+", help="a cycle sweep's output folder, or FOLDER:LABEL for sweeps compared")
     p.add_argument("--csv", type=Path)
     p.add_argument("--png", type=Path)
+    p.add_argument("--ensemble", action="store_true", help="also the knits of one protocol taken together: "
+                   "mean +- standard error of f_x^fin and of the damage over Eq. 1 at it")
     p.add_argument("--curve", type=Path, help="Fig. 4a of one job (--curve-at)")
     p.add_argument("--curve-at", type=float, nargs=2, default=(0.25, 0.38), metavar=("LY", "LX_MAX"),
                    help="the job of Fig. 4a: its l_y/l0 and Delta x_max (box l_x/l0), at the fastest bars")
@@ -88,6 +112,14 @@ def main() -> None:
     print("| " + " | ".join(shown) + " |\n|" + "---|" * len(shown))
     for _, row in table[shown].iterrows():
         print("| " + " | ".join(f"{v:.3f}" if isinstance(v, float) else str(v) for v in row) + " |")
+    if args.ensemble:
+        ensemble = ensemble_table(table)
+        print("\n| knits | n_y | Delta x_max | f_x^fin crossed | every cell / Eq. 1 | released / Eq. 1 | taut / Eq. 1 |"
+              "\n|---|---|---|---|---|---|---|")
+        for _, r in ensemble.iterrows():
+            cells = [f"{r[k]:.2f} +- {r[k + '_se']:.2f}" for k in ("fx_fin_crossed", "every_over_eq1",
+                                                                  "released_over_eq1", "taut_over_eq1")]
+            print(f"| {r.knits} | {r.n_y} | {r.lx_max:g} | " + " | ".join(cells) + " |")
     if args.csv:
         table.drop(columns=["job"]).to_csv(args.csv, index=False, float_format="%.5g")
     if args.png:
