@@ -119,7 +119,7 @@ def main() -> None:
         for _, r in ensemble.iterrows():
             cells = [f"{r[k]:.2f} +- {r[k + '_se']:.2f}" for k in ("fx_fin_crossed", "every_over_eq1",
                                                                   "released_over_eq1", "taut_over_eq1")]
-            print(f"| {r.knits} | {r.n_y} | {r.lx_max:g} | " + " | ".join(cells) + " |")
+            print(f"| {int(r.knits)} | {int(r.n_y)} | {r.lx_max:g} | " + " | ".join(cells) + " |")
     if args.csv:
         table.drop(columns=["job"]).to_csv(args.csv, index=False, float_format="%.5g")
     if args.png:
