@@ -29,6 +29,19 @@ def two_wavy_yarns_one_held_in_the_middle():
     return m, s, other
 
 
+def end_of_kick_tensions(m, s, w, F, other, dt):
+    """The tensions T_k = g_k+ / eps_k + c_k dg_k+/dt at the end of the kick v+ = v + dt M^-1 F that ``F`` causes,
+    and the forces they and ``other`` make: what the solve must have returned."""
+    v_end = s.v + dt * np.where(m.held, 0.0, 1.0 / m.mass)[:, None] * F
+    t = w.e / w.elen[:, None]
+    rate = np.sum(t * (v_end[m.edge_b] - v_end[m.edge_a]), axis=1)
+    tension = m.EA * (w.elen + dt * rate - m.rest_length) / m.rest_length + m.stretch_damping * rate
+    rebuilt = other.copy()
+    np.add.at(rebuilt, m.edge_a, tension[:, None] * t)
+    np.add.at(rebuilt, m.edge_b, -tension[:, None] * t)
+    return tension, rebuilt
+
+
 @pytest.mark.parametrize("one_range", [True, False])
 def test_the_tensions_are_those_at_the_end_of_the_kick_they_cause(one_range):
     """T_k = g_k+ / eps_k + c_k dg_k+/dt with g+ = g + dt t.(v+_b - v+_a) and v+ = v + dt M^-1 F, to
@@ -42,14 +55,7 @@ def test_the_tensions_are_those_at_the_end_of_the_kick_they_cause(one_range):
     for first, last in ranges:
         implicit_stretching_forces(w.e, w.elen, s.v, m.held, m.mass, m.edge_a, m.edge_b, m.rest_length, m.EA,
                                    m.stretch_damping, dt, F, w.axial_sweep, first, last)
-    inv_mass = np.where(m.held, 0.0, 1.0 / m.mass)
-    v_end = s.v + dt * inv_mass[:, None] * F
-    t = w.e / w.elen[:, None]
-    rate = np.sum(t * (v_end[m.edge_b] - v_end[m.edge_a]), axis=1)
-    tension = m.EA * (w.elen + dt * rate - m.rest_length) / m.rest_length + m.stretch_damping * rate
-    rebuilt = other.copy()
-    np.add.at(rebuilt, m.edge_a, tension[:, None] * t)
-    np.add.at(rebuilt, m.edge_b, -tension[:, None] * t)
+    tension, rebuilt = end_of_kick_tensions(m, s, w, F, other, dt)
     assert np.abs(tension).max() > 10 * np.abs(other).max()  # the springs dominate: a real test of the solve
     np.testing.assert_allclose(F, rebuilt, rtol=0, atol=1e-10 * np.abs(F).max())
 
@@ -74,15 +80,9 @@ def test_on_a_rail_the_tensions_are_those_at_the_end_of_the_kick_along_the_rail(
                                m.rail_axis)
     taken = np.zeros((1, 3))
     rail_forces(m.rail_node, m.rail_axis, F, taken)
-    inv_mass = np.where(m.held, 0.0, 1.0 / m.mass)
-    v_end = s.v + dt * inv_mass[:, None] * F
+    v_end = s.v + dt * np.where(m.held, 0.0, 1.0 / m.mass)[:, None] * F
     assert abs(np.cross(v_end[node], axis)).max() < 1e-12 * np.abs(v_end[node]).max()  # still along the rail
-    t = w.e / w.elen[:, None]
-    rate = np.sum(t * (v_end[m.edge_b] - v_end[m.edge_a]), axis=1)
-    tension = m.EA * (w.elen + dt * rate - m.rest_length) / m.rest_length + m.stretch_damping * rate
-    rebuilt = other.copy()
-    np.add.at(rebuilt, m.edge_a, tension[:, None] * t)
-    np.add.at(rebuilt, m.edge_b, -tension[:, None] * t)
+    _, rebuilt = end_of_kick_tensions(m, s, w, F, other, dt)
     rebuilt[node] -= taken[0]  # the rail takes what is across it
     np.testing.assert_allclose(F, rebuilt, rtol=0, atol=1e-10 * np.abs(F).max())
     np.testing.assert_allclose(taken[0] @ axis, 0.0, atol=1e-12 * np.abs(taken).max())
