@@ -174,8 +174,8 @@ class CutConfig(_WithPreset):
     contact_law: ContactLawName = _contact_law()
     contact_counting: Literal["union", "all_pairs"] = Field("union", description=(
         "contact counting of the laddering dynamics: union (exact friction) or all_pairs (conserves energy) [-]"))
-    edge: Literal["clamped", "tail"] = Field("clamped", description=(
-        "course ends: clamped at the edge sinkers (position and tangent) or held at straight tails [-]"))
+    edge: Literal["clamped", "tail", "continuous"] = Field("clamped", description=(
+        "course ends: clamped at the edge sinkers, held at tails, or continuous (one yarn turning in clips) [-]"))
     bars: Literal["held", "sliding"] = Field("held", description=(
         "the courses below and above: held, or sliding along x (the experiment's clips on its bars) [-]"))
     contact_damping_ratio: float = Field(0.3, ge=0, description=(
@@ -586,6 +586,8 @@ SAGITTA_MAX_SEGMENT = 0.3
 def check_band(cfg: CutConfig) -> None:
     """Refuse a run-stop band that is not one (one line naming the field): a band needs its first course and
     must lie inside the knit, off the cut course; a knitted band is stretched affinely, a curvature band tiled."""
+    if cfg.band == "friction" and cfg.band_row is not None and cfg.edge == "continuous":
+        raise ValueError("band: a friction band names its courses' yarns; on the continuous edge they are one yarn")
     if cfg.band != "friction" and cfg.band_row is None:
         raise ValueError(f"band: a {cfg.band} band needs its first course (band_row)")
     if cfg.knitted_band and cfg.stretch_start != "affine":

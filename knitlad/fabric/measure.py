@@ -18,13 +18,16 @@ from __future__ import annotations
 import numpy as np
 
 
-def tension_per_thread(reactions_N: np.ndarray, left_end: np.ndarray, right_end: np.ndarray, f0: float) -> float:
+def tension_per_thread(reactions_N: np.ndarray, left_end: np.ndarray, right_end: np.ndarray, f0: float,
+                       left_share=1.0, right_share=1.0) -> float:
     """f_x = F_x / (n_y f0) with F_x the mean of the right-end pull and minus the left-end pull [N].
 
     ``left_end``, ``right_end``: (n_y,) or (n_y, k) node indices, the held nodes of each course's
-    ends (k = 2 for clamped ends: their reactions together are the end's force).
+    ends (k = 2 for clamped ends: their reactions together are the end's force). ``left_share``,
+    ``right_share``: the share of each node's reaction its course carries (a clip that joins two
+    courses of one yarn: half each), broadcast against the ends.
     """
-    F_x = 0.5 * (reactions_N[right_end, 0].sum() - reactions_N[left_end, 0].sum())
+    F_x = 0.5 * ((reactions_N[right_end, 0] * right_share).sum() - (reactions_N[left_end, 0] * left_share).sum())
     return float(F_x / (len(right_end) * f0))
 
 
@@ -37,14 +40,16 @@ def transverse_tension(reactions_N: np.ndarray, held: np.ndarray, y: np.ndarray,
     return float(F_y / (n_x * f0))
 
 
-def course_tensions(reactions_N: np.ndarray, left_end: np.ndarray, right_end: np.ndarray, f0: float) -> np.ndarray:
+def course_tensions(reactions_N: np.ndarray, left_end: np.ndarray, right_end: np.ndarray, f0: float,
+                    left_share=1.0, right_share=1.0) -> np.ndarray:
     """Each course's own f_x: its right-end pull and minus its left-end pull, averaged, over f0 ((n_y,) [-]).
 
-    Their mean is :func:`tension_per_thread`. A ladder relaxes the courses it crosses and leaves the
-    others near f_x^ini, so the mean is a reading of the arrest only where every course was crossed.
+    Their mean is :func:`tension_per_thread` (the shares as there). A ladder relaxes the courses it crosses
+    and leaves the others near f_x^ini, so the mean is a reading of the arrest only where every course was
+    crossed.
     """
-    right = reactions_N[right_end, 0].reshape(len(right_end), -1).sum(axis=1)
-    left = reactions_N[left_end, 0].reshape(len(left_end), -1).sum(axis=1)
+    right = (reactions_N[right_end, 0] * right_share).reshape(len(right_end), -1).sum(axis=1)
+    left = (reactions_N[left_end, 0] * left_share).reshape(len(left_end), -1).sum(axis=1)
     return 0.5 * (right - left) / f0
 
 

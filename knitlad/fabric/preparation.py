@@ -149,7 +149,8 @@ class KnitGauge:
 
     def tension(self, sim: Simulation) -> float:
         k = self.knit
-        return tension_per_thread(sim.reaction_forces_N(), k.left_end, k.right_end, self.material.f0)
+        return tension_per_thread(sim.reaction_forces_N(), k.left_end, k.right_end, self.material.f0,
+                                  k.left_share, k.right_share)
 
     def tension_y(self, sim: Simulation) -> float:
         """f_y per column (:func:`knitlad.fabric.measure.transverse_tension`)."""
@@ -160,7 +161,8 @@ class KnitGauge:
     def course_tensions(self, sim: Simulation) -> np.ndarray:
         """Each free course's f_x, bottom to top (:func:`knitlad.fabric.measure.course_tensions`)."""
         k = self.knit
-        return course_tensions(sim.reaction_forces_N(), k.left_end, k.right_end, self.material.f0)
+        return course_tensions(sim.reaction_forces_N(), k.left_end, k.right_end, self.material.f0,
+                               k.left_share, k.right_share)
 
     def rows(self, x: np.ndarray) -> list[np.ndarray]:
         """Positions of the free courses, bottom to top, then of the held top course, by their
@@ -283,7 +285,9 @@ class KnitBox:
         the closing node (clamped ends): node k of it is the cell's node k mod n shifted by
         (k // n) l_x columns and r l_y courses. The cell is periodic, so the tiled knit is
         the infinite relaxed fabric cut to n_x x n_y: it is at equilibrium but at its two
-        edge columns, which miss their neighbours' contacts and relax locally.
+        edge columns, which miss their neighbours' contacts and relax locally. On the continuous
+        edge the odd courses are the same, run backwards, and the turning loops are laid again
+        between the courses' new ends (:meth:`KnitScene.place_turning_loops`).
         """
         g, n = self.knit.geometry, self.knit.geometry.nodes_per_stitch
         l0 = self.s.material.stitch_length / units.LENGTH
@@ -291,14 +295,15 @@ class KnitBox:
         k = np.arange(g.n_x * n + 1)
         shift = np.zeros((k.size, 3))
         shift[:, 0] = (k // n - 0.5 * (g.n_x - 1)) * cell.lx * l0
-        start = self.knit.rods.model.yarn_start  # as built: rows -1 to n_y
         x = self.sim.state.x
-        for row, y in enumerate([self.knit.bars[0]] + self.knit.courses + [self.knit.bars[1]], start=-1):
-            nodes = slice(int(start[y]), int(start[y + 1]))
+        for row, nodes in enumerate([self.knit.yarn_nodes(self.knit.bars[0])] + self.knit.row_nodes(), start=-1):
             if nodes.stop - nodes.start != k.size:
                 raise ValueError("tiling needs clamped course ends (a course of n_x stitches and one node)")
             shift[:, 1] = row * cell.ly * l0
-            x[nodes] = cell_x[k % n] + shift
+            tiled = cell_x[k % n] + shift
+            backwards = x[nodes.start, 0] > x[nodes.stop - 1, 0]
+            x[nodes] = tiled[::-1] if backwards else tiled
+        self.knit.place_turning_loops(x)
         self.sim.state.v[:] = 0.0
         if cell.sim.twist:
             self.tile_frames(cell)

@@ -451,7 +451,7 @@ def write_stretched_knit(path: str | Path, knit) -> Path:
                 checksummed_dataset(g, name, value)
         checksummed_dataset(f, "tension_history", knit.tension_history)
         g = f.create_group("knit")
-        for name in ("courses", "bars", "node_t", "left_end", "right_end"):
+        for name in ("courses", "bars", "node_t", "left_end", "right_end", "course_span", "left_share", "right_share"):
             checksummed_dataset(g, name, getattr(k, name))
         f.attrs["attrs_sha256"] = attributes_checksum(f)
     return path
@@ -491,7 +491,9 @@ def read_stretched_knit(path: str | Path):
         framed = bool(f.attrs["rods_framed"]) if "rods_framed" in f.attrs else twist and bool(np.any(model.kappa_bar))
         knit = KnitScene(geometry=KnitGeometry(**geometry), rods=Rods(model, state, twist, framed), H=float(f.attrs["H"]),
                          courses=[int(c) for c in g["courses"][()]], bars=[int(b) for b in g["bars"][()]],
-                         node_t=g["node_t"][()], left_end=g["left_end"][()], right_end=g["right_end"][()])
+                         node_t=g["node_t"][()], left_end=g["left_end"][()], right_end=g["right_end"][()],
+                         # knits stored before the continuous edge: each course its yarn, every end its own
+                         **{name: g[name][()] for name in ("course_span", "left_share", "right_share") if name in g})
         scalars = {name: f.attrs[name].item() if isinstance(f.attrs[name], np.generic) else f.attrs[name]
                    for name in _KNIT_SCALARS}
         scalars["tension_history"] = f["tension_history"][()].reshape(-1, 3) if "tension_history" in f else np.zeros((0, 3))

@@ -63,6 +63,10 @@ def loop_arc(knit, row, col):
 
 def test_jersey_topology_each_loop_passes_through_the_loop_of_the_course_below(knit):
     """Loop (r+1, i) threads head (r, i) exactly (two opposite piercings); no other pair touches."""
+    assert_jersey_topology(knit)
+
+
+def assert_jersey_topology(knit):
     n_x, n_y = knit.geometry.n_x, knit.geometry.n_y
     for r in range(n_y - 1):
         for i in range(1, n_x - 1):
@@ -98,6 +102,69 @@ def test_course_ends_with_tails_are_held_at_one_node():
     for y in knit.courses:
         held = np.flatnonzero(s.model.held[s.model.yarn_start[y]: s.model.yarn_start[y + 1]])
         assert held.tolist() == [0, s.model.yarn_start[y + 1] - s.model.yarn_start[y] - 1]
+
+
+@pytest.fixture(scope="module")
+def continuous():
+    return build_knit(KnitGeometry(n_x=5, n_y=5, l_x=0.3 * L0, l_y=0.245 * L0, nodes_per_stitch=24, edge="continuous"))
+
+
+def test_the_continuous_knit_is_one_yarn_turning_at_the_side_edges_in_clips_that_slide_along_y(continuous):
+    """edge="continuous": the free courses are one yarn, the odd ones run backwards, and course r turns into
+    course r + 1 in a half circle of diameter l_y (its end sinkers 1e-9 l0 on the box edges) whose apex, on the
+    right for even r and the left for odd r, is the one node on a rail along y; only the yarn's two ends are
+    held (two nodes each: position and tangent). The yarn turns smoothly: no hinge of the turning loops
+    or their joins bends more than the half circle's own pi / segments."""
+    k, g = continuous, continuous.geometry
+    m, x = k.rods.model, k.rods.state.x * kl.units.LENGTH
+    assert set(k.courses) == {k.courses[0]} and len(k.courses) == g.n_y and len(m.yarn_start) == 4
+    yarn = slice(int(m.yarn_start[k.courses[0]]), int(m.yarn_start[k.courses[0] + 1]))
+    edge = g.column_x(g.n_x - 1) + 0.5 * g.l_x
+    for r in range(g.n_y):
+        nodes = k.course_nodes(r)
+        direction = 1 if r % 2 == 0 else -1
+        assert x[nodes.start, 0] == pytest.approx(-direction * edge, abs=1e-9 * L0)
+        assert x[nodes.stop - 1, 0] == pytest.approx(direction * edge, abs=1e-9 * L0)
+    assert np.flatnonzero(m.held[yarn]).tolist() == [0, 1, yarn.stop - yarn.start - 2, yarn.stop - yarn.start - 1]
+    clips = m.rail_node
+    assert clips.size == g.n_y - 1 and np.allclose(m.rail_axis, [0.0, 1.0, 0.0])
+    sides = np.sign(x[clips, 0])
+    assert sides.tolist() == [1.0 if r % 2 == 0 else -1.0 for r in range(g.n_y - 1)]
+    np.testing.assert_allclose(np.abs(x[clips, 0]), edge + 0.5 * g.l_y, rtol=1e-9)
+    t = np.diff(x[yarn], axis=0)
+    t /= np.linalg.norm(t, axis=1)[:, None]
+    turn = np.arccos(np.clip((t[1:] * t[:-1]).sum(axis=1), -1.0, 1.0))
+    outside = np.abs(x[yarn][1:-1, 0]) > edge + 1e-9 * L0
+    segments = k.course_span[1, 0] - k.course_span[0, 1] + 1
+    assert turn[outside].max() <= math.pi / segments * (1 + 1e-6)
+
+
+def test_the_continuous_knit_interlocks_as_jersey_and_its_turning_loops_thread_nothing(continuous):
+    """Every loop threads the head below it and no other (as the clamped knit); a turning loop, outside the box,
+    pierces no head: the edges change how the yarn is held, not the fabric."""
+    assert_jersey_topology(continuous)
+    k, m = continuous, continuous.rods.model
+    span = k.course_span
+    for r in range(continuous.geometry.n_y - 1):
+        turn = k.rods.state.x[span[r, 1] - 1: span[r + 1, 0] + 1]
+        for row in range(continuous.geometry.n_y):
+            for col in range(continuous.geometry.n_x):
+                assert piercings(head_ring(k, row, col), turn)[0] == 0, (r, row, col)
+
+
+def test_the_continuous_knit_reads_each_clip_half_for_each_course_it_joins(continuous):
+    """f_x from the supports: a course's end is its clip (half of it: two courses pull on one clip) or a held end
+    of the yarn (all of it). With each course pulling T on its ends, the clips take 2 T and every course reads T."""
+    k = continuous
+    n_y, T = k.geometry.n_y, 3.0
+    reactions = np.zeros((k.rods.model.n_nodes, 3))
+    reactions[k.rods.model.rail_node, 0] = 2 * T * np.sign(k.rods.state.x[k.rods.model.rail_node, 0])
+    yarn_ends = k.left_end[0], k.right_end[n_y - 1]
+    reactions[yarn_ends[0], 0] = -0.5 * T
+    reactions[yarn_ends[1], 0] = 0.5 * T * np.sign(k.rods.state.x[yarn_ends[1][0], 0])
+    from knitlad.fabric.measure import course_tensions, tension_per_thread
+    np.testing.assert_allclose(course_tensions(reactions, k.left_end, k.right_end, 1.0, k.left_share, k.right_share), T)
+    assert tension_per_thread(reactions, k.left_end, k.right_end, 1.0, k.left_share, k.right_share) == pytest.approx(T)
 
 
 @pytest.mark.parametrize("kwargs, match", [(dict(n_x=0), "1 x 1"), (dict(l_x=L0), "l0"), (dict(nodes_per_stitch=4), "nodes_per_stitch"),

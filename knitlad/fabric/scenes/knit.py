@@ -37,6 +37,13 @@ How the course ends are held (``KnitGeometry.edge``):
   57 rounds of 750 FIRE steps, then a drop to 0.77; the loop heads of the two
   outermost columns moved 7.5 and 3.3 nodes, the interior ones < 1), where the
   clamped knit settles (f_x 2.36 -> 2.28 over 30 rounds, heads moved <= 1 node).
+* ``"continuous"``: the experiment's fabric, one yarn knitted back and forth. Course r runs from left to
+  right for even r and back for odd r; the end of course r turns into the start of course r + 1 in a
+  half circle of diameter l_y outside the box (:func:`turning_loop`), tangent to both courses' ends (their
+  sinkers run along x). The apex of each turning loop sits in a clip that slides along y on a rail: it holds
+  the loop in x and z, as the experiment's sliding clips on the side bars of its biaxial machine. The yarn's
+  two ends (the start of course 0, the end of course n_y - 1) are clamped. Each clip carries the pull of the
+  two courses it joins: each course counts half of it (``KnitScene.left_share``, ``right_share``).
 """
 
 from __future__ import annotations
@@ -56,7 +63,7 @@ class CourseTooWide(ValueError):
     """No centreline of this family holds l0 per stitch at this l_x: even a flat course is longer."""
 
 CRANE_A = 1.5
-EDGES = ("clamped", "tail")  # how the course ends are held: see the module docstring
+EDGES = ("clamped", "tail", "continuous")  # how the course ends are held: see the module docstring
 BARS = ("held", "sliding")  # how the edge courses below and above are held: see the module docstring
 # widest l_x/l0 at which the knit and the periodised stitch are built: wider, Crane's loops
 # of successive courses barely overlap; they are stretched from there
@@ -178,7 +185,7 @@ class KnitGeometry:
         knit = np.column_stack([np.interp(targets, s, pts[:, k]) for k in range(3)])
         tk = np.interp(targets, s, t)
         seg = s[-1] / n_seg
-        if self.edge == "clamped":
+        if self.edge != "tail":
             return knit, tk
         n_tail = max(1, int(round(self.tail * self.l_x / seg)))
         left = knit[0] + np.outer(np.arange(n_tail, 0, -1) * seg, [-1.0, 0.0, 0.0])
@@ -186,6 +193,28 @@ class KnitGeometry:
         t_left = np.full(n_tail, -np.inf)
         t_right = np.full(n_tail, np.inf)
         return np.vstack([left, knit, right]), np.concatenate([t_left, tk, t_right])
+
+
+def turning_loop(a: np.ndarray, b: np.ndarray, segments: int, outward: float) -> np.ndarray:
+    """The ``segments - 1`` nodes strictly between ``a`` and ``b`` on the half circle of diameter |b - a| that
+    bulges along ``outward`` x (+1: right, -1: left), in the plane of x and b - a; the yarn leaves ``a`` and
+    enters ``b`` along x, as it leaves and enters a course's end sinkers.
+
+        p(phi) = m + R (-cos(phi) u + sin(phi) w),  m = (a + b)/2,  R = |b - a|/2,  u = (b - a)/2R,
+
+    w the unit x direction made normal to u, phi = pi j / segments (j = 1 .. segments - 1)."""
+    m, R = 0.5 * (a + b), 0.5 * float(np.linalg.norm(b - a))
+    u = (b - a) / (2 * R)
+    w = np.array([outward, 0.0, 0.0]) - outward * u[0] * u
+    w /= np.linalg.norm(w)
+    phi = math.pi * np.arange(1, segments) / segments
+    return m + R * (np.outer(-np.cos(phi), u) + np.outer(np.sin(phi), w))
+
+
+def turning_segments(geometry: KnitGeometry) -> int:
+    """Segments of a turning loop (``edge="continuous"``): its half circle pi l_y / 2 at the knit's segment
+    length, even so that a node sits at the apex (its clip)."""
+    return max(2, 2 * int(round(0.25 * math.pi * geometry.l_y / geometry.segment)))
 
 
 def widest_fitting_width(lx_max: float, ly: float, material: Material, nodes_per_stitch: int,
@@ -217,27 +246,55 @@ class KnitScene:
     courses: list[int]  # yarn index of each free course, bottom to top
     bars: list[int]  # yarn indices of the held edge courses
     node_t: np.ndarray  # centreline parameter of each node (+-inf on tails)
-    left_end: np.ndarray  # (courses, held) node indices of the held left end of each free course
+    left_end: np.ndarray  # (courses, k) node indices of the support at the left end of each free course
     right_end: np.ndarray
+    # (courses, 2) [start, stop) nodes of each free course's stitches (None: its whole yarn, as before the
+    # continuous edge); the share of each end node's reaction the course carries (None: all of it)
+    course_span: np.ndarray | None = None
+    left_share: np.ndarray | None = None
+    right_share: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.course_span is None:
+            start = self.rods.model.yarn_start  # as built: this scene is never cut
+            self.course_span = np.array([[start[y], start[y + 1]] for y in self.courses], dtype=np.int64)
+        for name, end in (("left_share", self.left_end), ("right_share", self.right_end)):
+            if getattr(self, name) is None:
+                setattr(self, name, np.ones(end.shape))
 
     def course_nodes(self, k: int) -> slice:
-        """Node slice of free course k (0 = bottom). Node indices never change (a cut makes two
-        yarns of a course and shifts the yarn indices above it, not the nodes)."""
-        return self._yarn_nodes(self.courses[k])
+        """Node slice of free course k (0 = bottom): its stitches, sinker to sinker (and tails). Node indices
+        never change (a cut makes two yarns of a course and shifts the yarn indices above it, not the
+        nodes). On the continuous edge the odd courses run from right to left."""
+        start, stop = self.course_span[k]
+        return slice(int(start), int(stop))
 
     def row_nodes(self) -> list[slice]:
         """Node slices of the free courses, bottom to top, then of the held top course."""
-        return [self._yarn_nodes(y) for y in self.courses + [self.bars[1]]]
+        return [self.course_nodes(k) for k in range(len(self.courses))] + [self.yarn_nodes(self.bars[1])]
 
     def node_course(self) -> np.ndarray:
-        """The course of each node: 0 to n_y - 1 for the free courses, -1 and n_y for the held ones."""
+        """The course of each node: 0 to n_y - 1 for the free courses, -1 and n_y for the held ones; a
+        turning loop's nodes (continuous edge) belong to the course it leaves."""
         out = np.empty(self.rods.model.n_nodes, dtype=np.int64)
-        out[self._yarn_nodes(self.bars[0])] = -1
-        for k, nodes in enumerate(self.row_nodes()):
-            out[nodes] = k
+        out[self.yarn_nodes(self.bars[0])] = -1
+        out[self.yarn_nodes(self.bars[1])] = len(self.courses)
+        span = self.course_span
+        for k in range(len(self.courses)):
+            out[span[k, 0]:span[k + 1, 0] if k + 1 < len(self.courses) else span[k, 1]] = k
         return out
 
-    def _yarn_nodes(self, y: int) -> slice:
+    def place_turning_loops(self, x: np.ndarray) -> None:
+        """Lay each turning loop (continuous edge) on its half circle between the courses' ends at positions
+        ``x`` [any length unit], in place: after the courses were moved (tiled)."""
+        if self.geometry.edge != "continuous":
+            return
+        span = self.course_span
+        for k in range(len(self.courses) - 1):
+            a, b = span[k, 1] - 1, span[k + 1, 0]
+            x[a + 1:b] = turning_loop(x[a], x[b], b - a, 1.0 if x[a, 0] > 0 else -1.0)
+
+    def yarn_nodes(self, y: int) -> slice:
         start = self.rods.model.yarn_start  # as built: this scene is never cut
         return slice(int(start[y]), int(start[y + 1]))
 
@@ -261,8 +318,8 @@ def discrete_loop_half_height(geometry: KnitGeometry) -> float:
 
 
 def build_knit(geometry: KnitGeometry, stretch_damping_ratio: float = 0.2) -> KnitScene:
-    """A jersey knit at (l_x, l_y), every course held at its two ends (``geometry.edge``), edge courses held whole
-    or sliding along x (``geometry.bars``).
+    """A knit at (l_x, l_y), every course held at its two ends or all of them one yarn turning in clips
+    (``geometry.edge``), edge courses held whole or sliding along x (``geometry.bars``).
 
     ``stretch_damping_ratio``: each edge's axial dashpot as a fraction of critical (``Scene.build``).
     """
@@ -271,7 +328,16 @@ def build_knit(geometry: KnitGeometry, stretch_damping_ratio: float = 0.2) -> Kn
     courses, bars, ts = [], [], []
     left, right = [], []
     offset = 0
+    continuous = None
     for row in range(-1, geometry.n_y + 1):
+        if 0 <= row and geometry.edge == "continuous":
+            if continuous is None:  # all the free courses, one yarn
+                continuous = _add_continuous_yarn(scene, geometry, H, offset)
+                courses, left, right, spans, shares, t = continuous
+                ts.append(t)
+                offset += t.shape[0]
+            if row < geometry.n_y:
+                continue
         pts, t = geometry.course_points(row, H)
         y = scene.add_yarn(pts)
         ts.append(t)
@@ -292,7 +358,46 @@ def build_knit(geometry: KnitGeometry, stretch_damping_ratio: float = 0.2) -> Kn
             right.append(offset + last - np.arange(held))
         offset += pts.shape[0]
     rods = scene.build(twist=False, stretch_damping_ratio=stretch_damping_ratio)
+    extra = {} if continuous is None else dict(course_span=spans, left_share=shares[0], right_share=shares[1])
     return KnitScene(
         geometry=geometry, rods=rods, H=H, courses=courses, bars=bars, node_t=np.concatenate(ts),
-        left_end=np.array(left), right_end=np.array(right),
+        left_end=np.array(left), right_end=np.array(right), **extra,
     )
+
+
+def _add_continuous_yarn(scene: Scene, geometry: KnitGeometry, H: float, offset: int):
+    """The free courses as one yarn of the continuous edge (module docstring), its first node ``offset``:
+    (courses, left_end, right_end, course_span, (left_share, right_share), node_t)."""
+    n_y, segments = geometry.n_y, turning_segments(geometry)
+    pieces, ts, spans = [], [], []
+    count = 0
+    for row in range(n_y):
+        pts, t = geometry.course_points(row, H)
+        if row % 2:
+            pts, t = pts[::-1], t[::-1]
+        if row:  # the turning loop from the end of the course below
+            side = 1.0 if pieces[-1][-1, 0] > 0 else -1.0
+            pieces.append(turning_loop(pieces[-1][-1], pts[0], segments, side))
+            ts.append(np.full(segments - 1, side * np.inf))
+            count += segments - 1
+        spans.append((offset + count, offset + count + pts.shape[0]))
+        pieces.append(pts)
+        ts.append(t)
+        count += pts.shape[0]
+    y = scene.add_yarn(np.vstack(pieces))
+    last = count - 1
+    scene.hold(y, [0, 1, last - 1, last])
+    spans = np.array(spans, dtype=np.int64)
+    clips = [int(spans[k, 1]) - offset + segments // 2 - 1 for k in range(n_y - 1)]  # the apex of each loop
+    scene.slide(y, clips, (0.0, 1.0, 0.0))
+    clips = [offset + c for c in clips]
+    ends = np.zeros((2, n_y, 2), dtype=np.int64)  # [start side, end side] of each course
+    share = np.zeros((2, n_y, 2))
+    for k in range(n_y):
+        ends[0, k], share[0, k] = ([offset, offset + 1], (1.0, 1.0)) if k == 0 else ([clips[k - 1]] * 2, (0.5, 0.0))
+        ends[1, k], share[1, k] = (([offset + last, offset + last - 1], (1.0, 1.0)) if k == n_y - 1
+                                   else ([clips[k]] * 2, (0.5, 0.0)))
+    odd = np.arange(n_y) % 2 == 1  # odd courses start on the right
+    left, right = np.where(odd[:, None], ends[1], ends[0]), np.where(odd[:, None], ends[0], ends[1])
+    shares = (np.where(odd[:, None], share[1], share[0]), np.where(odd[:, None], share[0], share[1]))
+    return [y] * n_y, list(left), list(right), spans, shares, np.concatenate(ts)
