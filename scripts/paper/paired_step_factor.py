@@ -3,11 +3,13 @@
     python scripts/paper/paired_step_factor.py runs/step_factor_accurate [--reference 0.35] [--csv FILE]
     python scripts/paper/paired_step_factor.py docs/reference/step_factor_accurate_summary.csv
     python scripts/paper/paired_step_factor.py runs/friction_every_accurate --factor friction_every
+    python scripts/paper/paired_step_factor.py runs/continuous_edge16 --factor edge+bars --reference clamped+held
 
 Reads a sweep over (f_x target, ``dt_safety``) (``docs/reference/step_factor_accurate.yaml``): the knits of one
 nominal tension are targets a fraction of a percent apart, and every knit is laddered at every factor from the
 same stretch (``--factor``: another column of the sweep that every knit was laddered at, such as
-``friction_every``, ``docs/reference/friction_every_accurate.yaml``). Per nominal tension and factor it prints the mean observables and, per knit, the change against
+``friction_every``, ``docs/reference/friction_every_accurate.yaml``; columns joined by ``+`` for a grid of
+several, such as ``edge+bars``). Per nominal tension and factor it prints the mean observables and, per knit, the change against
 the smallest factor (the reference): mean +- standard error over the knits. A factor may replace the reference
 only where its paired change lies within two standard errors of zero and under the preset's stated error.
 """
@@ -82,8 +84,12 @@ def main() -> None:
     args = p.parse_args()
     summary = args.run if args.run.is_file() else args.run / "summary.csv"
     frame = pd.read_csv(summary)
-    if args.factor not in frame.columns:
-        p.error(f"--factor: the summary has no column {args.factor!r}")
+    columns = args.factor.split("+")
+    missing = [c for c in columns if c not in frame.columns]
+    if missing:
+        p.error(f"--factor: the summary has no column {missing[0]!r}")
+    if len(columns) > 1:  # a grid of several factors: each combination one level
+        frame[args.factor] = frame[columns].astype(str).agg("+".join, axis=1)
     reference = args.reference
     if reference is not None and pd.api.types.is_numeric_dtype(frame[args.factor]):
         reference = float(reference)

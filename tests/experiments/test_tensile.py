@@ -74,3 +74,13 @@ def test_sliding_bars_are_pulled_along_x_only():
     with pytest.raises(ValueError, match="ly_max"):
         config(bars="sliding", lx_max=None, ly_max=0.3)
     assert config(bars="sliding").bars == "sliding"
+
+
+def test_a_moving_box_refuses_the_continuous_edge():
+    """The continuous edge's clips stay where the stretch left them; the tensile test and protocol B move only
+    held course ends: refused, naming edge, before anything runs."""
+    from knitlad.experiments.config import CycleConfig
+    with pytest.raises(ValueError, match="edge: the continuous edge"):
+        config(edge="continuous")
+    with pytest.raises(ValueError, match="edge: the continuous edge"):
+        CycleConfig(fx=0.68, lx_max=0.38, edge="continuous")
