@@ -369,7 +369,7 @@ def stretch(s: StretchSettings, progress: Callable[[str, float], None] | None = 
     report = (lambda frac: progress("stretch", frac)) if progress else None
     box = KnitBox(s)
     within, fx = True, None
-    if s.start == "tiled" and s.edge == "clamped":
+    if s.start == "tiled" and s.edge in ("clamped", "continuous"):
         try:
             fx, within = stretch_tiled(box, report)
         except CourseTooWide:
