@@ -143,7 +143,7 @@ def test_the_continuous_knit_interlocks_as_jersey_and_its_turning_loops_thread_n
     """Every loop threads the head below it and no other (as the clamped knit); a turning loop, outside the box,
     pierces no head: the edges change how the yarn is held, not the fabric."""
     assert_jersey_topology(continuous)
-    k, m = continuous, continuous.rods.model
+    k = continuous
     span = k.course_span
     for r in range(continuous.geometry.n_y - 1):
         turn = k.rods.state.x[span[r, 1] - 1: span[r + 1, 0] + 1]
