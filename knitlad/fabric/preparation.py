@@ -465,8 +465,8 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
             break
         aim = target * cell_fx / fx
         if secant and len(tried) > 1 and tried[-1][1] != tried[-2][1]:
-            (c0, f0), (c1, f1) = tried[-2:]
-            aim = c1 + (target - f1) * (c1 - c0) / (f1 - f0)
+            (cell_a, knit_a), (cell_b, knit_b) = tried[-2:]
+            aim = cell_b + (target - knit_b) * (cell_b - cell_a) / (knit_b - knit_a)
             if aim <= 0:
                 aim = target * cell_fx / fx
         with small_scene_threads():
