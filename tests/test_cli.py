@@ -44,6 +44,8 @@ def run(*args, cwd=None):
         (["cycle", "--lx", "0.38", "--lx-max", "0.36"], "lx_max"),
         (["cycle"], "--lx-max"),
         (["cycle", "--lx-max", "0.38", "--bar-speed", "0"], "--bar-speed"),
+        (["cut", "--clip-friction", "0.3"], "clip_friction"),
+        (["cut", "--clip-friction", "-1", "--bars", "sliding"], "--clip-friction"),
     ],
 )
 def test_bad_options_get_one_line_and_exit_code_2(args, option):

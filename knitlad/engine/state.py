@@ -58,7 +58,8 @@ class RodModel(NamedTuple):
     yarn_start: np.ndarray  # (n_yarns + 1,) int64 offsets
     yarn_parent: np.ndarray  # (n_yarns,) int64 the yarn this one was cut from (itself if never cut)
     rail_node: np.ndarray  # (k,) int64 nodes that may only slide along a line ...
-    rail_axis: np.ndarray  # (k, 3) ... the unit direction of that line
+    rail_axis: np.ndarray  # (k, 3) ... the unit direction of that line ...
+    rail_friction: np.ndarray  # (k,) ... and the Coulomb coefficient between the node and its rail (0: none)
     image_node: np.ndarray  # (g,) int64 nodes of periodic images: held copies that follow ...
     image_master: np.ndarray  # (g,) int64 ... their master node ...
     image_shift: np.ndarray  # (g, 3) ... shifted by a lattice vector: x[image] = x[master] + shift
@@ -116,6 +117,7 @@ class RodState(NamedTuple):
 MODEL_AXES = {
     **dict.fromkeys(("mass", "radius", "held", "v_prescribed", "f_ext", "node_yarn"), NODE),
     "yarn_start": YARN, "yarn_parent": YARN, "rail_node": RAIL, "rail_axis": RAIL,
+    "rail_friction": RAIL,
     **dict.fromkeys(("image_node", "image_master", "image_shift"), IMAGE),
     **dict.fromkeys(("edge_a", "edge_b", "edge_shift", "rest_length", "EA", "stretch_damping", "twist_inertia",
                      "theta_held"), EDGE),
@@ -234,7 +236,7 @@ class _Yarn:
     natural_curvature: str
     start: np.ndarray | None = None  # (k, 3) metres: where the yarn starts, when not at its rest shape
     held: dict[int, np.ndarray] = field(default_factory=dict)  # node -> velocity (m/s)
-    rails: dict[int, np.ndarray] = field(default_factory=dict)  # node -> unit axis it slides along
+    rails: dict[int, tuple[np.ndarray, float]] = field(default_factory=dict)  # node -> (unit axis, Coulomb mu)
     image_of: tuple[int, np.ndarray] | None = None  # (master yarn, lattice shift [m]) for a periodic image
     forces: dict[int, np.ndarray] = field(default_factory=dict)  # node -> force (N)
     twist_held: set[int] = field(default_factory=set)
@@ -319,18 +321,19 @@ class Scene:
         for node in nodes:
             y.held[self._node_index(y, node)] = velocity
 
-    def slide(self, yarn: int, nodes: Sequence[int], axis: Sequence[float]) -> None:
-        """Let ``nodes`` move only along ``axis`` through their initial position (a frictionless rail).
-
-        The force on such a node is projected on the axis; its velocity stays along it.
-        """
+    def slide(self, yarn: int, nodes: Sequence[int], axis: Sequence[float], friction: float = 0.0) -> None:
+        """Let ``nodes`` move only along ``axis`` through their initial position (a rail, or a clip on a bar):
+        the force on them is projected on the axis, with Coulomb ``friction`` from the rail's normal reaction
+        (:func:`knitlad.engine.kernels.integrate.rail_friction_forces`; 0: frictionless)."""
         y = self._yarn(yarn)
         a = np.asarray(axis, dtype=float)
         norm = float(np.linalg.norm(a))
         if a.shape != (3,) or not norm > 0:
             raise ValueError(f"axis must be a non-zero 3-vector, got {axis!r}")
+        if not (math.isfinite(friction) and friction >= 0):
+            raise ValueError(f"friction must be a finite coefficient >= 0, got {friction!r}")
         for node in nodes:
-            y.rails[self._node_index(y, node)] = a / norm
+            y.rails[self._node_index(y, node)] = (a / norm, float(friction))
 
     def add_image(self, yarn: int, shift: Sequence[float]) -> int:
         """A periodic image of ``yarn`` shifted by the lattice vector ``shift`` [m]; returns its index.
@@ -460,7 +463,7 @@ class Scene:
         v_prescribed = np.zeros((n, 3))
         f_ext = np.zeros((n, 3))
         theta_held = np.zeros(ne, dtype=bool)
-        rail_node, rail_axis, image_node, image_master, image_shift = [], [], [], [], []
+        rail_node, rail_axis, rail_friction, image_node, image_master, image_shift = [], [], [], [], [], []
         first_edge = 0
         for iy, y in enumerate(self._yarns):
             s, k = int(yarn_start[iy]), y.points.shape[0]
@@ -469,10 +472,11 @@ class Scene:
                 image_node.extend(range(s, s + k))
                 image_master.extend(range(int(yarn_start[m]), int(yarn_start[m]) + k))
                 image_shift.extend([shift / units.LENGTH] * k)
-            for j, axis in sorted(y.rails.items()):
+            for j, (axis, mu) in sorted(y.rails.items(), key=lambda item: item[0]):
                 if j not in y.held:
                     rail_node.append(s + j)
                     rail_axis.append(axis)
+                    rail_friction.append(mu)
             for j, vel in y.held.items():
                 held[s + j] = True
                 v_prescribed[s + j] = vel / units.VELOCITY
@@ -484,6 +488,7 @@ class Scene:
         return dict(
             held=held, v_prescribed=v_prescribed, f_ext=f_ext, theta_held=theta_held,
             rail_node=np.array(rail_node, dtype=np.int64), rail_axis=np.array(rail_axis, dtype=float).reshape(-1, 3),
+            rail_friction=np.array(rail_friction, dtype=float),
             image_node=np.array(image_node, dtype=np.int64), image_master=np.array(image_master, dtype=np.int64),
             image_shift=np.array(image_shift, dtype=float).reshape(-1, 3),
         )

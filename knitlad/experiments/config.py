@@ -109,10 +109,10 @@ class CutConfig(_WithPreset):
         "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
         "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches", "contact_law",
         "band_row", "band_courses", "band_friction_factor", "pattern", "band", "band_curvature", "friction_every",
-        "bars")
+        "bars", "clip_friction")
     # fields added here after the experiments built on this config (cycle, tensile, snag, resistance) had run
     # sweeps: at their default they stay out of those scenes' job ids too (their ADDED_LATER lists their own)
-    ADDED_LATER_FOR_ALL: ClassVar[tuple[str, ...]] = ("band_curvature", "friction_every", "bars")
+    ADDED_LATER_FOR_ALL: ClassVar[tuple[str, ...]] = ("band_curvature", "friction_every", "bars", "clip_friction")
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
@@ -178,6 +178,8 @@ class CutConfig(_WithPreset):
         "course ends: clamped at the edge sinkers, held at tails, or continuous (one yarn turning in clips) [-]"))
     bars: Literal["held", "sliding"] = Field("held", description=(
         "the courses below and above: held, or sliding along x (the experiment's clips on its bars) [-]"))
+    clip_friction: float = Field(0.0, ge=0, le=2, description=(
+        "Coulomb coefficient of the clips on their bars (sliding bars, the continuous edge), on at the cut [-]"))
     contact_damping_ratio: float = Field(0.3, ge=0, description=(
         "normal and tangential contact dashpots of the laddering dynamics, fraction of critical [-]"))
     stretch_damping_ratio: float = Field(0.2, ge=0, description=(
@@ -200,29 +202,24 @@ class CutConfig(_WithPreset):
         "contact springs; with twist the spin modes are only held stable) [-]; default: the preset's, from "
         "paired time-step studies (0.35 at fast and default: docs/accuracy.md; 0.7 at accurate, whose limit "
         "is shorter: docs/performance.md)"))
-
     axial_stiffness_factor: float = Field(1.0, gt=0, le=1, description=(
         "stretching stiffness of the laddering dynamics over the yarn's EA [-]; below 1 the axial waves "
         "slow down and the step grows as 1/sqrt(factor), every edge keeping its tension at the cut; it "
         "changes v_lad and f_x^fin (docs/accuracy.md)"))
-
     twist_inertia_factor: float = Field(1.0, ge=1, le=1000, description=(
         "with twist: the yarn's inertia about its axis in the laddering dynamics over rho_L d^2/8 per length [-]; "
         "a setting for studies (the step does not need it); large factors slow the ladder, as the yarns roll "
         "at the contacts (docs/accuracy.md)"))
-
     framed_twist: bool = Field(False, description=(
         "with twist and no natural curvature: bend and twist through material frames (framed DER, the "
         "averaged material curvature) instead of the frame-free isotropic path (|kb|^2 and the reference "
         "twist by holonomy), whose bent hinges are a little softer in twist (by B |kb|^2 / 4GJ); costlier: "
         "for comparisons [-]"))
-
     implicit_axial: bool | None = Field(None, description=(
         "the laddering dynamics take the yarn's axial springs and dashpots at the end of each kick "
         "(linearly implicit, a tridiagonal solve per yarn): the axial waves set no limit and the step, "
         "dt_safety x the contact and bending limit, grows; the static tensions are unchanged [-]; "
         "default: the preset's"))
-
     stop_at_edge: bool = Field(True, description=(
         "stop the run when a ladder reaches an edge course (its damage and f_x^fin are then those of that moment); "
         "false: go on until every front has stopped (or max_time_ms) [-]"))
@@ -276,6 +273,7 @@ class CutConfig(_WithPreset):
             raise ValueError("memory_peak_ratio: shapes the memory of natural_curvature > 0; the yarn has none")
         check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
         check_band(self)
+        check_clips(self)
         if self.frame_every_us is not None and self.frame_every_us < self.observe_every_us:
             raise ValueError(f"frame_every_us: {self.frame_every_us:g} is shorter than observe_every_us "
                              f"({self.observe_every_us:g}): frames are taken at observations")
@@ -334,7 +332,7 @@ class CutConfig(_WithPreset):
             max_time_s=self.max_time_ms * 1e-3,
             frame_every_s=None if self.frame_every_us is None else self.frame_every_us * 1e-6,
             stop_at_edge=self.stop_at_edge, loss_factor=self.loss_factor, loss_peak_hz=self.loss_peak_hz,
-            air_drag=self.air_drag, stop_after_stitches=self.stop_after_stitches,
+            air_drag=self.air_drag, stop_after_stitches=self.stop_after_stitches, clip_friction=self.clip_friction,
             friction_band=(self.band_row, self.band_courses, self.band_friction_factor)
             if self.band_row is not None and self.band == "friction" else None,
         )
@@ -591,6 +589,13 @@ def check_moved_edge(edge: str) -> None:
     if edge == "continuous":
         raise ValueError("edge: the continuous edge's clips stay where the stretch left them; a moving box moves "
                          "held course ends only (edge clamped or tail)")
+
+
+def check_clips(cfg: CutConfig) -> None:
+    """Refuse clip friction on a knit without clips: they are the sliding bars' and the continuous edge's."""
+    if cfg.clip_friction > 0 and cfg.bars == "held" and cfg.edge != "continuous":
+        raise ValueError("clip_friction: this knit has no clips (bars held, edge not continuous); use bars sliding "
+                         "or edge continuous")
 
 
 def check_band(cfg: CutConfig) -> None:

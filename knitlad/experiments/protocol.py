@@ -95,6 +95,7 @@ class DynamicsSettings:
     stop_after_stitches: int | None = None  # stop once a front has run this many stitches (enough for v_lad)
     friction_band: tuple[int, int, float] | None = None  # (first course, courses, factor on mu): a run-stop band
     friction_every: int = 1  # each contact's friction computed once every this many steps, held between (a study)
+    clip_friction: float = 0.0  # Coulomb coefficient of the clips on the bars they slide along (0: frictionless)
 
     @property
     def material_damping(self) -> MaterialDamping | None:
@@ -183,9 +184,11 @@ def laddering_time_step(rods: Rods, contact: ContactModel, dynamics: DynamicsSet
 
 
 def dynamics_rods(rods: Rods, dynamics: DynamicsSettings, material: Material) -> Rods:
-    """The stretched knit's rods as the dynamics run them: their dashpots, axial stiffness and twist."""
+    """The stretched knit's rods as the dynamics run them: their dashpots, clip friction, axial stiffness and twist."""
     rods = rods.replace_model(
         stretch_damping=rods.model.stretch_damping * (dynamics.stretch_damping_ratio / STRETCH_AXIAL_DAMPING))
+    if dynamics.clip_friction > 0:  # the stretch ran at mu = 0, the clips' friction too: both come on at the cut
+        rods = rods.replace_model(rail_friction=np.full(rods.model.rail_node.shape[0], dynamics.clip_friction))
     if dynamics.axial_stiffness_factor != 1.0:
         rods = with_axial_stiffness(rods, dynamics.axial_stiffness_factor)
     if dynamics.twist and not rods.twist:  # a yarn with natural curvature carries twist from the stretch

@@ -483,6 +483,7 @@ def read_stretched_knit(path: str | Path):
         stored = {name: f["model"][name][()] for name in RodModel._fields if name in f["model"]}
         # knits stored before cuts kept their pieces one yarn for the contact were never cut
         stored.setdefault("yarn_parent", np.arange(stored["yarn_start"].shape[0] - 1, dtype=np.int64))
+        stored.setdefault("rail_friction", np.zeros(stored["rail_node"].shape[0]))  # and before clip friction
         model = RodModel(**stored)
         state = RodState(**{name: f["state"][name][()] for name in RodState._fields})
         g = f["knit"]

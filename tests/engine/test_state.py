@@ -103,6 +103,8 @@ def test_a_node_on_a_rail_moves_only_along_it():
     assert abs(tip[1]) < 1e-15 and abs(tip[2]) < 1e-15
     with pytest.raises(ValueError, match="axis"):
         scene.slide(y, [1], (0.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="friction"):
+        scene.slide(y, [1], (1.0, 0.0, 0.0), friction=-0.1)
 
 
 def test_a_softer_yarn_keeps_its_tensions_and_takes_a_longer_step():

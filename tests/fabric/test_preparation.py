@@ -172,3 +172,31 @@ def test_the_continuous_edge_reaches_its_target_and_its_clips_hold_the_pull_whil
     after = run.sim.state.x[clips]
     assert np.abs(after[:, [0, 2]] - before[:, [0, 2]]).max() < 1e-9 * np.abs(before).max()
     assert np.abs(after[:, 1] - before[:, 1]).max() > 1e-4 * knit.settings.material.diameter / kl_units.LENGTH
+
+
+def test_the_clips_friction_comes_on_at_the_cut_and_keeps_every_reaction_in_its_coulomb_cone():
+    """clip_friction (the continuous edge's clips and the sliding bars' on their bars): the stretch runs them
+    frictionless, the cut switches them on with mu; while the ladder runs, every rail's reaction along its bar
+    stays within mu times its reaction across (to 1e-9), and some clip reaches that bound (it slides)."""
+    mu = 0.3
+    cfg = config(n_x=6, n_y=6, fx=4.0, resolution=16, edge="continuous", bars="sliding", clip_friction=mu)
+    knit = stretch(cfg.stretch_settings())
+    assert not np.any(knit.knit.rods.model.rail_friction)
+    run = cut(knit, cfg.dynamics_settings())
+    model = run.sim.model
+    assert np.all(model.rail_friction == mu) and model.rail_friction.size == model.rail_node.size > 0
+    ratios = []
+    for _ in range(30):
+        run.sim.step(100)
+        r = run.sim.reaction_forces_N()[model.rail_node]
+        along = np.einsum("ij,ij->i", r, model.rail_axis)
+        across = np.linalg.norm(r - along[:, None] * model.rail_axis, axis=1)
+        assert np.all(np.abs(along) <= mu * across * (1 + 1e-9) + 1e-15)
+        ratios.append(np.max(np.abs(along) / np.maximum(across, 1e-300)))
+    assert max(ratios) == pytest.approx(mu, rel=1e-6)
+
+
+def test_clip_friction_needs_clips():
+    with pytest.raises(ValueError, match="clip_friction: this knit has no clips"):
+        config(fx=4.0, clip_friction=0.3)
+    assert config(fx=4.0, bars="sliding", clip_friction=0.3).dynamics_settings().clip_friction == 0.3

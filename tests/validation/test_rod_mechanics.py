@@ -218,6 +218,67 @@ def test_a_yarn_whose_end_slides_on_a_rail_extends_by_FL_over_EA_and_the_rail_ca
     np.testing.assert_allclose(reactions[-1], [0.0, 0.0, -across], atol=force * 1e-9)
 
 
+def yarn_on_a_clipped_rail(pull: float, press: float, mu: float, implicit_axial: bool = False) -> kl.Simulation:
+    """A straight yarn along x, every node in a clip on a rail along x with Coulomb coefficient ``mu``, pulled
+    along the rail and pressed across it by ``pull`` and ``press`` [m/s^2] times its mass: every node feels the
+    same acceleration, so the yarn moves as one block on a rough plane (its springs stay at rest)."""
+    n = 11
+    pts = np.zeros((n, 3))
+    pts[:, 0] = np.linspace(0.0, 0.01, n)
+    scene = kl.Scene()
+    y = scene.add_yarn(pts)
+    scene.slide(y, range(n), (1.0, 0.0, 0.0), friction=mu)
+    mass = scene.build().model.mass * kl.units.MASS
+    for i in range(n):  # pressed obliquely: the normal reaction is the whole force across the rail
+        scene.apply_force(y, i, mass[i] * np.array([pull, 0.6 * press, -0.8 * press]))
+    return kl.Simulation(scene.build(), implicit_axial=implicit_axial)
+
+
+@pytest.mark.parametrize("implicit_axial", [False, True], ids=["explicit", "implicit axial"])
+def test_a_clip_holds_below_mu_N_and_slides_above_with_the_coulomb_deceleration(implicit_axial):
+    """Coulomb friction of a rail (``Scene.slide(friction=mu)``): pulled at 0.8 mu N the yarn stays at rest to
+    round-off and its clips carry the pull; pulled at 1.6 mu N it slides with a = (pull - mu press), its
+    displacement 1/2 a t^2 to 1e-9 (Verlet is exact under constant force), and the ledger's friction is mu N
+    times the distance and the ledger closes, both to half a step's friction loss, mu N u dt / 2 = friction dt/t
+    (the ledger counts each evaluation's loss over a whole kick; a run ends on half a kick)."""
+    mu, press = 0.5, 100.0
+    held = yarn_on_a_clipped_rail(0.8 * mu * press, press, mu, implicit_axial)
+    x0 = held.positions_m().copy()
+    held.step(2000)
+    assert np.abs(held.positions_m() - x0).max() < 1e-15
+    assert held.ledger().friction == 0.0
+    total_mass = held.model.mass.sum() * kl.units.MASS
+    assert held.reaction_forces_N()[:, 0].sum() == pytest.approx(-0.8 * mu * press * total_mass, rel=1e-12)
+
+    sliding = yarn_on_a_clipped_rail(1.6 * mu * press, press, mu, implicit_axial)
+    sliding.reset_ledger()
+    sliding.step(2000)
+    distance = sliding.positions_m()[:, 0] - x0[:, 0]
+    expected = 0.5 * 0.6 * mu * press * sliding.time_s**2
+    np.testing.assert_allclose(distance, expected, rtol=1e-9)
+    ledger = sliding.ledger()
+    half_step_loss = ledger.friction * sliding.dt_s / sliding.time_s
+    assert abs(ledger.friction - mu * press * total_mass * expected) < 1.01 * half_step_loss
+    assert abs(ledger.residual) < 1.01 * half_step_loss
+
+
+def test_a_clip_stops_a_sliding_yarn_at_u0_squared_over_2_mu_g_and_keeps_it_there():
+    """Launched along its rail at u0 with no pull, the yarn decelerates at mu g and stops at u0^2/(2 mu g)
+    (to one step's travel), then stays stopped: the clip sticks, with no creep and no reversal."""
+    mu, press, u0 = 0.5, 100.0, 0.05
+    sim = yarn_on_a_clipped_rail(0.0, press, mu)
+    sim.state.v[:, 0] = u0 / kl.units.VELOCITY
+    sim.compute_forces()
+    x0 = sim.positions_m()[:, 0].copy()
+    stop_s = u0 / (mu * press)
+    sim.run(1.5 * stop_s)
+    travel = sim.positions_m()[:, 0] - x0
+    assert np.abs(travel - u0**2 / (2 * mu * press)).max() < u0 * sim.dt_s
+    stopped = sim.positions_m().copy()
+    sim.run(0.5 * stop_s)
+    assert np.abs(sim.positions_m() - stopped).max() < 1e-15
+
+
 def test_implicit_axial_springs_damp_axial_vibration_and_never_add_energy():
     """Stepped at 4 x their explicit limit without any dashpot, the released axial vibration
     decays (backward Euler in the springs) and the energy never rises (to 1e-9)."""

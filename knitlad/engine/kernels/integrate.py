@@ -28,6 +28,7 @@ from knitlad.engine.kernels.contact import contact_energy, contact_forces, refre
 from knitlad.engine.kernels.dissipation import (
     AIR,
     AXIAL_DASHPOT,
+    FRICTION,
     GLOBAL_DRAG,
     MATERIAL,
     OBSTACLE_WORK,
@@ -215,7 +216,10 @@ def compute_forces(m, s, w, c, twist, contact, damping, dt, axial=AXIAL_EXPLICIT
     w.rail_reaction[:] = 0.0
     rail_forces(m.rail_node, m.rail_axis, w.force, w.rail_reaction)
     if not explicit:
-        implicit_stretching_by_yarn(m, s, w, dt)  # last: its tensions balance every other force
+        implicit_stretching_by_yarn(m, s, w, dt)  # its tensions balance every other force ...
+    if m.rail_friction.shape[0] > 0:  # ... but the clips': they need the rail's whole normal reaction
+        w.ledger[0, FRICTION] += rail_friction_forces(m.rail_node, m.rail_axis, m.rail_friction, m.mass, s.v, dt,
+                                                      w.force, w.rail_reaction)
     if damping.supports_moving:  # every force on the held nodes is known: the supports' work
         w.ledger[0, SUPPORT_WORK] += dt * support_power(m.held, m.v_prescribed, w.force)
     return True
@@ -276,6 +280,41 @@ def rail_forces(rail_node, rail_axis, force, taken):
         for k in range(3):
             taken[r, k] += force[i, k] - f * rail_axis[r, k]
             force[i, k] = f * rail_axis[r, k]
+
+
+@njit(**NUMBA_OPTS)
+def rail_friction_forces(rail_node, rail_axis, rail_friction, mass, v, dt, force, taken):
+    """Coulomb friction of each rail on its node (a clip on a bar), after :func:`rail_forces`; returns the energy
+    it takes out over the coming kick.
+
+    The rail presses on its node with N = |taken| (what it took of the force), so its friction F_f along the
+    axis is at most mu N. The kick of ``dt`` that follows takes the half-step velocity u to
+    u + dt (F_a + F_f) / m: F_f is the force that stops the node there (sticking, u' = 0) if it is within
+    mu N, else mu N against that (sliding). Discrete Coulomb friction: no regularising velocity, and a
+    node at rest under a pull below mu N stays at rest to round-off. The energy taken out is
+    -F_f (u + u')/2 dt, what the kick takes from the kinetic energy. The rail's reaction gains -F_f.
+    """
+    lost = 0.0
+    for r in range(rail_node.shape[0]):
+        mu = rail_friction[r]
+        if mu == 0.0:
+            continue
+        i = rail_node[r]
+        ax, ay, az = rail_axis[r, 0], rail_axis[r, 1], rail_axis[r, 2]
+        normal = math.sqrt(taken[r, 0] ** 2 + taken[r, 1] ** 2 + taken[r, 2] ** 2)
+        along = force[i, 0] * ax + force[i, 1] * ay + force[i, 2] * az
+        u = v[i, 0] * ax + v[i, 1] * ay + v[i, 2] * az
+        cap = mu * normal
+        f = min(max(-(mass[i] * u / dt + along), -cap), cap)
+        u_next = u + dt * (along + f) / mass[i]
+        lost -= f * 0.5 * (u + u_next) * dt
+        force[i, 0] += f * ax
+        force[i, 1] += f * ay
+        force[i, 2] += f * az
+        taken[r, 0] -= f * ax
+        taken[r, 1] -= f * ay
+        taken[r, 2] -= f * az
+    return lost
 
 
 @njit(**NUMBA_OPTS)
