@@ -216,6 +216,9 @@ class DissipationControl:
         """The dissipation the kernels apply (:func:`knitlad.engine.dissipation.damping_params`)."""
         m = self.model
         moving = bool(np.any(m.v_prescribed[m.held])) if m.held.any() else False
+        if m.rail_node.size and not moving:  # a rail carried across itself (ramp_held's rails) is a moving support
+            v = self.state.v[m.rail_node]
+            moving = bool(np.any(v - np.sum(v * m.rail_axis, axis=1)[:, None] * m.rail_axis))
         return damping_params(self.drag, self.material_damping, self.air, moving)
 
     def relax_branches(self) -> None:

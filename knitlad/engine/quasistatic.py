@@ -43,11 +43,13 @@ class QuasiStatics:
         f = self.work.force[free] + self.drag * m.mass[free, None] * self.state.v[free]
         return float(np.sqrt(np.max(np.sum(f * f, axis=1))) * units.FORCE)
 
-    def ramp_held(self, nodes, by_m, speed_m_s: float, damping_per_s: float) -> dict:
+    def ramp_held(self, nodes, by_m, speed_m_s: float, damping_per_s: float, rails=(), rails_by_m=None) -> dict:
         """Move held ``nodes`` by ``by_m`` [m] (one 3-vector, or one per node) at a steady speed of at most
         ``speed_m_s`` under the damping ``damping_per_s`` = alpha [1/s] (module docstring), then hold them
         still; the drag in force before is restored. They land on ``by_m`` to round-off (the speed is lowered to a
         whole number of steps). Read forces after :meth:`settle`, or while moving with the bias alpha M V.
+        ``rails``: nodes on rails (clips) carried with the supports by ``rails_by_m`` across their rails (the
+        part along a rail is left out: along it the clip slides), landing there to round-off.
 
         Returns ``time_s`` (simulated) and ``steps``.
         """
@@ -57,19 +59,36 @@ class QuasiStatics:
         if not (speed_m_s > 0 and math.isfinite(speed_m_s) and damping_per_s > 0):
             raise ValueError("speed_m_s and damping_per_s must be positive")
         by = np.broadcast_to(np.asarray(by_m, dtype=float), (idx.size, 3))
-        if not np.all(np.isfinite(by)):
-            raise ValueError("by_m contains NaN or infinity")
-        steps = max(1, step_count("by_m / speed_m_s", math.ceil(float(np.max(np.linalg.norm(by, axis=1))) / speed_m_s
-                                                             / self.dt_s)))
+        carried, axis, across = self._rails_across(rails, rails_by_m)
+        if not (np.all(np.isfinite(by)) and np.all(np.isfinite(across))):
+            raise ValueError("by_m or rails_by_m contains NaN or infinity")
+        reach = float(np.max(np.linalg.norm(np.concatenate([by, across]), axis=1), initial=0.0))
+        steps = max(1, step_count("by_m / speed_m_s", math.ceil(reach / speed_m_s / self.dt_s)))
         before = self.drag / units.TIME
         self.set_drag(damping_per_s)
+        v = self.state.v
         try:
             self.hold(idx, velocity_m_s=by / (steps * self.dt_s))
+            # a rail moves with its node's velocity across it: the rail takes every force across, so it stays
+            v[carried] += across / (steps * self.dt_s) / units.VELOCITY
             self.step(steps)
         finally:
             self.hold(idx)
+            v[carried] = np.sum(v[carried] * axis, axis=1)[:, None] * axis
             self.set_drag(before)
         return {"time_s": steps * self.dt_s, "steps": steps}
+
+    def _rails_across(self, rails, rails_by_m) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(rail nodes, their rails' axes, their move [m] across their rails) of :meth:`ramp_held`."""
+        m = self.model
+        carried = self._nodes(rails) if len(rails) else np.zeros(0, dtype=np.int64)
+        row = np.full(m.n_nodes, -1, dtype=np.int64)
+        row[m.rail_node] = np.arange(m.rail_node.size)
+        if np.any(row[carried] < 0):
+            raise ValueError("rails: ramp_held carries nodes on rails only: slide() them first")
+        axis = m.rail_axis[row[carried]]
+        by = np.broadcast_to(np.asarray(0.0 if rails_by_m is None else rails_by_m, dtype=float), (carried.size, 3))
+        return carried, axis, by - np.sum(by * axis, axis=1)[:, None] * axis
 
     def settle(self, force_tol_N: float, max_time_s: float, damping_per_s: float,
                check_every_s: float | None = None) -> dict:

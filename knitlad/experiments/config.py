@@ -398,7 +398,6 @@ class CycleConfig(CutConfig):
     def loads(self) -> "CycleConfig":
         if self.lx is not None and self.lx_max <= self.lx:
             raise ValueError(f"lx_max: {self.lx_max:g} is not above the start lx = {self.lx:g}")
-        check_moved_edge(self.edge)
         return self
 
     def cycle_settings(self):
@@ -434,7 +433,6 @@ class TensileConfig(CutConfig):
             raise ValueError(f"lx_max: {self.lx_max:g} is the start lx (the box must move)")
         if self.bars == "sliding" and self.ly_max is not None:
             raise ValueError("ly_max: sliding bars are moved along x only; pull along y with held bars")
-        check_moved_edge(self.edge)
         return self
 
     def tensile_settings(self):
@@ -581,14 +579,6 @@ class StitchConfig(_WithPreset):
 # the longest segment, over the correction's radius of curvature R, at which the sagitta correction
 # is taken: it is l^2/(12 R) to leading order in l/R, measured from 24 nodes per stitch up (l = 0.27 R)
 SAGITTA_MAX_SEGMENT = 0.3
-
-
-def check_moved_edge(edge: str) -> None:
-    """Refuse the continuous edge where the box moves (protocol B, the tensile test): its clips slide along y
-    where they were built; the box moves only held nodes."""
-    if edge == "continuous":
-        raise ValueError("edge: the continuous edge's clips stay where the stretch left them; a moving box moves "
-                         "held course ends only (edge clamped or tail)")
 
 
 def check_clips(cfg: CutConfig) -> None:

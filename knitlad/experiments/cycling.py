@@ -76,6 +76,7 @@ class LoadedKnit:
         rods = dynamics_rods(knit.knit.rods.copy(), dynamics, knit.settings.material)
         self.sim = dynamics_simulation(rods, knit, dynamics)
         self.held = np.flatnonzero(self.sim.model.held)
+        self.clips = self.sim.model.rail_node  # carried with the box across their rails (sliding bars, clips)
         self.lx, self.ly = knit.box_lx, knit.box_ly
         held_y = self.sim.state.x[self.held, 1]
         self.y_centre = 0.5 * (held_y.min() + held_y.max())  # the box's centre line (x's is x = 0)
@@ -87,20 +88,30 @@ class LoadedKnit:
     def move_box(self, lx: float, ly: float, report: Callable[[float], None] | None = None,
                  read: Callable[[], None] | None = None) -> None:
         """Bring the box to (``lx``, ``ly``) (l/l0) in ``readings_per_leg`` ramps of the held nodes, affine about
-        the box's centre, calling ``read`` after each."""
-        s, x = self.s, self.sim.state.x
+        the box's centre, the clips carried with them across their rails (along them they slide), calling
+        ``read`` after each."""
+        s = self.s
         lx0, ly0 = self.lx, self.ly
         for k, f in enumerate(np.linspace(0.0, 1.0, s.readings_per_leg + 1)[1:], start=1):
             tx, ty = lx0 + (lx - lx0) * f, ly0 + (ly - ly0) * f
-            by = np.zeros((self.held.size, 3))
-            by[:, 0] = x[self.held, 0] * (tx / self.lx - 1.0) * units.LENGTH
-            by[:, 1] = (x[self.held, 1] - self.y_centre) * (ty / self.ly - 1.0) * units.LENGTH
-            self.sim.ramp_held(self.held, by_m=by, speed_m_s=s.bar_speed_m_s, damping_per_s=s.damping_per_s)
+            by, clips_by = (self.affine_move(nodes, tx, ty) for nodes in (self.held, self.clips))
+            self.sim.ramp_held(self.held, by_m=by, speed_m_s=s.bar_speed_m_s, damping_per_s=s.damping_per_s,
+                               rails=self.clips, rails_by_m=clips_by)
             self.lx, self.ly = tx, ty
             if read:
                 read()
             if report:
                 report(k / s.readings_per_leg)
+
+    def affine_move(self, nodes: np.ndarray, tx: float, ty: float) -> np.ndarray:
+        """(len(nodes), 3) the move [m] of ``nodes`` from the box now to (``tx``, ``ty``) (l/l0), affine about
+        its centre; a node outside the held ones in x (a turning loop's clip) moves as the box's side does."""
+        x = self.sim.state.x
+        side = np.abs(x[self.held, 0]).max()
+        by = np.zeros((nodes.size, 3))
+        by[:, 0] = np.clip(x[nodes, 0], -side, side) * (tx / self.lx - 1.0) * units.LENGTH
+        by[:, 1] = (x[nodes, 1] - self.y_centre) * (ty / self.ly - 1.0) * units.LENGTH
+        return by
 
     def move_bars(self, lx: float, cycle: int, report: Callable[[float], None] | None = None) -> None:
         """Bring the box to ``lx`` (l_x/l0) in ``readings_per_leg`` ramps, reading f_x after each."""

@@ -137,3 +137,32 @@ def test_a_reaction_read_while_the_supports_move_under_a_drag_warns_with_its_bia
         warnings.simplefilter("error")
         sim.reaction_forces_N()
     assert not np.any(sim.reaction_bias_N())
+
+
+def test_a_ramp_carries_a_clip_across_its_rail_and_the_ledger_counts_the_rail_s_work():
+    """ramp_held(rails=...): a yarn along y, held at one end, its other end in a clip on a rail along y and
+    pushed across the rail by F along +x. Both ends carried by dx along x: the clip lands on dx to round-off
+    (its y is free, its z kept), and the ledger closes: the rail's work -F dx balances the load's F dx (without
+    it the residual would be F dx); to 1e-3 of F dx (measured 3e-7)."""
+    n, length, push, dx = 11, 0.01, 1e-3, 2e-4
+    pts = np.zeros((n, 3))
+    pts[:, 1] = np.linspace(0.0, length, n)
+    scene = kl.Scene()
+    y = scene.add_yarn(pts)
+    scene.hold(y, [0])
+    scene.slide(y, [n - 1], (0.0, 1.0, 0.0))
+    scene.apply_force(y, n - 1, (push, 0.0, 0.0))
+    sim = kl.Simulation(scene.build())
+    sim.reset_ledger()
+    before = sim.positions_m()[-1].copy()
+    sim.ramp_held([0], by_m=(dx, 0.0, 0.0), speed_m_s=0.05, damping_per_s=2e3, rails=[n - 1],
+                  rails_by_m=(dx, 0.0, 0.0))
+    after = sim.positions_m()[-1]
+    assert after[0] - before[0] == pytest.approx(dx, rel=1e-12) and after[2] == before[2]
+    assert np.all(sim.state.v[n - 1, [0, 2]] == 0.0)  # carried no further
+    ledger = sim.ledger()
+    # the supports' work: the rail's -F dx, and the few % the held end pays for the drag and the yarn's motion
+    assert -push * dx < ledger.support_work < -0.95 * push * dx
+    assert abs(ledger.residual) < 1e-3 * push * dx
+    with pytest.raises(ValueError, match="rails: ramp_held carries nodes on rails only"):
+        sim.ramp_held([0], by_m=(dx, 0.0, 0.0), speed_m_s=0.05, damping_per_s=2e3, rails=[1])

@@ -76,11 +76,27 @@ def test_sliding_bars_are_pulled_along_x_only():
     assert config(bars="sliding").bars == "sliding"
 
 
-def test_a_moving_box_refuses_the_continuous_edge():
-    """The continuous edge's clips stay where the stretch left them; the tensile test and protocol B move only
-    held course ends: refused, naming edge, before anything runs."""
+def test_a_moving_box_carries_the_continuous_edges_clips_with_its_sides():
+    """The tensile test on the experiment's boundary (edge continuous, bars sliding), at mu 0: the box pulled
+    from l_x/l0 0.36 to 0.38 carries each turning loop's clip across its rail as its side moves, to
+    round-off (along the rail, y, the clip slides), and the knit's f_x rises with the pull, as with clamped
+    course ends. Protocol B accepts the edge too."""
     from knitlad.experiments.config import CycleConfig
-    with pytest.raises(ValueError, match="edge: the continuous edge"):
-        config(edge="continuous")
-    with pytest.raises(ValueError, match="edge: the continuous edge"):
-        CycleConfig(fx=0.68, lx_max=0.38, edge="continuous")
+    from knitlad.experiments.cycling import LoadedKnit
+
+    cfg = config(edge="continuous", bars="sliding", mu=0.0)
+    knit = stretch(cfg.stretch_settings())
+    loaded = LoadedKnit(knit, cfg.tensile_settings(), cfg.dynamics_settings())
+    model, x = loaded.sim.model, loaded.sim.state.x
+    clips = model.rail_node[np.abs(model.rail_axis[:, 1]) == 1.0]
+    assert clips.size == 7
+    side = np.abs(x[loaded.held, 0]).max()
+    before, f_before = x[clips].copy(), loaded.tension()
+    loaded.move_box(0.38, loaded.ly)
+    moved = x[clips] - before
+    np.testing.assert_allclose(moved[:, 0], np.sign(before[:, 0]) * side * (0.38 / 0.36 - 1.0), rtol=1e-9)
+    assert np.all(moved[:, 2] == 0.0) and np.all(loaded.sim.state.v[clips][:, [0, 2]] == 0.0)
+    assert loaded.tension() > 1.2 * f_before
+    assert CycleConfig(fx=0.68, lx_max=0.38, edge="continuous").edge == "continuous"
+
+

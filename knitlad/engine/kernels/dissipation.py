@@ -264,3 +264,17 @@ def support_power(held, v_prescribed, force):
             total -= (force[i, 0] * v_prescribed[i, 0] + force[i, 1] * v_prescribed[i, 1]
                       + force[i, 2] * v_prescribed[i, 2])
     return total
+
+
+@njit(**NUMBA_OPTS)
+def rail_power(rail_node, rail_axis, v, taken):
+    """The power the rails put into the rods by moving across themselves (a clip carried with its bar) [uJ/ms]:
+    the rail's reaction across it, -(taken less its part along the rail), times the node's velocity (the part
+    along, the clip's friction, is counted as friction)."""
+    total = 0.0
+    for r in range(rail_node.shape[0]):
+        i = rail_node[r]
+        along = taken[r, 0] * rail_axis[r, 0] + taken[r, 1] * rail_axis[r, 1] + taken[r, 2] * rail_axis[r, 2]
+        for k in range(3):
+            total -= (taken[r, k] - along * rail_axis[r, k]) * v[i, k]
+    return total

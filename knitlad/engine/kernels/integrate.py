@@ -36,6 +36,7 @@ from knitlad.engine.kernels.dissipation import (
     air_drag_forces,
     drag_dissipation,
     no_damping,
+    rail_power,
     support_power,
     viscoelastic_forces,
 )
@@ -221,7 +222,8 @@ def compute_forces(m, s, w, c, twist, contact, damping, dt, axial=AXIAL_EXPLICIT
         w.ledger[0, FRICTION] += rail_friction_forces(m.rail_node, m.rail_axis, m.rail_friction, m.mass, s.v, dt,
                                                       w.force, w.rail_reaction)
     if damping.supports_moving:  # every force on the held nodes is known: the supports' work
-        w.ledger[0, SUPPORT_WORK] += dt * support_power(m.held, m.v_prescribed, w.force)
+        w.ledger[0, SUPPORT_WORK] += dt * (support_power(m.held, m.v_prescribed, w.force)
+                                           + rail_power(m.rail_node, m.rail_axis, s.v, w.rail_reaction))
     return True
 
 
