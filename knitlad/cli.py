@@ -273,8 +273,6 @@ def cut(
     Without --fx or --lx, force control to f_x^ini = 13.6 (the paper's Fig. 3c,d).
     """
 
-    from knitlad.experiments.protocol import run_ladder
-
     from knitlad.io.folders import FolderError, FolderLock
 
     made = not (Path(out).exists() if out else False)
@@ -297,15 +295,15 @@ def cut(
     _say_if_compiling()
     progress = _StageProgress()
     try:
-        result = _experiment_or_exit(lambda: run_ladder(cfg.settings(), progress=progress), progress)
+        finished = _experiment_or_exit(lambda: _experiment("ladder", cfg, progress=progress), progress)
     except typer.Exit:
         nothing_written()
         raise
     progress.close(finished=True)
-    summary = result.summary()
+    result, summary = finished.result, finished.summary
     try:
         # written beside the earlier run first, then put in its place: on a full disk the earlier run stays whole
-        h5, png = _replace_run_outputs(out_dir, result, earlier)
+        h5, png = _replace_run_outputs(out_dir, finished, earlier)
     except OSError as e:  # a full disk or a file-size limit: keep the summary, say it in one line
         kept = _keep_summary(out_dir, summary) if not earlier else None
         typer.echo(_json(summary))
@@ -373,10 +371,8 @@ def cycle(
     (the force-displacement readings), cycle.png (Fig. 4a), cycle.h5 (readings, and the ladder of the cut).
     """
 
-    from knitlad.experiments.cycling import run_protocol_b
-    from knitlad.fabric.preparation import stretch
     from knitlad.io.hdf5 import write_arrays
-    from knitlad.io.knit_cache import cached_stretch
+    from knitlad.studies.registry import write_cycle_table
 
     cfg, out_dir = _knit_run(_config.CycleConfig, options, stitches, 0.68, out, "cycle")
     n_x, n_y = cfg.n_x, cfg.n_y
@@ -387,7 +383,7 @@ def cycle(
 
     def keep_readings(readings) -> None:  # after each leg: a run stopped early keeps its curve, a full disk says so
         try:
-            _write_cycle_table(out_dir / "cycle.csv", readings)
+            write_cycle_table(out_dir / "cycle.csv", readings)
         except OSError as e:
             unwritten.append(str(e))
 
@@ -397,18 +393,15 @@ def cycle(
         except OSError as e:
             unwritten.append(str(e))
 
-    def run():
-        knit = cached_stretch(cfg.stretch_settings(), out_dir / "stretched", stretch, progress)[0]
-        return run_protocol_b(cfg.settings(), cfg.cycle_settings(), cut_at_max=cfg.cut, progress=progress, knit=knit,
-                              after_leg=keep_readings, keep=keep_checkpoint, resume=restart)
-
-    result, ladder = _experiment_or_exit(
-        run, progress, kept=f"the readings so far are in {out_dir / 'cycle.csv'} (if a leg had ended); "
-                            f"knitlad cycle ... --out {out_dir} --resume goes on from the last leg")
+    finished = _experiment_or_exit(
+        lambda: _experiment("cycle", cfg, out_dir, progress, after_leg=keep_readings, keep=keep_checkpoint,
+                            resume=restart),
+        progress, kept=f"the readings so far are in {out_dir / 'cycle.csv'} (if a leg had ended); "
+                       f"knitlad cycle ... --out {out_dir} --resume goes on from the last leg")
     progress.close(finished=True)
+    result, ladder = finished.result
     l0 = cfg.settings().material.stitch_length
-    h5, csv, png = _files_or_exit(lambda: _write_cycle_outputs(out_dir, cfg, result, ladder), {
-        **result.summary(), **({f"cut_{k}": v for k, v in ladder.summary().items()} if ladder else {})})
+    h5, csv, png = _files_or_exit(lambda: _write_experiment(finished, out_dir / "cycle.h5"), finished.summary)
     (out_dir / CYCLE_CHECKPOINT).unlink(missing_ok=True)  # finished: nothing to resume, nor to re-stretch
     shutil.rmtree(out_dir / "stretched", ignore_errors=True)
     typer.echo(
@@ -481,25 +474,13 @@ def tensile(
     Without --fx or --lx, the knit starts at f_x = 0.68 (the experiments' holding tension). Writes
     tensile.csv (the readings), tensile.png (the force-displacement loops) and tensile.h5.
     """
-    from knitlad.experiments.tensile import COLUMNS, run_tensile
-    from knitlad.fabric.preparation import stretch
-    from knitlad.io.hdf5 import write_tensile_result
-    from knitlad.viz.plots import tensile_curve_plot
-
     cfg, out_dir = _knit_run(_config.TensileConfig, options, stitches, 0.68, out, "tensile")
     _say_if_compiling()
     progress = _StageProgress()
-    result = _experiment_or_exit(
-        lambda: run_tensile(stretch(cfg.stretch_settings(), progress), cfg.tensile_settings(), cfg.dynamics_settings(),
-                            progress), progress)
+    finished = _experiment_or_exit(lambda: _experiment("tensile", cfg, progress=progress), progress)
     progress.close(finished=True)
-    summary = result.summary()
-    def write() -> None:
-        _write_table(out_dir / "tensile.csv", result.readings, COLUMNS)
-        write_tensile_result(out_dir / "tensile.h5", result, cfg.model_dump())
-        tensile_curve_plot(result.readings, out_dir / "tensile.png")
-
-    _files_or_exit(write, summary)
+    result, summary = finished.result, finished.summary
+    _files_or_exit(lambda: _write_experiment(finished, out_dir / "tensile.h5"), summary)
     if json_out:
         typer.echo(_json(summary))
         return
@@ -529,31 +510,16 @@ def snag(
     Without --fx or --lx, force control to f_x^ini = 4. Writes snag.csv and snag.png (the pull-out curve) and,
     after a break, the ladder as `cut` does (ladder.h5, ladder.xdmf, spatio_temporal.png).
     """
-    import numpy as np
-
-    from knitlad.experiments.snag import snag as run_snag
-    from knitlad.fabric.preparation import stretch
-    from knitlad.viz.plots import snag_curve_plot
-
     cfg, out_dir = _knit_run(_config.SnagConfig, options, stitches, 4.0, out, "snag")
-    earlier = [p for p in ("snag.csv", "ladder.h5") if (out_dir / p).exists()]
+    earlier = [p for p in ("snag.h5", "snag.csv") if (out_dir / p).exists()]
     if earlier:
         fail(f"--out {out_dir}: holds an earlier snag run ({', '.join(earlier)}); choose another folder")
     _say_if_compiling()
     progress = _StageProgress()
-    result = _experiment_or_exit(
-        lambda: run_snag(stretch(cfg.stretch_settings(), progress), cfg.dynamics_settings(), cfg.snag_settings(),
-                         progress), progress)
+    finished = _experiment_or_exit(lambda: _experiment("snag", cfg, progress=progress), progress)
     progress.close(finished=True)
-    summary = result.summary()
-    def write() -> None:
-        _write_table(out_dir / "snag.csv", np.column_stack([result.pull_m * 1e3, result.force_N]),
-                     ("pull_mm", "force_N"))
-        snag_curve_plot(result.pull_m, result.force_N, out_dir / "snag.png", result.broke)
-        if result.ladder is not None:
-            _write_run_outputs(out_dir, result.ladder)
-
-    _files_or_exit(write, summary)
+    result, summary = finished.result, finished.summary
+    _files_or_exit(lambda: _write_experiment(finished, out_dir / "snag.h5"), summary)
     if json_out:
         typer.echo(_json(summary))
         return
@@ -563,7 +529,7 @@ def snag(
     if not result.broke:
         typer.echo(f"{head}\n  no break within {cfg.max_pull_mm:g} mm: peak pull-out force "
                    f"{summary['peak_force_N']:.4f} N; the pin put in {summary['pin_work_J']:.3e} J\n"
-                   f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/snag.csv, snag.png")
+                   f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/snag.h5, snag.csv, snag.png")
         return
     typer.echo(
         f"{head}\n"
@@ -575,7 +541,8 @@ def snag(
         f"  ladder: n_lad/n_y = {summary['n_lad_over_ny']:.3f}, v_lad/c_b = {summary['v_lad_over_cb']:.3f} up, "
         f"{summary['v_down_over_cb']:.3f} down, "
         f"f_x^fin = {summary['fx_fin']:.3f}{' (reached an edge course)' if summary['reached_edge'] else ''}\n"
-        f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/snag.csv, snag.png, ladder.h5, spatio_temporal.png")
+        f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/snag.h5 (the curve and the ladder: knitlad render "
+        f"{out_dir}/snag.h5), snag.xdmf, snag.csv, snag.png, spatio_temporal.png")
 
 
 @app.command()
@@ -594,37 +561,15 @@ def resistance(
     and resistance_report.png (one page: the design, the snag, damage and velocity against tension, the
     threshold, the ladder where it stopped).
     """
-    from knitlad.experiments.resistance import run_resistance
-    from knitlad.fabric.preparation import stretch
-    from knitlad.io.hdf5 import write_resistance_result
-    from knitlad.studies.registry import draw_resistance_report
-
     cfg, out_dir = _knit_run(_config.ResistanceConfig, options, stitches, 4.0, out, "resistance")
     if (out_dir / "resistance.h5").exists():
         fail(f"--out {out_dir}: holds an earlier resistance test (resistance.h5); choose another folder")
     _say_if_compiling()
     progress = _StageProgress()
-    knits = {}
-
-    def stretch_for(one):  # the snag and the cut at its tension share one stretched knit
-        key = (one.fx, one.lx)
-        if key not in knits:
-            knits[key] = stretch(one.stretch_settings(), progress)
-        return knits[key]
-
-    result = _experiment_or_exit(lambda: run_resistance(cfg, stretch_for, progress), progress)
+    finished = _experiment_or_exit(lambda: _experiment("resistance", cfg, progress=progress), progress)
     progress.close(finished=True)
-    summary = result.summary()
-
-    def write() -> None:
-        h5 = write_resistance_result(out_dir / "resistance.h5", result, result.cuts[0].settings.stretch.material,
-                                     cfg.model_dump())
-        _write_table(out_dir / "resistance.csv", result.table(), (
-            "fx_target", "fx_ini", "n_lad_over_ny", "released_over_ny", "v_lad_over_cb", "fx_fin_crossed",
-            "reached_edge"))
-        draw_resistance_report(result, h5, out_dir / "resistance_report.png")
-
-    _files_or_exit(write, summary)
+    result, summary = finished.result, finished.summary
+    _files_or_exit(lambda: _write_experiment(finished, out_dir / "resistance.h5"), summary)
     if json_out:
         typer.echo(_json(summary))
         return
@@ -656,33 +601,6 @@ def _files_or_exit(write, summary: dict):
         raise typer.Exit(1)
 
 
-def _write_table(path, rows, columns) -> None:
-    """A CSV of ``rows`` under ``columns``, atomically."""
-    import pandas as pd
-
-    from knitlad.io.atomic import atomic_path
-
-    with atomic_path(path) as tmp:
-        pd.DataFrame(rows, columns=list(columns)).to_csv(tmp, index=False)
-
-
-def _write_cycle_table(path, readings) -> None:
-    """cycle.csv: the readings (cycle, leg: 1 loading, 0 hold, -1 unloading, t [s], box l_x/l0, f_x), atomically."""
-    _write_table(path, readings, ["cycle", "leg", "t_s", "box_lx_over_l0", "fx"])
-
-
-def _write_cycle_outputs(out_dir, cfg, result, ladder):
-    """cycle.h5 (the readings; the ladder's series and frames if cut), cycle.csv and cycle.png."""
-    from knitlad.io.hdf5 import write_cycle_result
-    from knitlad.viz.plots import cycle_curve_plot
-
-    h5 = write_cycle_result(out_dir / "cycle.h5", result, ladder, cfg.model_dump())
-    _write_cycle_table(out_dir / "cycle.csv", result.readings)
-    png = cycle_curve_plot(result.readings, cfg.n_x, cfg.settings().material.stitch_length, cfg.fx_thr,
-                           result.delta_l_over_l0, out_dir / "cycle.png")
-    return h5, out_dir / "cycle.csv", png
-
-
 @app.command()
 @config_options(_config.LoopConfig)
 def loop(
@@ -694,15 +612,13 @@ def loop(
     None of its geometries reproduces the paper's Fig 5c (docs/single_loop.md); the fabric's own v_lad against f_x and mu is in docs/paper_claims.md (knitlad sweep docs/reference/velocity24_mu.yaml).
     """
 
-    from knitlad.experiments.periodic_loop import run_single_loop
-
     cfg = validated(_config.LoopConfig, options)
     try:
-        result = run_single_loop(cfg.settings())
+        finished = _experiment("loop", cfg)
     except RuntimeError as e:
         typer.echo(f"knitlad: run failed: {e}", err=True)
         raise typer.Exit(1)
-    summary = result.summary()
+    result, summary = finished.result, finished.summary
     if json_out:
         typer.echo(_json(summary))
         return
@@ -722,12 +638,10 @@ def stitch(
 ) -> None:
     """Periodised jersey stitch: tensions per thread f_x, f_y at imposed (l_x, l_y), relaxed at mu = 0."""
 
-    from knitlad.fabric.stitch_model import StitchRun
-
     cfg = validated(_config.StitchConfig, options)
     settings = cfg.settings()
     try:
-        result = StitchRun(settings).run()
+        result = _experiment("stitch", cfg).result
     except ValueError as e:
         typer.echo(f"knitlad: run failed: {e}", err=True)
         raise typer.Exit(1)
@@ -1100,7 +1014,7 @@ def _velocity_caveat(result) -> str:
 
 
 def _experiment_or_exit(run, progress, kept: str = "nothing written"):
-    """``run()`` (an experiment: run_ladder, run_protocol_b), every way it can end without a result said in
+    """``run()`` (an experiment, :func:`_experiment`), every way it can end without a result said in
     one line: Ctrl-C (130) and SIGTERM (143), a run that failed (1), settings found infeasible once the knit
     is built (2)."""
     from knitlad.fabric.observers import Interpenetration
@@ -1148,7 +1062,7 @@ def _remove(paths) -> None:
         shutil.rmtree(path) if path.is_dir() else path.unlink(missing_ok=True)
 
 
-def _replace_run_outputs(out_dir, result, earlier: list):
+def _replace_run_outputs(out_dir, finished, earlier: list):
     """Write the run into a staging folder in ``out_dir``, then remove the ``earlier`` run's files (its renders
     and movies would not match this run) and move the new ones in: an OSError while writing leaves the earlier
     run as it was and no staging folder."""
@@ -1159,8 +1073,8 @@ def _replace_run_outputs(out_dir, result, earlier: list):
     stage.mkdir()
     previous = signal.signal(signal.SIGTERM, _on_sigterm)  # a kill while writing: the staging folder goes too
     try:
-        h5, png = _write_run_outputs(stage, result)
-        log = _write_run_log(stage / "run.log", result.summary())
+        h5, png = _write_run_outputs(stage, finished)
+        log = _write_run_log(stage / "run.log", finished.summary)
         _remove(earlier)
         for new in (h5, h5.with_suffix(".xdmf"), png, log):
             os.replace(new, out_dir / new.name)
@@ -1199,26 +1113,35 @@ def _write_run_log(path, summary: dict):
     return path
 
 
-def _write_run_outputs(out_dir, result):
-    """ladder.h5, ladder.xdmf and spatio_temporal.png of a run; OSError if any cannot be written, with
-    nothing half-written left (temporary files removed, HDF5's complaints while closing a failed file
-    kept off the terminal)."""
-    from knitlad.io.hdf5 import write_ladder_result
-    from knitlad.viz.plots import spatio_temporal_diagram
-    from knitlad.io.xdmf import write_xdmf
+def _experiment(name: str, cfg, folder: Path | None = None, progress=None, **hooks):
+    """The experiment ``name`` run through its one entry (:data:`knitlad.studies.registry.SCENES`), as a sweep's
+    job runs it: a :class:`knitlad.studies.registry.Finished`."""
+    from knitlad.studies.registry import SCENES
+    from knitlad.studies.sweep import Output
 
+    return SCENES[name].run(cfg, Output(), folder, progress, **hooks)
+
+
+def _write_experiment(finished, path: Path) -> tuple[Path, ...]:
+    """The run file at ``path`` and the tables and pictures beside it; OSError if any cannot be written, with
+    nothing half-written left (temporary files removed, HDF5's complaints while closing a failed file kept
+    off the terminal)."""
     previous = sys.unraisablehook
     sys.unraisablehook = lambda info: None  # h5py's __dealloc__ of a file whose writes failed
     try:
-        h5 = write_ladder_result(out_dir / "ladder.h5", result)
-        write_xdmf(h5)
-        return h5, spatio_temporal_diagram(result, out_dir / "spatio_temporal.png")
+        return (finished.write(path, {}), *finished.beside(path))
     except RuntimeError as e:  # h5py reports some failed writes as RuntimeError
         raise OSError(str(e).splitlines()[0]) from None
     finally:
         sys.unraisablehook = previous
-        for tmp in out_dir.glob("*.tmp*"):
+        for tmp in path.parent.glob("*.tmp*"):
             tmp.unlink(missing_ok=True)
+
+
+def _write_run_outputs(out_dir, finished):
+    """ladder.h5, ladder.xdmf and spatio_temporal.png of a laddering run (:func:`_write_experiment`)."""
+    h5, _, png = _write_experiment(finished, out_dir / "ladder.h5")
+    return h5, png
 
 
 def _keep_summary(out_dir, summary: dict):
@@ -1234,14 +1157,21 @@ def _keep_summary(out_dir, summary: dict):
         return None
 
 
+# the run files a ladder is drawn from, in a folder written by knitlad cut, snag, resistance or cycle
+LADDER_FILES = ("ladder.h5", "snag.h5", "resistance.h5", "cycle.h5")
+
+
 def _run_file(run: str):
-    """The ``ladder.h5`` of a run folder (or the file itself); one line and exit 2 if there is none."""
+    """The run file of a run folder (the first of :data:`LADDER_FILES` it holds), or the file itself; one line
+    and exit 2 if there is none."""
     from pathlib import Path
 
     path = Path(run)
-    path = path / "ladder.h5" if path.is_dir() else path
+    if path.is_dir():
+        path = next((path / name for name in LADDER_FILES if (path / name).is_file()), path / "ladder.h5")
     if not path.is_file():
-        fail(f"{run}: no ladder.h5 (a folder written by knitlad cut, or its file)")
+        fail(f"{run}: no ladder.h5 (a folder written by knitlad cut, or its file; or snag.h5, resistance.h5, "
+             "cycle.h5 of a snag, a resistance test or protocol B with a cut)")
     from knitlad.io.hdf5 import RunFileError, check_run_file
 
     try:

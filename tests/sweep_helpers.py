@@ -37,7 +37,7 @@ def fast_ladder_scene():
     from knitlad.studies import registry
 
     def instant(cfg, output, folder=None, progress=None):
-        return {"fx_ini": 1.0}, lambda path, record: write_record(path, record)
+        return registry.Finished(None, {"fx_ini": 1.0}, lambda path, record: write_record(path, record))
 
     saved = registry.SCENES["ladder"]
     registry.SCENES["ladder"] = dataclasses.replace(saved, run=instant)

@@ -134,7 +134,7 @@ def test_snag_breaks_a_worn_loop_and_writes_the_curve_and_the_ladder(tmp_path):
     assert "the yarn broke at 0.10" in p.stdout and "ladder: n_lad/n_y" in p.stdout
     table = (tmp_path / "snag.csv").read_text().splitlines()
     assert table[0] == "pull_mm,force_N" and len(table) > 10
-    assert (tmp_path / "snag.png").stat().st_size > 1000 and (tmp_path / "ladder.h5").exists()
+    assert (tmp_path / "snag.png").stat().st_size > 1000 and (tmp_path / "snag.h5").exists()
     bad = run("snag", "--stitches", "6", "--snag-row", "9", "--out", str(tmp_path / "no"))
     assert bad.returncode == 2 and "snag_row" in bad.stderr and "Traceback" not in bad.stderr
     assert not (tmp_path / "no").exists() or not any((tmp_path / "no").iterdir())
@@ -146,14 +146,14 @@ def test_a_run_that_fails_is_reported_in_one_line_with_exit_code_1(tmp_path, mon
     force-control failure itself is tested in test_protocol."""
     from typer.testing import CliRunner
 
-    from knitlad.experiments import protocol
     from knitlad.cli import app
     from knitlad.fabric.stretching import OutOfReach
+    from knitlad.studies import registry
 
-    def fail(settings, progress=None):
+    def fail(cfg, folder, progress=None):
         raise OutOfReach("at l_x/l0 = 0.300 the relaxed knit already carries f_x = 0.40 > 0.05: use position control (--lx)")
 
-    monkeypatch.setattr(protocol, "run_ladder", fail)
+    monkeypatch.setattr(registry, "prepared_knit", fail)
     p = CliRunner().invoke(app, ["cut", "--fx", "0.05", "--stitches", "8x10", "--out", str(tmp_path / "out")])
     assert p.exit_code == 1
     assert p.output.strip().splitlines()[-1].startswith("knitlad: run failed: at l_x/l0")

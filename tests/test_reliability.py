@@ -102,7 +102,7 @@ def test_a_job_whose_file_cannot_be_written_fails_alone(tmp_path, monkeypatch):
         def write(path, record):
             raise OSError(28, "No space left on device")
 
-        return {"fx_ini": 1.0}, write
+        return registry.Finished(None, {"fx_ini": 1.0}, write)
 
     monkeypatch.setitem(registry.SCENES, "ladder", dataclasses.replace(registry.SCENES["ladder"], run=no_space))
     row = run_job(job, str(tmp_path / "jobs"))

@@ -1,4 +1,5 @@
-"""The sweep summary table (pandas): one row per job, written atomically as CSV (and Parquet).
+"""The sweep summary table (pandas): one row per job, written atomically as CSV (and Parquet); and the tables
+one run writes beside its file (``write_table``).
 
 Columns: ``job_id``, ``scene``, the job's inputs (the fields of its scene config,
 in the config's units), ``status`` (pending, ok, failed), ``error``, then the
@@ -51,3 +52,10 @@ def read_summary(out_dir: str | Path) -> pd.DataFrame:
     if not path.exists():
         raise FileNotFoundError(f"{path} not found (is {out_dir} a sweep folder?)")
     return pd.read_csv(path)
+
+
+def write_table(path: str | Path, rows, columns) -> Path:
+    """A CSV of ``rows`` (an array or a list of rows) under ``columns``, atomically."""
+    with atomic_path(path) as tmp:
+        pd.DataFrame(rows, columns=list(columns)).to_csv(tmp, index=False)
+    return Path(path)

@@ -1,10 +1,13 @@
-"""The scenes a sweep can run: each names its config, its runner and its summary columns once.
+"""The experiments, each with one entry that serves both the command line and sweeps.
 
-A runner takes the validated config of one job, the job's output options, the
-sweep's folder and a progress callback ``progress(stage, fraction)`` (or None), runs it, and returns its summary (a dict of scalars) and a writer
-``write(path, record)`` of its file (``record``: the sweep's job attributes: id,
-status, config).
-To add a scene: a pydantic config in :mod:`knitlad.experiments.config`, a runner here, one entry.
+An entry names the experiment's config, its runner and its summary columns once. A runner takes the
+validated config, the output options, a folder where stretched knits are kept and shared (None: stretch
+in memory) and a progress callback ``progress(stage, fraction)`` (or None), runs the experiment, and returns
+a :class:`Finished`: the result, its summary (a dict of scalars), the writer of its run file, and the writer
+of the tables and pictures the command line puts beside that file. A sweep's job writes the run file alone
+(``<job>.h5``, with the job's record: id, status, config); `knitlad <experiment>` writes it and its companions.
+To add an experiment: a pydantic config in :mod:`knitlad.experiments.config`, a runner here, one entry,
+and a command in :mod:`knitlad.cli` that calls the entry.
 """
 
 from __future__ import annotations
@@ -13,7 +16,7 @@ import dataclasses
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 from pydantic import BaseModel
 
@@ -30,13 +33,28 @@ from knitlad.experiments.config import (
 
 @dataclass(frozen=True)
 class SweepScene:
-    """A scene a sweep can run (``scene:`` in a sweep config): not :class:`knitlad.engine.state.Scene`, the rod builder."""
+    """An experiment a sweep can run (``scene:`` in a sweep config) and the command line runs through the same
+    ``run``: not :class:`knitlad.engine.state.Scene`, the rod builder."""
 
     config: type[BaseModel]
-    run: Callable  # (config, output options, sweep folder, progress) -> (summary, write)
+    run: Callable  # (config, output options, knit folder, progress) -> Finished
     summary_keys: tuple[str, ...]  # the results a sweep's summary table shows, in order
     description: str
     shared_work: Callable | None = None  # config -> key of work that jobs with the same key share
+
+
+def no_companions(path: Path) -> tuple[Path, ...]:
+    return ()
+
+
+@dataclass(frozen=True)
+class Finished:
+    """One finished run of an experiment: what a sweep's job and the command line both take from it."""
+
+    result: Any
+    summary: dict
+    write: Callable[[Path, dict], Path]  # (path, record) -> the run file, the record among its attributes
+    beside: Callable[[Path], tuple[Path, ...]] = no_companions  # run file -> the tables and pictures beside it
 
 
 def stretch_of(cfg: CutConfig) -> str:
@@ -46,120 +64,172 @@ def stretch_of(cfg: CutConfig) -> str:
     return stretch_key(cfg.stretch_settings())
 
 
-def run_ladder_job(cfg: CutConfig, output, folder: Path | None = None, progress=None):
-    """The laddering experiment (`knitlad cut`); its file holds the frames and series (:mod:`knitlad.io.hdf5`).
+def prepared_knit(cfg: CutConfig, folder: Path | None, progress=None):
+    """(the stretched knit of ``cfg``, whether it was read): kept in ``folder/stretched`` and reused by the runs
+    that share its settings (:mod:`knitlad.io.knit_cache`), or stretched in memory without a folder."""
+    from knitlad.fabric.preparation import stretch
+    from knitlad.io.knit_cache import cached_stretch
 
-    The stretched knit is kept in ``folder/stretched`` and reused by the jobs that share
-    its settings (:mod:`knitlad.io.knit_cache`): a sweep over the dynamics stretches once."""
+    if folder is None:
+        return stretch(cfg.stretch_settings(), progress), False
+    return cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch, progress)
+
+
+def _compression(output) -> str | None:
+    return None if output.compression == "none" else output.compression
+
+
+def _ladder_companions(ladder, path: Path) -> tuple[Path, ...]:
+    """A ladder's ParaView file beside its run file and its spatio-temporal diagram."""
+    from knitlad.io.xdmf import write_xdmf
+    from knitlad.viz.plots import spatio_temporal_diagram
+
+    return write_xdmf(path), spatio_temporal_diagram(ladder, path.with_name("spatio_temporal.png"))
+
+
+def run_ladder_job(cfg: CutConfig, output, folder: Path | None = None, progress=None) -> Finished:
+    """The laddering experiment (`knitlad cut`); its file holds the frames and series (:mod:`knitlad.io.hdf5`).
+    A sweep over the dynamics stretches once (:func:`prepared_knit`)."""
     import time
 
     from knitlad.io.hdf5 import write_ladder_result
-    from knitlad.io.knit_cache import cached_stretch
     from knitlad.experiments.protocol import analyse, cut, propagate, require_memory, require_tension
-    from knitlad.fabric.preparation import stretch
 
     require_memory(cfg.memory_estimate_bytes(), f"a {cfg.n_x} x {cfg.n_y} knit at {cfg.resolution} nodes per stitch")
     t0 = time.perf_counter()
-    if folder is None:
-        knit, reused = stretch(cfg.stretch_settings(), progress), False
-    else:
-        knit, reused = cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch, progress)
+    knit, reused = prepared_knit(cfg, folder, progress)
     if reused:  # the stretch cost this job only the reading
         knit = dataclasses.replace(knit, wall_s=time.perf_counter() - t0)
     require_tension(knit)  # a compressed knit's "ladder" is no result: the job fails, saying why
     result = analyse(propagate(cut(knit, cfg.dynamics_settings()), progress=progress))
     if not output.frames:
         result.frames, result.frame_times_s = [], []
-    compression = None if output.compression == "none" else output.compression
 
-    def write(path: Path, record: dict) -> None:
-        write_ladder_result(path, result, compression=compression, attrs={**record, "stretch_reused": reused})
+    def write(path: Path, record: dict) -> Path:
+        return write_ladder_result(path, result, compression=_compression(output),
+                                   attrs={**record, "stretch_reused": reused})
 
-    return {**result.summary(), "stretch_reused": reused}, write
+    return Finished(result, {**result.summary(), "stretch_reused": reused}, write,
+                    lambda path: _ladder_companions(result, path))
 
 
-def run_cycle_job(cfg: CycleConfig, output, folder: Path | None = None, progress=None):
-    """Protocol B (`knitlad cycle`): its file holds the readings and, if cut, the ladder."""
+def run_cycle_job(cfg: CycleConfig, output, folder: Path | None = None, progress=None, **checkpoints) -> Finished:
+    """Protocol B (`knitlad cycle`): its file holds the readings and, if cut, the ladder; beside it the readings'
+    table and Fig. 4a. ``checkpoints``: :func:`knitlad.experiments.cycling.run_protocol_b`'s ``after_leg``,
+    ``keep`` and ``resume`` (the command line's)."""
     from knitlad.experiments.cycling import run_protocol_b
     from knitlad.io.hdf5 import write_cycle_result
-    from knitlad.io.knit_cache import cached_stretch
-    from knitlad.fabric.preparation import stretch
 
-    knit = None if folder is None else cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch,
-                                                      progress)[0]
+    knit = None if folder is None else prepared_knit(cfg, folder, progress)[0]
     cycle, ladder = run_protocol_b(cfg.settings(), cfg.cycle_settings(), cut_at_max=cfg.cut, progress=progress,
-                                   knit=knit)
+                                   knit=knit, **checkpoints)
     summary = {**cycle.summary(), **({f"cut_{k}": v for k, v in ladder.summary().items()} if ladder else {})}
     if ladder is not None and not output.frames:
         ladder.frames, ladder.frame_times_s = [], []
 
-    def write(path: Path, record: dict) -> None:
-        write_cycle_result(path, cycle, ladder, cfg.model_dump(),
-                           compression=None if output.compression == "none" else output.compression, attrs=record)
+    def write(path: Path, record: dict) -> Path:
+        return write_cycle_result(path, cycle, ladder, cfg.model_dump(), compression=_compression(output),
+                                  attrs=record)
 
-    return summary, write
+    def beside(path: Path) -> tuple[Path, ...]:
+        from knitlad.viz.plots import cycle_curve_plot
+
+        return (write_cycle_table(path.with_suffix(".csv"), cycle.readings),
+                cycle_curve_plot(cycle.readings, cfg.n_x, cfg.settings().material.stitch_length, cfg.fx_thr,
+                                 cycle.delta_l_over_l0, path.with_suffix(".png")))
+
+    return Finished((cycle, ladder), summary, write, beside)
 
 
-def run_tensile_job(cfg: TensileConfig, output, folder: Path | None = None, progress=None):
-    """The tensile test (`knitlad tensile`): its file holds the readings (:func:`knitlad.io.hdf5.write_tensile_result`)."""
-    from knitlad.experiments.tensile import run_tensile
-    from knitlad.fabric.preparation import stretch
+def write_cycle_table(path: Path, readings) -> Path:
+    """Protocol B's readings (cycle, leg: 1 loading, 0 hold, -1 unloading, t [s], box l_x/l0, f_x) as CSV."""
+    from knitlad.io.summary import write_table
+
+    return write_table(path, readings, ("cycle", "leg", "t_s", "box_lx_over_l0", "fx"))
+
+
+def run_tensile_job(cfg: TensileConfig, output, folder: Path | None = None, progress=None) -> Finished:
+    """The tensile test (`knitlad tensile`): its file holds the readings (:func:`knitlad.io.hdf5.write_tensile_result`);
+    beside it their table and the force-displacement loops."""
+    from knitlad.experiments.tensile import COLUMNS, run_tensile
     from knitlad.io.hdf5 import write_tensile_result
-    from knitlad.io.knit_cache import cached_stretch
 
-    knit = (stretch(cfg.stretch_settings(), progress) if folder is None else
-            cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch, progress)[0])
-    result = run_tensile(knit, cfg.tensile_settings(), cfg.dynamics_settings(), progress)
+    result = run_tensile(prepared_knit(cfg, folder, progress)[0], cfg.tensile_settings(), cfg.dynamics_settings(),
+                         progress)
 
-    def write(path: Path, record: dict) -> None:
-        write_tensile_result(path, result, cfg.model_dump(), attrs=record)
+    def write(path: Path, record: dict) -> Path:
+        return write_tensile_result(path, result, cfg.model_dump(), attrs=record)
 
-    return result.summary(), write
+    def beside(path: Path) -> tuple[Path, ...]:
+        from knitlad.io.summary import write_table
+        from knitlad.viz.plots import tensile_curve_plot
+
+        return (write_table(path.with_suffix(".csv"), result.readings, COLUMNS),
+                tensile_curve_plot(result.readings, path.with_suffix(".png")))
+
+    return Finished(result, result.summary(), write, beside)
 
 
-def run_snag_job(cfg: SnagConfig, output, folder: Path | None = None, progress=None):
+def run_snag_job(cfg: SnagConfig, output, folder: Path | None = None, progress=None) -> Finished:
     """A snag (`knitlad snag`): its file holds the pull-out curve and, after a break, the ladder
-    (:func:`knitlad.io.hdf5.write_snag_result`)."""
+    (:func:`knitlad.io.hdf5.write_snag_result`); beside it the curve's table and picture, and the ladder's."""
     from knitlad.experiments.snag import snag
-    from knitlad.fabric.preparation import stretch
     from knitlad.io.hdf5 import write_snag_result
-    from knitlad.io.knit_cache import cached_stretch
 
-    knit = (stretch(cfg.stretch_settings(), progress) if folder is None else
-            cached_stretch(cfg.stretch_settings(), Path(folder) / "stretched", stretch, progress)[0])
+    knit = prepared_knit(cfg, folder, progress)[0]
     result = snag(knit, cfg.dynamics_settings(), cfg.snag_settings(), progress)
     if result.ladder is not None and not output.frames:
         result.ladder.frames, result.ladder.frame_times_s = [], []
 
-    def write(path: Path, record: dict) -> None:
-        write_snag_result(path, result, knit.settings.material, cfg.model_dump(),
-                          compression=None if output.compression == "none" else output.compression, attrs=record)
+    def write(path: Path, record: dict) -> Path:
+        return write_snag_result(path, result, knit.settings.material, cfg.model_dump(),
+                                 compression=_compression(output), attrs=record)
 
-    return result.summary(), write
+    def beside(path: Path) -> tuple[Path, ...]:
+        import numpy as np
+
+        from knitlad.io.summary import write_table
+        from knitlad.viz.plots import snag_curve_plot
+
+        curve = (write_table(path.with_suffix(".csv"), np.column_stack([result.pull_m * 1e3, result.force_N]),
+                             ("pull_mm", "force_N")),
+                 snag_curve_plot(result.pull_m, result.force_N, path.with_suffix(".png"), result.broke))
+        return curve + (() if result.ladder is None else _ladder_companions(result.ladder, path))
+
+    return Finished(result, result.summary(), write, beside)
 
 
-def run_resistance_job(cfg: ResistanceConfig, output, folder: Path | None = None, progress=None):
+def run_resistance_job(cfg: ResistanceConfig, output, folder: Path | None = None, progress=None) -> Finished:
     """A ladder-resistance test (`knitlad resistance`): its file holds the cut series, the snag's curve and
-    the pictured ladder's run file; its one-page report is drawn beside it (``<job>_report.png``)."""
+    the pictured ladder's run file, with its one-page report drawn beside it (``<file>_report.png``, in a
+    sweep too: the report is the test's product); the command line adds the series' table."""
     from knitlad.experiments.resistance import run_resistance
-    from knitlad.fabric.preparation import stretch
     from knitlad.io.hdf5 import write_resistance_result
-    from knitlad.io.knit_cache import cached_stretch
 
-    def stretch_for(one):
-        if folder is None:
-            return stretch(one.stretch_settings(), progress)
-        return cached_stretch(one.stretch_settings(), Path(folder) / "stretched", stretch, progress)[0]
+    knits = {}
+
+    def stretch_for(one):  # the snag and the cut at its tension share one stretched knit
+        key = (one.fx, one.lx)
+        if key not in knits:
+            knits[key] = prepared_knit(one, folder, progress)[0]
+        return knits[key]
 
     result = run_resistance(cfg, stretch_for, progress)
 
-    def write(path: Path, record: dict) -> None:
+    def write(path: Path, record: dict) -> Path:
         write_resistance_result(path, result, result.cuts[0].settings.stretch.material, cfg.model_dump(),
-                                compression=None if output.compression == "none" else output.compression,
-                                attrs=record)
+                                compression=_compression(output), attrs=record)
         draw_resistance_report(result, path, path.with_name(f"{path.stem}_report.png"))
+        return path
 
-    return result.summary(), write
+    def beside(path: Path) -> tuple[Path, ...]:
+        from knitlad.io.summary import write_table
+
+        return (write_table(path.with_suffix(".csv"), result.table(), (
+            "fx_target", "fx_ini", "n_lad_over_ny", "released_over_ny", "v_lad_over_cb", "fx_fin_crossed",
+            "reached_edge")), path.with_name(f"{path.stem}_report.png"))
+
+    return Finished(result, result.summary(), write, beside)
 
 
 def draw_resistance_report(result, h5: Path, png: Path) -> Path:
@@ -179,27 +249,29 @@ def draw_resistance_report(result, h5: Path, png: Path) -> Path:
         return resistance_report(result, png, picture)
 
 
-def _attributes_only(result):
-    """A reduced model's summary, and a writer of a file of attributes (summary, settings, scales)."""
+def _attributes_only(result) -> Finished:
+    """A reduced model's result, and a writer of a file of attributes (summary, settings, scales)."""
     from knitlad.io.hdf5 import scale_attributes, write_record
 
     summary = result.summary()
     settings = {k: v for k, v in dataclasses.asdict(result.settings).items() if k != "material"}
     scales = scale_attributes(result.settings.material)
 
-    def write(path: Path, record: dict) -> None:
-        write_record(path, {**summary, **record, "settings_json": json.dumps(settings), **scales})
+    def write(path: Path, record: dict) -> Path:
+        return write_record(path, {**summary, **record, "settings_json": json.dumps(settings), **scales})
 
-    return summary, write
+    return Finished(result, summary, write)
 
 
-def run_loop_job(cfg: LoopConfig, output, folder: Path | None = None, progress=None):
+def run_loop_job(cfg: LoopConfig, output, folder: Path | None = None, progress=None) -> Finished:
+    """The single loop (`knitlad loop`): a file of attributes."""
     from knitlad.experiments.periodic_loop import run_single_loop
 
     return _attributes_only(run_single_loop(cfg.settings()))
 
 
-def run_stitch_job(cfg: StitchConfig, output, folder: Path | None = None, progress=None):
+def run_stitch_job(cfg: StitchConfig, output, folder: Path | None = None, progress=None) -> Finished:
+    """The periodised stitch (`knitlad stitch`): a file of attributes."""
     from knitlad.fabric.stitch_model import StitchRun
 
     return _attributes_only(StitchRun(cfg.settings()).run())

@@ -80,7 +80,8 @@ def run_job(job: Job, jobs_dir: str, threads: int | None = 1, token: str | None 
     t0 = time.perf_counter()
     progress = ProgressFile(path.with_suffix(".progress"))  # read by the sweep's progress line
     try:
-        summary, write = SCENES[job.scene].run(job.scene_config(), job.output, Path(jobs_dir).parent, progress)
+        finished = SCENES[job.scene].run(job.scene_config(), job.output, Path(jobs_dir).parent, progress)
+        summary, write = finished.summary, finished.write  # a job keeps the run file alone, not its companions
         record = _record(job, "ok", "", time.perf_counter() - t0)
     except KeyboardInterrupt:
         raise

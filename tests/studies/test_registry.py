@@ -1,8 +1,11 @@
-"""knitlad.studies.registry: each scene names its config, runner and summary columns once."""
+"""knitlad.studies.registry: each experiment names its config, runner and summary columns once, and its one
+entry serves the command line and sweeps."""
 
 from __future__ import annotations
 
 import inspect
+import re
+from pathlib import Path
 
 from knitlad.experiments.config import CutConfig
 from knitlad.studies.registry import SCENES, stretch_of
@@ -10,7 +13,7 @@ from knitlad.studies.registry import SCENES, stretch_of
 
 def test_every_scene_has_a_runner_taking_the_progress_and_distinct_summary_columns():
     for name, scene in SCENES.items():
-        assert list(inspect.signature(scene.run).parameters) == ["cfg", "output", "folder", "progress"], name
+        assert list(inspect.signature(scene.run).parameters)[:4] == ["cfg", "output", "folder", "progress"], name
         assert len(set(scene.summary_keys)) == len(scene.summary_keys), name
         assert "job_wall_s" in scene.summary_keys and scene.description, name
 
@@ -21,3 +24,18 @@ def test_laddering_jobs_share_a_stretch_exactly_when_their_stretch_settings_agre
     assert stretch_of(base) == stretch_of(base.replace(mu=0.0, max_time_ms=3.0))
     assert stretch_of(base) != stretch_of(base.replace(fx=5.0))
     assert stretch_of(base) != stretch_of(base.replace(preset="fast"))
+
+
+def test_the_command_line_runs_each_experiment_through_its_entry():
+    """`knitlad cut`, `cycle`, `tensile`, ... call the registry's runner, as a sweep's job does: cli.py names no
+    experiment's own run function and writes no experiment's file itself."""
+    import knitlad.cli as cli
+
+    source = Path(cli.__file__).read_text()
+    direct = {"run_ladder", "run_protocol_b", "run_tensile", "run_snag", "run_resistance", "run_single_loop",
+              "StitchRun", "write_ladder_result", "write_cycle_result", "write_tensile_result", "write_snag_result",
+              "write_resistance_result"}
+    named = {name for name in direct if re.search(rf"\b{name}\b", source)}
+    assert not named, f"cli.py runs or writes these itself: {sorted(named)}"
+    for name in ("ladder", "cycle", "tensile", "snag", "resistance", "loop", "stitch"):
+        assert f'_experiment("{name}"' in source, name
