@@ -15,7 +15,7 @@ from knitlad.engine.state import RodModel, Rods, RodState, Scene
 from knitlad.engine import units  # the internal unit system (knitlad.units.LENGTH, ...), as before the folders
 from knitlad.engine.units import NYLON, Material, Scales
 
-__version__ = "0.12.0"
+__version__ = "0.13.0"
 
 # the laddering experiment: name -> module that defines it (loaded on first use, PEP 562)
 _EXPERIMENT = {
@@ -24,14 +24,14 @@ _EXPERIMENT = {
     "LoopConfig": "knitlad.experiments.config",
     "LADDER_PRESETS": "knitlad.fabric.presets",
     "StretchedKnit": "knitlad.fabric.preparation",
-    "Laddering": "knitlad.experiments.protocol",
-    "LadderTrace": "knitlad.experiments.protocol",
-    "LadderResult": "knitlad.experiments.protocol",
+    "Laddering": "knitlad.experiments.laddering",
+    "LadderTrace": "knitlad.experiments.laddering",
+    "LadderResult": "knitlad.experiments.laddering",
     "stretch": "knitlad.fabric.preparation",
-    "cut": "knitlad.experiments.protocol",
-    "propagate": "knitlad.experiments.protocol",
-    "analyse": "knitlad.experiments.protocol",
-    "run_ladder": "knitlad.experiments.protocol",
+    "cut": "knitlad.experiments.laddering",
+    "propagate": "knitlad.experiments.laddering",
+    "analyse": "knitlad.experiments.laddering",
+    "run_ladder": "knitlad.experiments.laddering",
     "read_stretched_knit": "knitlad.io.hdf5",
     "write_stretched_knit": "knitlad.io.hdf5",
     "TrajectoryRecorder": "knitlad.fabric.observers",

@@ -240,7 +240,7 @@ def _knit_run(model, options: dict, stitches: str, default_fx: float, out: str |
     of hours must not end on a full memory or an unwritable folder): --stitches, the config (force control
     to ``default_fx`` when neither --fx nor --lx is given), the memory, the folder (default runs/<name>-<time>)."""
     from knitlad.io.folders import FolderError, writable_folder
-    from knitlad.experiments.protocol import KnitTooLarge, require_memory
+    from knitlad.experiments.laddering import KnitTooLarge, require_memory
 
     try:
         n_x, n_y = _config.parse_stitches(stitches)

@@ -143,7 +143,7 @@ def test_snag_breaks_a_worn_loop_and_writes_the_curve_and_the_ladder(tmp_path):
 def test_a_run_that_fails_is_reported_in_one_line_with_exit_code_1(tmp_path, monkeypatch):
     """A run that stops on its own (force control out of reach, interpenetration, blow-up)
     raises; the command prints one line and writes nothing. The failure is injected: the
-    force-control failure itself is tested in test_protocol."""
+    force-control failure itself is tested in test_laddering."""
     from typer.testing import CliRunner
 
     from knitlad.cli import app

@@ -107,7 +107,7 @@ def test_deprecated_names_still_work_and_warn():
 
 
 def test_the_experiment_names_load_lazily_and_unknown_names_fail():
-    assert knitlad.cut is __import__("knitlad.experiments.protocol", fromlist=["cut"]).cut
+    assert knitlad.cut is __import__("knitlad.experiments.laddering", fromlist=["cut"]).cut
     with pytest.raises(AttributeError, match="no attribute 'cutt'"):
         knitlad.cutt  # noqa: B018
 

@@ -334,7 +334,7 @@ def test_a_run_of_absurdly_many_steps_is_refused_before_its_first_step(option, t
 def test_a_step_longer_than_the_observation_interval_is_refused():
     """d/l0 = 1e-6 gave a 1.2 ms step against 20 us between observations: the run 'finished' in 2 steps."""
     from knitlad.experiments.config import CutConfig
-    from knitlad.experiments.protocol import check_feasible
+    from knitlad.experiments.laddering import check_feasible
     from knitlad.fabric.preparation import InfeasibleRun
 
     dynamics = CutConfig(lx=0.38, preset="fast").dynamics_settings()

@@ -3,7 +3,7 @@
 An experiment gives :func:`run_until` its ``observe(t) -> reading`` (its observers are called there; the
 reading is what its rules check) and its stop rules, each with ``check(t, reading) -> str | None`` (the
 reason it fires, or None). What a reading holds is the experiment's: the laddering's undone cells
-(:func:`knitlad.experiments.protocol.propagate`), whether a single loop is still held (:class:`knitlad.fabric.observers.LetGo`,
+(:func:`knitlad.experiments.laddering.propagate`), whether a single loop is still held (:class:`knitlad.fabric.observers.LetGo`,
 :mod:`knitlad.experiments.loop_model`, :mod:`knitlad.experiments.periodic_loop`). ``t`` is the time since the loop began [s].
 """
 

@@ -319,7 +319,7 @@ class CutConfig(_WithPreset):
 
     def dynamics_settings(self):
         from knitlad.engine.contact import Counting
-        from knitlad.experiments.protocol import DynamicsSettings
+        from knitlad.experiments.laddering import DynamicsSettings
 
         return DynamicsSettings(
             mu=self.mu, contact_counting=Counting(self.contact_counting),
@@ -338,7 +338,7 @@ class CutConfig(_WithPreset):
         )
 
     def settings(self):
-        from knitlad.experiments.protocol import LadderSettings
+        from knitlad.experiments.laddering import LadderSettings
 
         return LadderSettings(self.stretch_settings(), self.dynamics_settings())
 

@@ -30,7 +30,7 @@ from typing import Callable
 import numpy as np
 
 from knitlad.engine import units
-from knitlad.experiments.protocol import (
+from knitlad.experiments.laddering import (
     DynamicsSettings,
     LadderResult,
     Laddering,
@@ -137,7 +137,7 @@ class LoadedKnit:
 
 
 def cut_cycled(knit: StretchedKnit, loaded: Simulation, dynamics: DynamicsSettings) -> Laddering:
-    """:func:`knitlad.experiments.protocol.cut` of a cycled knit, the contacts' friction history carried over from the
+    """:func:`knitlad.experiments.laddering.cut` of a cycled knit, the contacts' friction history carried over from the
     simulation that loaded it (``loaded``): the cut edge's pairs go, every other pair keeps its slip."""
     run = cut(knit, dynamics, rods_ready=True)
     ne = loaded.model.edge_a.shape[0]

@@ -5,7 +5,7 @@ takes a knit design (its pattern, a run-stop band, its yarn's d/l0 and friction)
 
 1. **the snag** (:func:`knitlad.experiments.snag.snag`): a pin pulls the central loop out of the knit
    stretched to f_x^ini = ``fx`` until the yarn breaks (its pull-out curve, the break, the ladder after it);
-2. **the cut at each tension** of ``tensions`` (the paper's experiment, :mod:`knitlad.experiments.protocol`):
+2. **the cut at each tension** of ``tensions`` (the paper's experiment, :mod:`knitlad.experiments.laddering`):
    the damage n_lad/n_y and the cells released into loaded courses, v_lad/c_b and f_x^fin against f_x^ini;
 3. **the threshold**, bracketed by the series: the highest tension at which the cut does not ladder and the
    lowest at which it does. A run ladders when it undoes ``LADDERING_ONSET_CELLS`` cells or more (0.1 n_y of
@@ -25,7 +25,7 @@ from typing import Callable
 
 import numpy as np
 
-from knitlad.experiments.protocol import LadderResult, analyse, cut, propagate, require_tension
+from knitlad.experiments.laddering import LadderResult, analyse, cut, propagate, require_tension
 from knitlad.experiments.snag import SnagResult, snag
 from knitlad.fabric.preparation import StretchedKnit
 

@@ -13,8 +13,8 @@ How runs start in worn fabric, where the paper's experiment cuts a loop with sci
    ``record_every_s``: the pin's travel and the force the yarn holds it back with (the pull-out curve).
    The pull ends at the first break, or without one at ``max_pull_m``.
 3. **ladder**: at a break the pin lets go (:meth:`~knitlad.engine.simulation.Simulation.release_obstacle`)
-   and the knit runs on as after the paper's cut (:func:`knitlad.experiments.protocol.propagate`,
-   :func:`~knitlad.experiments.protocol.analyse`): the fronts are followed in the broken loop's column
+   and the knit runs on as after the paper's cut (:func:`knitlad.experiments.laddering.propagate`,
+   :func:`~knitlad.experiments.laddering.analyse`): the fronts are followed in the broken loop's column
    and the one beside it, cells counted from the state at the break (what the snag distorted before it
    is not the ladder's damage).
 
@@ -33,7 +33,7 @@ import numpy as np
 from knitlad.engine import units
 from knitlad.engine.fracture import Break
 from knitlad.engine.obstacles import Cylinder
-from knitlad.experiments.protocol import (
+from knitlad.experiments.laddering import (
     DynamicsSettings,
     LadderResult,
     Laddering,

@@ -28,7 +28,7 @@ import numpy as np
 
 from knitlad.engine.units import Material
 from knitlad.experiments.cycling import LoadedKnit
-from knitlad.experiments.protocol import DynamicsSettings
+from knitlad.experiments.laddering import DynamicsSettings
 from knitlad.fabric.preparation import StretchedKnit
 
 LOADING, HOLD, UNLOADING = 1, 0, -1  # the leg column of the readings

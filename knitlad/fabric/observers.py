@@ -1,8 +1,8 @@
-"""Observers and stop rules of the laddering run loop (:func:`knitlad.experiments.protocol.propagate`).
+"""Observers and stop rules of the laddering run loop (:func:`knitlad.experiments.laddering.propagate`).
 
 An observer is any object with ``observe(t, run, undone)``: called after every
 observation interval with the time since the cut [s], the running
-:class:`knitlad.experiments.protocol.Laddering` and the map of cells undone since the cut
+:class:`knitlad.experiments.laddering.Laddering` and the map of cells undone since the cut
 (n_y, n_x). A stop rule has ``check(t, undone) -> str | None``: a reason to stop, or
 None. Write your own and pass them to ``propagate``; these are the standard ones.
 """
@@ -134,7 +134,7 @@ class TensionRecorder:
         self.fx_courses.append(run.course_tensions())
 
 
-AUTO_FRAMES = 60  # frames over a ladder's expected duration when no frame interval is given (protocol.frame_interval)
+AUTO_FRAMES = 60  # frames over a ladder's expected duration when no frame interval is given (laddering.frame_interval)
 FREE, TOUCHING, SLIDING = 0, 1, 2  # contact state of a node (FrameRecorder.contact)
 
 

@@ -7,7 +7,7 @@ The knit is built at the target l_y and at l_x = min(target, 0.30 l0) (narrower 
 :func:`build_width`); from there either every course is tiled with the periodised stitch stretched to
 the target (``start="tiled"``, :func:`stretch_tiled`) or the whole fabric is stretched affinely
 (:mod:`knitlad.fabric.stretching`), by position or by force control, and relaxed to a steady f_x. The
-laddering (:mod:`knitlad.experiments.protocol`), protocol B (:mod:`knitlad.experiments.cycling`) and any
+laddering (:mod:`knitlad.experiments.laddering`), protocol B (:mod:`knitlad.experiments.cycling`) and any
 other test of the fabric start from a :class:`StretchedKnit`.
 """
 

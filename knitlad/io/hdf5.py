@@ -183,7 +183,7 @@ def _extra_datasets(f: h5py.File, datasets: dict | None) -> None:
 
 def write_ladder_result(path: str | Path, result, compression: str | None = "gzip", attrs: dict | None = None,
                         datasets: dict | None = None) -> Path:
-    """Write one run (:class:`knitlad.experiments.protocol.LadderResult`); ``attrs`` adds file attributes (a sweep's job
+    """Write one run (:class:`knitlad.experiments.laddering.LadderResult`); ``attrs`` adds file attributes (a sweep's job
     record), ``datasets`` more datasets by path (``{"cycle/readings": array}``: the loading before the cut)."""
     path = Path(path)
     with atomic_hdf5(path) as f:

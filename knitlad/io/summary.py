@@ -3,7 +3,7 @@ one run writes beside its file (``write_table``).
 
 Columns: ``job_id``, ``scene``, the job's inputs (the fields of its scene config,
 in the config's units), ``status`` (pending, ok, failed), ``error``, then the
-results of :meth:`knitlad.experiments.protocol.LadderResult.summary` (f_x^ini, f_x^fin,
+results of :meth:`knitlad.experiments.laddering.LadderResult.summary` (f_x^ini, f_x^fin,
 n_lad/n_y, v_lad/c_b, measured l_x/l0 and l_y/l0, wall times, ...).
 """
 

@@ -93,7 +93,7 @@ def run_ladder_job(cfg: CutConfig, output, folder: Path | None = None, progress=
     import time
 
     from knitlad.io.hdf5 import write_ladder_result
-    from knitlad.experiments.protocol import analyse, cut, propagate, require_memory, require_tension
+    from knitlad.experiments.laddering import analyse, cut, propagate, require_memory, require_tension
 
     require_memory(cfg.memory_estimate_bytes(), f"a {cfg.n_x} x {cfg.n_y} knit at {cfg.resolution} nodes per stitch")
     t0 = time.perf_counter()

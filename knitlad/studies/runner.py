@@ -252,7 +252,7 @@ def compile_kernels() -> None:
     workers load the cache instead of each compiling the same kernels.
     """
     from knitlad.experiments.config import CutConfig
-    from knitlad.experiments.protocol import run_ladder
+    from knitlad.experiments.laddering import run_ladder
 
     run_ladder(CutConfig(n_x=4, n_y=6, lx=0.40, preset="fast", resolution=12, steps_per_increment=5, max_time_ms=5e-3,
                          observe_every_us=5.0, arrest_ms=5e-3).settings())

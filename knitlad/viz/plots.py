@@ -82,7 +82,7 @@ def _title(fx_ini: float, v: float) -> str:
 
 
 def spatio_temporal_diagram(result, path: str | Path) -> Path:
-    """The diagram of a :class:`knitlad.experiments.protocol.LadderResult`."""
+    """The diagram of a :class:`knitlad.experiments.laddering.LadderResult`."""
     return draw_spatio_temporal(result.times_s, result.front_up, result.front_down, result.column_history,
                                 result.settings.stretch.n_y // 2, _title(result.fx_ini, result.v_lad_over_cb), path,
                                 column=result.laddering_column)

@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 
 from knitlad.experiments.config import CutConfig
-from knitlad.experiments.protocol import run_ladder
+from knitlad.experiments.laddering import run_ladder
 from knitlad.engine.simulation import numba_threads
 
 

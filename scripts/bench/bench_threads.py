@@ -27,7 +27,7 @@ import json, sys, time
 import numba
 from knitlad.experiments.config import CutConfig
 from knitlad.io.hdf5 import read_stretched_knit
-from knitlad.experiments.protocol import cut
+from knitlad.experiments.laddering import cut
 knit = read_stretched_knit(sys.argv[1])
 cfg = CutConfig(n_x=knit.settings.n_x, n_y=knit.settings.n_y, fx=4.0, preset=sys.argv[2])
 run = cut(knit, cfg.dynamics_settings())

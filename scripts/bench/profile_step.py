@@ -51,7 +51,7 @@ from knitlad.engine.kernels.integrate import (
     verlet_steps,
 )
 from knitlad.engine.kernels.options import PARALLEL_OPTS
-from knitlad.experiments.protocol import cut
+from knitlad.experiments.laddering import cut
 from knitlad.fabric.preparation import stretch
 from knitlad.engine.simulation import numba_threads
 

@@ -93,7 +93,7 @@ def loop_run(cfg: dict) -> dict:
 def knit_runs(cfg: dict, size: int, tensions: list[float], nominal: float | None = None) -> list[dict]:
     """v_lad and n_lad at each target; ``nominal``: the tension named in the labels (default: the target)."""
     from knitlad.experiments.config import CutConfig
-    from knitlad.experiments.protocol import run_ladder
+    from knitlad.experiments.laddering import run_ladder
 
     rows = []
     for fx in tensions:
@@ -142,7 +142,7 @@ def model_runs(size: int, tensions: list[float], csv: Path, study: dict[str, lis
     to: the change against the default run is what is reported, to be read against the
     run-to-run scatter. Resumable."""
     from knitlad.experiments.config import CutConfig
-    from knitlad.experiments.protocol import analyse, cut, propagate
+    from knitlad.experiments.laddering import analyse, cut, propagate
     from knitlad.fabric.preparation import stretch
 
     defaults = {name: f.default for name, f in CutConfig.model_fields.items()}

@@ -37,7 +37,7 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 from knitlad.engine.simulation import SimulationBlowUp  # noqa: E402
 from knitlad.experiments.config import CutConfig  # noqa: E402
-from knitlad.experiments.protocol import analyse, cut, propagate
+from knitlad.experiments.laddering import analyse, cut, propagate
 from knitlad.fabric.preparation import stretch  # noqa: E402
 from knitlad.fabric.observers import Interpenetration  # noqa: E402
 from knitlad.studies.ensemble import resumed_rows, save_rows, target_offsets  # noqa: E402

@@ -25,7 +25,7 @@ os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 from knitlad.experiments.config import CutConfig  # noqa: E402
 from knitlad.fabric.observers import Interpenetration  # noqa: E402
-from knitlad.experiments.protocol import analyse, cut, propagate
+from knitlad.experiments.laddering import analyse, cut, propagate
 from knitlad.fabric.preparation import stretch  # noqa: E402
 from knitlad.engine.simulation import SimulationBlowUp  # noqa: E402
 from knitlad.fabric.measure import front_arrivals  # noqa: E402

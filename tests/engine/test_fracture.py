@@ -100,7 +100,7 @@ def test_a_stretched_knit_holds_its_yarn_whole():
     """The laddering's tensions are some tens of f0 (a few 0.1 N), the Nylon breaks at 530 f0: a cut knit
     ladders with the breaking force on and no segment breaks, its most loaded one far below it."""
     from knitlad.experiments.config import CutConfig
-    from knitlad.experiments.protocol import cut
+    from knitlad.experiments.laddering import cut
     from knitlad.fabric.preparation import stretch
 
     cfg = CutConfig(n_x=6, n_y=8, preset="fast", lx=0.38, max_time_ms=0.3)

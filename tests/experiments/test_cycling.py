@@ -9,7 +9,7 @@ import pytest
 
 from knitlad.experiments.config import CycleConfig
 from knitlad.experiments.cycling import HOLD, LOADING, UNLOADING, cut_cycled, run_cycles, shortening_to
-from knitlad.experiments.protocol import cut
+from knitlad.experiments.laddering import cut
 from knitlad.fabric.preparation import stretch
 
 

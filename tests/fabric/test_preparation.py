@@ -9,7 +9,7 @@ import pytest
 from knitlad.engine import units as kl_units
 from knitlad.engine.simulation import Simulation
 from knitlad.experiments.config import CutConfig
-from knitlad.experiments.protocol import cut
+from knitlad.experiments.laddering import cut
 from knitlad.fabric.preparation import KnitBox, build_width, stretch, stretch_contact
 from knitlad.fabric.scenes.knit import BUILD_LX
 from knitlad.fabric.stretching import OutOfReach, stretch_to

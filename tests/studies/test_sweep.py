@@ -314,7 +314,7 @@ def test_a_stitch_sweep_maps_the_tension_sign(tmp_path):
 def test_jobs_that_share_a_stretch_stretch_once_and_ladder_as_fresh_runs(tmp_path):
     """A sweep over the dynamics (here mu) stretches its knit once (`<out>/stretched/`); the job
     that reuses it gives the very ladder a fresh run gives."""
-    from knitlad.experiments.protocol import run_ladder
+    from knitlad.experiments.laddering import run_ladder
 
     cfg = {"fixed": {**TINY, "lx": 0.38, "max_time_ms": 0.5}, "sweep": {"axes": {"mu": [0.4, 0.0]}}}
     _, jobs = load_sweep(write_config(tmp_path / "c.yaml", cfg))

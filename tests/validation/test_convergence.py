@@ -17,7 +17,7 @@ import pandas as pd
 import pytest
 
 from knitlad.experiments.config import CutConfig, StitchConfig
-from knitlad.experiments.protocol import run_ladder
+from knitlad.experiments.laddering import run_ladder
 from knitlad.engine.simulation import numba_threads
 from knitlad.fabric.stitch_model import StitchRun, stitch_tensions, zero_tension_lx
 
@@ -92,7 +92,7 @@ def test_the_accurate_preset_ladders_at_its_step_as_at_a_quarter_of_it():
     0.175 x it (the paired study, three knits per tension at 1.6, 4 and 13.6: docs/performance.md, measured
     v_lad +0.1 %, f_x^fin +0.2 %, damage one stitch of 16 less in two knits of three): v_lad within 2 %,
     f_x^fin within 1 %, the damage within two stitches."""
-    from knitlad.experiments.protocol import analyse, cut, propagate
+    from knitlad.experiments.laddering import analyse, cut, propagate
     from knitlad.fabric.preparation import stretch
 
     cfg = CutConfig(n_x=16, n_y=16, fx=13.6, preset="accurate")
@@ -113,7 +113,7 @@ def test_a_friction_held_over_the_step_an_implicit_scheme_needs_moves_the_slow_l
     step a 3 x gain needs), everything else at the explicit step. Measured on three knits: v_lad +14.1 +- 1.1 %,
     f_x^fin -7.5 +- 0.9 %. Held: v_lad moves by more than the preset's stated error at low tension (8 %), and
     f_x^fin by more than 4 %."""
-    from knitlad.experiments.protocol import analyse, cut, propagate
+    from knitlad.experiments.laddering import analyse, cut, propagate
     from knitlad.fabric.preparation import stretch
 
     cfg = CutConfig(n_x=16, n_y=16, fx=1.58, preset="accurate")

@@ -15,7 +15,7 @@ import knitlad as kl
 from knitlad.experiments.config import CutConfig
 from knitlad.engine.contact import ContactModel
 from knitlad.fabric.observers import Interpenetration
-from knitlad.experiments.protocol import analyse, cut, propagate
+from knitlad.experiments.laddering import analyse, cut, propagate
 from knitlad.fabric.preparation import stretch, stretch_contact
 from knitlad.fabric.scenes.weave import plain_weave
 from knitlad.engine.simulation import energy_history, numba_threads

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from knitlad.experiments.config import CutConfig
-from knitlad.experiments.protocol import analyse, cut, propagate, run_ladder
+from knitlad.experiments.laddering import analyse, cut, propagate, run_ladder
 from knitlad.fabric.preparation import stretch
 from tests.validation.references import paper_der_line
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import pytest
 
 from knitlad.experiments.config import CutConfig
-from knitlad.experiments.protocol import run_ladder
+from knitlad.experiments.laddering import run_ladder
 from knitlad.engine.simulation import numba_threads
 
 NO_LADDER_CELLS = 0.1 * 42
@@ -58,7 +58,7 @@ def test_without_friction_the_threshold_is_about_the_memory_and_friction_raises_
     holds at f_x^ini 0.5 (2 cells measured) and ladders at 2 (25 cells), so f_x^thr(mu = 0) lies between
     K/2 and 2K. The same stretched knit at 2, cut with mu = 0.4, holds (its bracket: 5 to 6): friction
     raises the threshold, paired on one stretch."""
-    from knitlad.experiments.protocol import analyse, cut, propagate
+    from knitlad.experiments.laddering import analyse, cut, propagate
     from knitlad.fabric.preparation import stretch
 
     def cells(fx, mus):

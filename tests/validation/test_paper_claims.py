@@ -11,7 +11,7 @@ from __future__ import annotations
 import pytest
 
 from knitlad.experiments.config import CutConfig
-from knitlad.experiments.protocol import analyse, cut, propagate
+from knitlad.experiments.laddering import analyse, cut, propagate
 from knitlad.fabric.preparation import stretch
 from knitlad.engine.simulation import numba_threads
 

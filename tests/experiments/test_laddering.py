@@ -7,7 +7,7 @@ import pytest
 
 from knitlad.engine import units
 from knitlad.experiments.config import CutConfig
-from knitlad.experiments.protocol import analyse, cut, propagate
+from knitlad.experiments.laddering import analyse, cut, propagate
 from knitlad.fabric.preparation import KnitBox, stretch
 from knitlad.engine.timestep import DEFAULT_SAFETY
 from knitlad.engine.units import NYLON
@@ -200,7 +200,7 @@ def test_every_nan_of_a_ladders_summary_has_its_reason_beside_it():
     import math
 
     from knitlad.experiments.config import CutConfig
-    from knitlad.experiments.protocol import run_ladder
+    from knitlad.experiments.laddering import run_ladder
 
     cfg = CutConfig(n_x=6, n_y=8, lx=0.40, preset="fast", resolution=16, max_time_ms=0.05)
     result = run_ladder(cfg.settings())
