@@ -98,7 +98,8 @@ def scales() -> None:
 
 
 @app.command()
-def columns(scene: str = typer.Argument("ladder", help="ladder, cycle, loop or stitch")) -> None:
+def columns(scene: str = typer.Argument("ladder", help="the experiment: ladder, cycle, tensile, snag, resistance, "
+                                                       "loop, stitch or diagram")) -> None:
     """Print what each column of a sweep's summary.csv means, with its unit (a sweep writes the same table
     beside it as summary_columns.csv)."""
     from knitlad.studies.columns import column_dictionary
@@ -665,40 +666,39 @@ def diagram(
     preset: str = typer.Option("default", "--preset", help="Accuracy preset (fast, default, accurate): the "
                                "resolution and the contact's sagitta correction, as for knitlad stitch."),
     resolution: int = typer.Option(None, "--resolution", help="Nodes per stitch; default: the preset's."),
+    pattern: str = typer.Option("jersey", "--pattern", help="The knit's pattern (jersey, rib, garter); rib's curve "
+                                "lies below the search's 0.22 l0 (docs/patterns.md)."),
     out: str = typer.Option("runs/diagram", "--out", help="Folder for fx0_curve.csv and fx0_curve.png."),
 ) -> None:
     """The f_x = 0 curve of the periodised stitch in the (l_x/l0, l_y/l0) plane (paper, configuration diagram)."""
     import pandas as pd
 
-    from knitlad.experiments.config import StitchConfig
     from knitlad.io.atomic import atomic_path
+    from knitlad.io.folders import FolderError, writable_folder
     from knitlad.viz.plots import zero_tension_curve_plot
-    from knitlad.fabric.stitch_model import zero_tension_lx
 
     values = ly or [0.20, 0.22, 0.24, 0.26, 0.28, 0.30]
-    for v in values:
-        cfg = validated(StitchConfig, dict(ly=v, preset=preset, resolution=resolution, d_over_l0=d_over_l0))
-    material = cfg.settings().material
-    from knitlad.io.folders import FolderError, writable_folder
-
+    configs = [validated(_config.DiagramConfig, dict(ly=v, preset=preset, resolution=resolution, d_over_l0=d_over_l0,
+                                                       pattern=pattern))
+               for v in values]
     try:  # before any compute
         out_dir = writable_folder(out)
     except FolderError as e:
         fail(f"--out {e}")
     rows = []
-    for v in values:
+    for cfg in configs:
         try:
-            lx0 = zero_tension_lx(v, nodes_per_stitch=cfg.resolution, material=material,
-                                  sagitta_radius_d=cfg.sagitta_radius)
+            lx0 = _experiment("diagram", cfg).summary["lx_over_l0_at_fx0"]
         except ValueError as e:
             typer.echo(f"knitlad: {e}", err=True)
             lx0 = float("nan")
-        rows.append({"ly_over_l0": v, "lx_over_l0_at_fx0": lx0})
-        typer.echo(f"l_y/l0 = {v:.3f}: f_x = 0 at l_x/l0 = {lx0:.4f}")
+        rows.append({"ly_over_l0": cfg.ly, "lx_over_l0_at_fx0": lx0})
+        typer.echo(f"l_y/l0 = {cfg.ly:.3f}: f_x = 0 at l_x/l0 = {lx0:.4f}")
     df = pd.DataFrame(rows)
     with atomic_path(out_dir / "fx0_curve.csv") as tmp:
         df.to_csv(tmp, index=False)
     # the yarn's own d/l0 (1/70, the paper's rounded value, means its Nylon: 0.01437), as `stitch` prints it
+    material = configs[0].settings().material
     png = zero_tension_curve_plot(df, material.diameter / material.stitch_length, out_dir / "fx0_curve.png")
     typer.echo(f"wrote {out_dir / 'fx0_curve.csv'} and {png}")
 

@@ -23,6 +23,7 @@ half belongs to the neighbouring cell).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
@@ -194,6 +195,29 @@ def zero_tension_lx(ly_over_l0: float, lo: float = 0.22, hi: float = 0.40, tol: 
         if hi - lo < tol:
             break
     return lo - f_lo * (hi - lo) / (f_hi - f_lo)
+
+
+@dataclass(frozen=True)
+class ZeroTensionResult:
+    """One point of the configuration diagram's f_x = 0 curve: the width l_x/l0 at which the relaxed stitch
+    carries no tension at ``settings.ly_over_l0`` (``settings.lx_over_l0`` is that width)."""
+
+    settings: StitchSettings
+    wall_s: float
+
+    def summary(self) -> dict:
+        return {"ly_over_l0": self.settings.ly_over_l0, "lx_over_l0_at_fx0": self.settings.lx_over_l0,
+                "wall_s": self.wall_s}
+
+
+def zero_tension_width(settings: StitchSettings, lo: float = 0.22, hi: float = 0.40) -> ZeroTensionResult:
+    """:func:`zero_tension_lx` for the stitch of ``settings`` at its l_y (its l_x is not read): the diagram's
+    experiment (`knitlad diagram`)."""
+    t0 = time.perf_counter()
+    lx = zero_tension_lx(settings.ly_over_l0, lo, hi, nodes_per_stitch=settings.nodes_per_stitch,
+                         material=settings.material, sagitta_radius_d=settings.sagitta_radius_d,
+                         contact_law=settings.contact_law, pattern=settings.pattern)
+    return ZeroTensionResult(dataclasses.replace(settings, lx_over_l0=lx), time.perf_counter() - t0)
 
 
 def cell_energy(sim: Simulation, cell: PeriodicStitch) -> float:

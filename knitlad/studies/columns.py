@@ -17,7 +17,8 @@ from typing import Literal, get_args, get_origin
 # columns every row has, whatever its scene
 FRAME = {
     "job_id": ("-", "the job's id: a hash of its resolved config (the same inputs, the same id)"),
-    "scene": ("-", "what the job ran: ladder (knitlad cut), cycle (protocol B), loop, stitch"),
+    "scene": ("-", "the experiment the job ran: ladder (knitlad cut), cycle (protocol B), tensile, snag, resistance, "
+                   "loop, stitch or diagram"),
     "fx_nominal": ("1", "an ensemble's point: the target f_x^ini its members' fx are spread around (sweep.ensemble)"),
     "ensemble_member": ("index", "which knit of its point's ensemble (targets 0.5 % apart)"),
     "status": ("-", "pending (not run yet), ok, or failed"),
@@ -136,6 +137,11 @@ STITCH = {
     "relax_steps": ("1", "FIRE steps of the relaxation"),
 }
 
+DIAGRAM = {
+    "lx_over_l0_at_fx0": ("l0", "the width l_x/l0 at which the relaxed periodised stitch carries f_x = 0 at ly (the "
+                                "configuration diagram's curve)"),
+}
+
 TENSILE = {
     "fx_start": ("f0", "f_x per course at the start (the knit stretched at mu = 0)"),
     "fy_start": ("f0", "f_y per column at the start"),
@@ -193,7 +199,7 @@ RESISTANCE = {
 }
 
 RESULTS = {"ladder": LADDER, "cycle": CYCLE, "tensile": TENSILE, "snag": SNAG, "resistance": RESISTANCE, "loop": LOOP,
-           "stitch": STITCH}
+           "stitch": STITCH, "diagram": DIAGRAM}
 
 
 def unit_of(description: str) -> str:

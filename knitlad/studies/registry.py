@@ -23,6 +23,7 @@ from pydantic import BaseModel
 from knitlad.experiments.config import (
     CutConfig,
     CycleConfig,
+    DiagramConfig,
     LoopConfig,
     ResistanceConfig,
     SnagConfig,
@@ -277,6 +278,13 @@ def run_stitch_job(cfg: StitchConfig, output, folder: Path | None = None, progre
     return _attributes_only(StitchRun(cfg.settings()).run())
 
 
+def run_diagram_job(cfg: DiagramConfig, output, folder: Path | None = None, progress=None) -> Finished:
+    """One point of the configuration diagram (`knitlad diagram`): a file of attributes."""
+    from knitlad.fabric.stitch_model import zero_tension_width
+
+    return _attributes_only(zero_tension_width(cfg.settings()))
+
+
 SCENES: dict[str, SweepScene] = {
     "ladder": SweepScene(CutConfig, run_ladder_job, (
         "fx_ini", "fx_fin", "fx_fin_crossed", "fx_fin_intact", "n_lad", "n_lad_over_ny", "v_lad_over_cb", "natural_curvature", "lx_over_l0", "ly_over_l0",
@@ -318,4 +326,6 @@ SCENES: dict[str, SweepScene] = {
     "stitch": SweepScene(StitchConfig, run_stitch_job, (
         "fx", "fy", "converged", "max_overlap_over_d", "relax_steps", "wall_s", "job_wall_s"),
         "`knitlad stitch`: the periodised stitch"),
+    "diagram": SweepScene(DiagramConfig, run_diagram_job, ("lx_over_l0_at_fx0", "wall_s", "job_wall_s"),
+                          "`knitlad diagram`: the width at which the periodised stitch carries f_x = 0, at l_y"),
 }

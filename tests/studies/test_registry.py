@@ -37,5 +37,20 @@ def test_the_command_line_runs_each_experiment_through_its_entry():
               "write_resistance_result"}
     named = {name for name in direct if re.search(rf"\b{name}\b", source)}
     assert not named, f"cli.py runs or writes these itself: {sorted(named)}"
-    for name in ("ladder", "cycle", "tensile", "snag", "resistance", "loop", "stitch"):
+    for name in ("ladder", "cycle", "tensile", "snag", "resistance", "loop", "stitch", "diagram"):
         assert f'_experiment("{name}"' in source, name
+
+
+def test_a_point_of_the_diagram_is_the_stitchs_zero_tension_width():
+    """The diagram's entry (a sweep's job, `knitlad diagram`) gives what zero_tension_lx gives for its settings."""
+    from knitlad.experiments.config import DiagramConfig
+    from knitlad.fabric.stitch_model import zero_tension_lx
+    from knitlad.studies.sweep import Output
+
+    cfg = DiagramConfig(ly=0.25, preset="fast")
+    finished = SCENES["diagram"].run(cfg, Output())
+    s = cfg.settings()
+    direct = zero_tension_lx(0.25, nodes_per_stitch=s.nodes_per_stitch, material=s.material,
+                             sagitta_radius_d=s.sagitta_radius_d)
+    assert finished.summary["lx_over_l0_at_fx0"] == direct and 0.25 < direct < 0.40
+    assert finished.result.settings.lx_over_l0 == direct
