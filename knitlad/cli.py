@@ -236,10 +236,11 @@ def validated(model, options: dict, names: dict | None = None):
         fail(text.removeprefix("config: "))
 
 
-def _knit_run(model, options: dict, stitches: str, default_fx: float, out: str | None, name: str):
+def _knit_run(model, options: dict, stitches: str, default_fx: float | None, out: str | None, name: str):
     """A knit experiment's validated config and output folder, every check made before any compute (a run
     of hours must not end on a full memory or an unwritable folder): --stitches, the config (force control
-    to ``default_fx`` when neither --fx nor --lx is given), the memory, the folder (default runs/<name>-<time>)."""
+    to ``default_fx``, if given, when neither --fx nor --lx is), the memory, the folder (default
+    runs/<name>-<time>)."""
     from knitlad.io.folders import FolderError, writable_folder
     from knitlad.experiments.laddering import KnitTooLarge, require_memory
 
@@ -247,7 +248,7 @@ def _knit_run(model, options: dict, stitches: str, default_fx: float, out: str |
         n_x, n_y = _config.parse_stitches(stitches)
     except ValueError as e:
         fail(f"--stitches: {e}")
-    if options.get("fx") is None and options.get("lx") is None:
+    if default_fx is not None and options.get("fx") is None and options.get("lx") is None:
         options["fx"] = default_fx
     cfg = validated(model, {**options, "n_x": n_x, "n_y": n_y}, {"n_x": "--stitches", "n_y": "--stitches"})
     out_dir = Path(out) if out else Path("runs") / time.strftime(f"{name}-%Y%m%d-%H%M%S")
@@ -1269,6 +1270,69 @@ def movie(
         sys.unraisablehook = previous
     line.close()
     typer.echo(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB)")
+
+
+# the experiments whose commands above print their own lines (`ladder` is `knitlad cut`)
+OWN_COMMANDS = ("ladder", "cycle", "tensile", "snag", "resistance", "loop", "stitch", "diagram")
+
+
+def experiment_command(name: str):
+    """`knitlad <name>` for a registry entry without a command of its own: its config's fields as options
+    (a knit's size as --stitches), the run through the entry, ``<name>.h5`` and its companions in --out, the
+    summary as ``key = value`` lines or JSON. A new experiment needs no edit here."""
+    from knitlad.io.folders import FolderError, writable_folder
+    from knitlad.studies.registry import SCENES
+
+    entry = SCENES[name]
+    knit = "n_x" in entry.config.model_fields
+
+    def command(
+        stitches: str = typer.Option("16", "--stitches", help="Fabric size: N (N x N) or NXxNY.",
+                                     rich_help_panel=EXPERIMENT_PANEL, hidden=not knit),
+        out: str = typer.Option(None, "--out", help=f"Output folder; default runs/{name}-<time>.",
+                                rich_help_panel=OUTPUT_PANEL),
+        json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object.",
+                                      rich_help_panel=OUTPUT_PANEL),
+        options: dict = None,
+    ) -> None:
+        if knit:
+            cfg, out_dir = _knit_run(entry.config, options, stitches, None, out, name)
+        else:
+            cfg = validated(entry.config, options)
+            out_dir = Path(out) if out else Path("runs") / time.strftime(f"{name}-%Y%m%d-%H%M%S")
+            try:
+                writable_folder(out_dir)
+            except FolderError as e:
+                fail(f"--out {e}")
+        if (out_dir / f"{name}.h5").exists():
+            fail(f"--out {out_dir}: holds an earlier {name} run ({name}.h5); choose another folder")
+        _say_if_compiling()
+        progress = _StageProgress()
+        finished = _experiment_or_exit(lambda: _experiment(name, cfg, progress=progress), progress)
+        progress.close(finished=True)
+        paths = _files_or_exit(lambda: _write_experiment(finished, out_dir / f"{name}.h5"), finished.summary)
+        if json_out:
+            typer.echo(_json(finished.summary))
+            return
+        shown = [key for key in entry.summary_keys if key in finished.summary and key != "job_wall_s"]
+        width = max((len(key) for key in shown), default=0)
+        typer.echo("\n".join([entry.description.split(": ", 1)[-1]]
+                             + [f"  {key:{width}s} = {finished.summary[key]}" for key in shown]
+                             + [f"  wrote {', '.join(str(p) for p in paths)}"]))
+
+    command.__doc__ = entry.description.split(": ", 1)[-1]
+    return config_options(entry.config, exclude=("n_x", "n_y") if knit else ())(command)
+
+
+def _experiments_without_commands() -> None:
+    from knitlad.studies.registry import SCENES
+
+    for name in SCENES:
+        if name not in OWN_COMMANDS:
+            app.command(name)(experiment_command(name))
+
+
+_experiments_without_commands()
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -335,3 +335,40 @@ def test_the_stitch_of_a_pattern_is_one_repeat_and_says_which():
     assert p.returncode == 0 and p.stdout.startswith("periodised garter stitch"), p.stderr
     fx = float(p.stdout.split("f_x = ")[1].split(",")[0])
     assert fx > 0  # in tension at 0.36 (docs/patterns.md: garter's f_x = 0 width is below it)
+
+
+def test_an_experiment_without_a_command_of_its_own_gets_one_from_its_registry_entry(tmp_path, monkeypatch):
+    """A new experiment is a config, a runner and an entry: `knitlad <name>` then takes the config's fields as
+    options, runs the entry, writes <name>.h5 and prints the summary; a bad value is one line, exit 2."""
+    import h5py
+    import typer
+    from pydantic import BaseModel, ConfigDict, Field
+    from typer.testing import CliRunner
+
+    from knitlad import cli
+    from knitlad.io.hdf5 import write_record
+    from knitlad.studies import registry
+
+    class ToyConfig(BaseModel):
+        model_config = ConfigDict(extra="forbid", frozen=True)
+        length: float = Field(1.0, gt=0, description="a length [mm]")
+
+    def run_toy(cfg, output, folder=None, progress=None):
+        summary = {"twice": 2 * cfg.length}
+        return registry.Finished(None, summary, lambda path, record: write_record(path, {**summary, **record}))
+
+    monkeypatch.setitem(registry.SCENES, "toy", registry.SweepScene(
+        ToyConfig, run_toy, ("twice", "wall_s", "job_wall_s"), "`knitlad toy`: twice a length",
+        results={"twice": ("mm", "twice the length")}))
+    app = typer.Typer()
+    app.command("toy")(cli.experiment_command("toy"))
+    app.command("other")(lambda: None)  # two commands, so that the toy is called by its name
+    p = CliRunner().invoke(app, ["toy", "--length", "1.5", "--out", str(tmp_path)])
+    assert p.exit_code == 0, p.output
+    assert "twice = 3.0" in p.output
+    with h5py.File(tmp_path / "toy.h5") as f:
+        assert f.attrs["twice"] == 3.0
+    bad = CliRunner().invoke(app, ["toy", "--length", "-1", "--out", str(tmp_path / "bad")])
+    assert bad.exit_code == 2 and "--length" in bad.output and "Traceback" not in bad.output
+    again = CliRunner().invoke(app, ["toy", "--out", str(tmp_path)])
+    assert again.exit_code == 2 and "earlier toy run" in again.output

@@ -3,7 +3,7 @@
 import pandas as pd
 import pytest
 
-from knitlad.studies.columns import RESULTS, column_dictionary, unit_of
+from knitlad.studies.columns import column_dictionary, unit_of
 from knitlad.studies.registry import SCENES
 
 
@@ -22,8 +22,8 @@ def test_every_column_a_summary_can_have_is_in_the_dictionary_with_a_unit_and_a_
 
 
 def test_no_result_is_described_that_no_scene_keeps():
-    for scene, table in RESULTS.items():
-        assert set(table) <= set(SCENES[scene].summary_keys), scene
+    for scene, entry in SCENES.items():
+        assert set(entry.results) <= set(entry.summary_keys), scene
 
 
 def test_a_fields_unit_is_read_from_the_brackets_its_description_ends_with():
