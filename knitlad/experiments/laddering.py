@@ -37,7 +37,7 @@ import numpy as np
 from knitlad.engine import units
 from knitlad.engine.contact import ContactModel, Counting, contact_time_step
 from knitlad.engine.dissipation import STITCH_BENDING_HZ, AirDrag, EnergyLedger, MaterialDamping
-from knitlad.engine.runloop import StopRule, run_until
+from knitlad.engine.runloop import Observer, StopRule, run_until
 from knitlad.engine.simulation import Simulation
 from knitlad.engine.state import Rods, cut_edge, with_axial_stiffness, with_twist
 from knitlad.engine.timestep import DEFAULT_SAFETY, MAX_STEPS, critical_time_steps
@@ -52,7 +52,6 @@ from knitlad.fabric.observers import (
     FrameRecorder,
     FrontRan,
     FrontRecorder,
-    Observer,
     OverlapGuard,
     TOP_ROWS_HELD,
     TensionRecorder,
@@ -320,12 +319,24 @@ def frame_interval(run: Laddering) -> float:
     return max(min(expected, d.max_time_s) / AUTO_FRAMES, d.observe_every_s)
 
 
+class PropagateProgress:
+    """The progress of a ladder's run: its reach (it stops at an edge course) or the time limit, whichever is
+    further, as ``progress("propagate", fraction)``."""
+
+    def __init__(self, progress: Callable[[str, float], None], fronts) -> None:
+        self.progress, self.fronts = progress, fronts
+
+    def observe(self, t: float, run: Laddering, undone: np.ndarray) -> None:
+        self.progress("propagate", max(min(t / run.dynamics.max_time_s, 1.0), self.fronts.reach(run.knit.settings.n_y)))
+
+
 def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Callable[[str, float], None] | None = None,
               stop_rules: Sequence[StopRule] | None = None) -> LadderTrace:
     """Stage 3: run the free dynamics, calling the observers every ``observe_every_s``, until a stop rule fires.
 
     The standard recorders (fronts, tension, frames, overlap guard) always run; ``observers``
-    are called after them with (t, run, undone cells). ``stop_rules``: default the ladder
+    are called after them with (t, run, undone cells): the run loop's one signature
+    (:func:`knitlad.engine.runloop.run_until`). ``stop_rules``: default the ladder
     reaching an edge course, no cell changed for ``arrest_s``, ``max_time_s``.
     """
     t0 = time.perf_counter()
@@ -345,13 +356,13 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
         guard.check(run.sim, f"at t = {t * 1e3:.3f} ms after the cut")
         undone[...] |= run.laddered() & ~run.baseline  # an undone cell does not knit itself again
         times.append(t)
-        for obs in (fronts, tension, cell_times, frames, energy, *observers):
-            obs.observe(t, run, undone)
-        if progress:  # the ladder's reach (it stops at an edge course) or the time limit, whichever is further
-            progress("propagate", max(min(t / d.max_time_s, 1.0), fronts.reach(run.knit.settings.n_y)))
         return undone
 
-    t, rule, reason = run_until(run.sim, max(1, int(round(d.observe_every_s / run.sim.dt_s))), observe, rules)
+    shown = [fronts, tension, cell_times, frames, energy, *observers]
+    if progress:
+        shown.append(PropagateProgress(progress, fronts))
+    t, rule, reason = run_until(run.sim, max(1, int(round(d.observe_every_s / run.sim.dt_s))), observe, rules,
+                                shown, run)
     frames.observe(t, run, undone, last=True)  # the state at the stop
     taut = run.knit.gauge.taut(run.sim.state.x, run.knit.box_lx, run.knit.box_ly) & undone
     return LadderTrace(

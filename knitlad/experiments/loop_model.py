@@ -29,11 +29,11 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import NamedTuple, Sequence
 
 from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP, ContactModel
 from knitlad.fabric.observers import LetGo, TimeLimit
-from knitlad.engine.runloop import run_until
+from knitlad.engine.runloop import Observer, run_until
 from knitlad.fabric.scenes.knit import KnitGeometry
 from knitlad.fabric.scenes.loop import LoopScene, build_single_loop
 from knitlad.engine.simulation import Simulation, small_scene_threads
@@ -147,7 +147,9 @@ class LoopRun:
         s.x[nodes, 1] -= 10.0 * (s.x[:, 1].max() - s.x[:, 1].min())
         s.v[nodes] = 0.0
 
-    def release(self) -> None:
+    def release(self, observers: Sequence[Observer] = ()) -> None:
+        """Remove the row below and follow the loop until it lets go; ``observers`` see (t, this run, a
+        :class:`LoopReading`) at every reading."""
         t0 = time.perf_counter()
         sc, res = self.scene, self.result
         self.sim.set_friction(self.s.mu)
@@ -172,7 +174,7 @@ class LoopRun:
             return LoopReading(bool(piercings(s.x[loop], s.x[upper])[0] > 0))  # still threaded
 
         let_go = LetGo(self.s.confirm_s, "unthreaded")
-        _, rule, _ = run_until(self.sim, n_obs, observe, [let_go, TimeLimit(self.s.max_time_s)])
+        _, rule, _ = run_until(self.sim, n_obs, observe, [let_go, TimeLimit(self.s.max_time_s)], observers, self)
         if rule is let_go:
             res.released = True
             res.tau_s = let_go.since - 0.5 * self.s.topology_every_s
@@ -182,8 +184,8 @@ class LoopRun:
         res.steps = self.sim.steps
         res.wall_s["release"] = time.perf_counter() - t0
 
-    def run(self) -> LoopResult:
+    def run(self, observers: Sequence[Observer] = ()) -> LoopResult:
         with small_scene_threads():
             self.relax()
-            self.release()
+            self.release(observers)
         return self.result

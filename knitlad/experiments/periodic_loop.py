@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from typing import Sequence
 
 import numpy as np
 
@@ -37,7 +38,7 @@ from knitlad.engine import units
 from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP, ContactModel
 from knitlad.experiments.loop_model import LoopReading, LoopResult, check_tension_and_friction
 from knitlad.fabric.observers import LetGo, TimeLimit
-from knitlad.engine.runloop import run_until
+from knitlad.engine.runloop import Observer, run_until
 from knitlad.fabric.scenes.rows import PeriodicRows, build_periodic_rows
 from knitlad.engine.simulation import Simulation, small_scene_threads
 from knitlad.fabric.stitch_model import StitchRun, StitchSettings, cell_energy
@@ -251,7 +252,9 @@ class PeriodicLoopRun:
         start = rows.row_nodes(self.sim, LOOP).start + self.middle * n
         return in_loop, in_upper, slice(start, start + n)
 
-    def release(self) -> None:
+    def release(self, observers: Sequence[Observer] = ()) -> None:
+        """Remove the loop below and follow the loop until it lets go; ``observers`` see (t, this run, a
+        :class:`LoopReading`) at every reading."""
         t0 = time.perf_counter()
         s, sim, res = self.s, self.sim, self.result
         sim.set_friction(s.mu)
@@ -277,7 +280,7 @@ class PeriodicLoopRun:
             return LoopReading(touching)
 
         let_go = LetGo(s.confirm_s, "apart from the upper row")
-        _, rule, _ = run_until(sim, n_obs, observe, [let_go, TimeLimit(s.max_time_s)])
+        _, rule, _ = run_until(sim, n_obs, observe, [let_go, TimeLimit(s.max_time_s)], observers, self)
         if rule is let_go:
             res.released = True
             res.tau_s = res.tau_contact_s = seen["last_touch"] + 0.5 * n_obs * sim.dt_s
@@ -288,17 +291,17 @@ class PeriodicLoopRun:
         res.steps = sim.steps
         res.wall_s["release"] = time.perf_counter() - t0
 
-    def run(self) -> PeriodicLoopResult:
+    def run(self, observers: Sequence[Observer] = ()) -> PeriodicLoopResult:
         with small_scene_threads():
             self.build()
             self.relax()
-            self.release()
+            self.release(observers)
         return self.result
 
 
-def run_single_loop(settings):
+def run_single_loop(settings, observers: Sequence[Observer] = ()):
     """One single-loop run of either model: :class:`knitlad.experiments.loop_model.LoopSettings` (rows ending in tails)
-    or :class:`PeriodicLoopSettings`."""
+    or :class:`PeriodicLoopSettings`; ``observers`` see (t, the run, a :class:`LoopReading`) at every reading."""
     from knitlad.experiments.loop_model import LoopRun
 
-    return (PeriodicLoopRun if isinstance(settings, PeriodicLoopSettings) else LoopRun)(settings).run()
+    return (PeriodicLoopRun if isinstance(settings, PeriodicLoopSettings) else LoopRun)(settings).run(observers)

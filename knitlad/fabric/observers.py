@@ -1,15 +1,13 @@
 """Observers and stop rules of the laddering run loop (:func:`knitlad.experiments.laddering.propagate`).
 
-An observer is any object with ``observe(t, run, undone)``: called after every
-observation interval with the time since the cut [s], the running
-:class:`knitlad.experiments.laddering.Laddering` and the map of cells undone since the cut
-(n_y, n_x). A stop rule has ``check(t, undone) -> str | None``: a reason to stop, or
-None. Write your own and pass them to ``propagate``; these are the standard ones.
+An observer is any object with ``observe(t, run, reading)``, the run loop's one signature
+(:class:`knitlad.engine.runloop.Observer`): for the laddering, called after every observation interval
+with the time since the cut [s], the running :class:`knitlad.experiments.laddering.Laddering` and the map
+of cells undone since the cut (n_y, n_x). A stop rule has ``check(t, undone) -> str | None``: a reason to
+stop, or None. Write your own and pass them to ``propagate``; these are the standard ones.
 """
 
 from __future__ import annotations
-
-from typing import Protocol
 
 import numpy as np
 
@@ -17,10 +15,6 @@ from knitlad.fabric.measure import ladder_front
 from knitlad.engine.units import LENGTH, VELOCITY
 
 MAX_OVERLAP_OVER_D = 0.5  # deeper than this, a yarn may pass through another: the run stops with an error
-
-
-class Observer(Protocol):
-    def observe(self, t: float, run, undone: np.ndarray) -> None: ...
 
 
 class Interpenetration(RuntimeError):
@@ -267,7 +261,7 @@ class TimeLimit:
 
 class TrajectoryRecorder:
     """An observer of one's own scene: call it with the simulation (or pass it as ``Simulation.run``'s
-    ``observe``) and it keeps positions [m], velocities [m/s], each node's contact state (0 free,
+    ``observe``, or among an experiment's observers: ``propagate(..., observers=[...])``) and it keeps positions [m], velocities [m/s], each node's contact state (0 free,
     1 touching, 2 sliding), the touching pairs (``Simulation.contact_pairs``: points [m], normal and
     friction forces [N], sliding) and the time [s], as float32 frames, and with obstacles their shapes and
     where each is at every frame [m]; ``knitlad.write_trajectory`` writes them."""
@@ -301,3 +295,7 @@ class TrajectoryRecorder:
                                         "radius": o.radius * LENGTH}
             self.obstacle_points.append(sim.obstacle_positions_m())
         self.times.append(sim.time_s)
+
+    def observe(self, t: float, run, reading=None) -> None:
+        """As an observer of an experiment (the run loop's signature): records ``run.sim``."""
+        self(run.sim)
