@@ -103,10 +103,10 @@ def columns(scene: str = typer.Argument("ladder", help="the experiment: ladder, 
     """Print what each column of a sweep's summary.csv means, with its unit (a sweep writes the same table
     beside it as summary_columns.csv)."""
     from knitlad.studies.columns import column_dictionary
-    from knitlad.studies.registry import SCENES
+    from knitlad.studies.registry import EXPERIMENTS
 
-    if scene not in SCENES:
-        fail(f"scene: one of {', '.join(SCENES)}, got {scene!r}")
+    if scene not in EXPERIMENTS:
+        fail(f"scene: one of {', '.join(EXPERIMENTS)}, got {scene!r}")
     rows = column_dictionary(scene)
     width = max(len(name) for name, _, _ in rows)
     for name, unit, meaning in rows:
@@ -1115,12 +1115,12 @@ def _write_run_log(path, summary: dict):
 
 
 def _experiment(name: str, cfg, folder: Path | None = None, progress=None, **hooks):
-    """The experiment ``name`` run through its one entry (:data:`knitlad.studies.registry.SCENES`), as a sweep's
+    """The experiment ``name`` run through its one entry (:data:`knitlad.studies.registry.EXPERIMENTS`), as a sweep's
     job runs it: a :class:`knitlad.studies.registry.Finished`."""
-    from knitlad.studies.registry import SCENES
+    from knitlad.studies.registry import EXPERIMENTS
     from knitlad.studies.sweep import Output
 
-    return SCENES[name].run(cfg, Output(), folder, progress, **hooks)
+    return EXPERIMENTS[name].run(cfg, Output(), folder, progress, **hooks)
 
 
 def _write_experiment(finished, path: Path) -> tuple[Path, ...]:
@@ -1281,9 +1281,9 @@ def experiment_command(name: str):
     (a knit's size as --stitches), the run through the entry, ``<name>.h5`` and its companions in --out, the
     summary as ``key = value`` lines or JSON. A new experiment needs no edit here."""
     from knitlad.io.folders import FolderError, writable_folder
-    from knitlad.studies.registry import SCENES
+    from knitlad.studies.registry import EXPERIMENTS
 
-    entry = SCENES[name]
+    entry = EXPERIMENTS[name]
     knit = "n_x" in entry.config.model_fields
 
     def command(
@@ -1325,9 +1325,9 @@ def experiment_command(name: str):
 
 
 def _experiments_without_commands() -> None:
-    from knitlad.studies.registry import SCENES
+    from knitlad.studies.registry import EXPERIMENTS
 
-    for name in SCENES:
+    for name in EXPERIMENTS:
         if name not in OWN_COMMANDS:
             app.command(name)(experiment_command(name))
 

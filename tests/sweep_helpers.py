@@ -39,9 +39,9 @@ def fast_ladder_scene():
     def instant(cfg, output, folder=None, progress=None):
         return registry.Finished(None, {"fx_ini": 1.0}, lambda path, record: write_record(path, record))
 
-    saved = registry.SCENES["ladder"]
-    registry.SCENES["ladder"] = dataclasses.replace(saved, run=instant)
+    saved = registry.EXPERIMENTS["ladder"]
+    registry.EXPERIMENTS["ladder"] = dataclasses.replace(saved, run=instant)
     try:
         yield
     finally:
-        registry.SCENES["ladder"] = saved
+        registry.EXPERIMENTS["ladder"] = saved

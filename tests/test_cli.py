@@ -357,7 +357,7 @@ def test_an_experiment_without_a_command_of_its_own_gets_one_from_its_registry_e
         summary = {"twice": 2 * cfg.length}
         return registry.Finished(None, summary, lambda path, record: write_record(path, {**summary, **record}))
 
-    monkeypatch.setitem(registry.SCENES, "toy", registry.SweepScene(
+    monkeypatch.setitem(registry.EXPERIMENTS, "toy", registry.Experiment(
         ToyConfig, run_toy, ("twice", "wall_s", "job_wall_s"), "`knitlad toy`: twice a length",
         results={"twice": ("mm", "twice the length")}))
     app = typer.Typer()

@@ -104,7 +104,7 @@ def test_a_job_whose_file_cannot_be_written_fails_alone(tmp_path, monkeypatch):
 
         return registry.Finished(None, {"fx_ini": 1.0}, write)
 
-    monkeypatch.setitem(registry.SCENES, "ladder", dataclasses.replace(registry.SCENES["ladder"], run=no_space))
+    monkeypatch.setitem(registry.EXPERIMENTS, "ladder", dataclasses.replace(registry.EXPERIMENTS["ladder"], run=no_space))
     row = run_job(job, str(tmp_path / "jobs"))
     assert row["status"] == "failed" and "No space left on device" in row["error"]
     assert trusted_attrs(job_path(tmp_path / "jobs", job), job)[0]["status"] == "failed"

@@ -3,7 +3,7 @@
 A sweep writes it beside ``summary.csv`` as ``summary_columns.csv`` (columns ``column``, ``unit``,
 ``meaning``), and ``knitlad columns [SCENE]`` prints it. The inputs' entries come from the scene's config
 (each field's description ends with its unit in brackets: :mod:`knitlad.experiments.config`); the
-results' from its registry entry (``SweepScene.results``, :mod:`knitlad.studies.registry`), the columns every
+results' from its registry entry (``Experiment.results``, :mod:`knitlad.studies.registry`), the columns every
 row has from :data:`FRAME`, here. ``tests/studies/test_columns.py`` holds every column a summary can
 have to an entry. Units: ``1`` a pure number, ``f0`` a tension per thread f_x = F_x/(n_y f0), ``l0`` a length
 over the stitch length, ``c_b`` a velocity over the bending-wave speed, ``-`` text or a flag.
@@ -41,9 +41,9 @@ def unit_of(description: str) -> str:
 def column_dictionary(scene: str) -> list[tuple[str, str, str]]:
     """(column, unit, meaning) of every column the summary of ``scene``'s jobs can have, in the table's order:
     the frame's, the inputs (the scene config's fields), the results (the scene's summary keys)."""
-    from knitlad.studies.registry import SCENES
+    from knitlad.studies.registry import EXPERIMENTS
 
-    s = SCENES[scene]
+    s = EXPERIMENTS[scene]
     rows = [("job_id", *FRAME["job_id"]), ("scene", *FRAME["scene"])]
     for name, field in s.config.model_fields.items():
         kinds = (field.annotation, *get_args(field.annotation))

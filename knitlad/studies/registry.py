@@ -33,9 +33,9 @@ from knitlad.experiments.config import (
 
 
 @dataclass(frozen=True)
-class SweepScene:
-    """An experiment a sweep can run (``scene:`` in a sweep config) and the command line runs through the same
-    ``run``: not :class:`knitlad.engine.state.Scene`, the rod builder."""
+class Experiment:
+    """An experiment's one entry: a sweep runs it (its name is the sweep config's ``scene:``) and the command line
+    runs it through the same ``run``."""
 
     config: type[BaseModel]
     run: Callable  # (config, output options, knit folder, progress) -> Finished
@@ -458,8 +458,8 @@ RESISTANCE_RESULTS = {
 }
 
 
-SCENES: dict[str, SweepScene] = {
-    "ladder": SweepScene(CutConfig, run_ladder_job, (
+EXPERIMENTS: dict[str, Experiment] = {
+    "ladder": Experiment(CutConfig, run_ladder_job, (
         "fx_ini", "fx_fin", "fx_fin_crossed", "fx_fin_intact", "n_lad", "n_lad_over_ny", "v_lad_over_cb", "natural_curvature", "lx_over_l0", "ly_over_l0",
         "ladders_up", "ladders_down", "first_down_ms", "second_up_ms", "hindered", "n_lad_cut_row", "n_lad_immediate", "n_lad_released",
         "n_lad_released_over_ny", "n_lad_released_taut", "n_lad_released_taut_over_ny",
@@ -468,7 +468,7 @@ SCENES: dict[str, SweepScene] = {
         "dissipated_contact_dashpot_J", "dissipated_axial_dashpot_J", "dissipated_material_J", "dissipated_air_J",
         "dissipated_global_drag_J", "dissipated_fracture_J", "owner_changes_J", "ledger_residual", "nan_reasons", "nodes", "steps", "relax_steps", "stretch_reused", "wall_s",
         "wall_stretch_s", "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment", stretch_of, LADDER_RESULTS),
-    "cycle": SweepScene(CycleConfig, run_cycle_job, (
+    "cycle": Experiment(CycleConfig, run_cycle_job, (
         "fx_ini", "lx_over_l0", "ly_over_l0", "lx_max", "fx_thr", "delta_l_over_l0", "predicted_damage",
         "fx_thr_own", "delta_l_own_over_l0", "predicted_damage_own", "cut_n_lad_over_ny", "cut_fx_fin", "cut_fx_fin_crossed", "cut_reached_edge", "cut_ladders_up",
         "cut_ladders_down", "cut_second_up_ms", "cut_hindered", "cut_n_lad_cut_row", "cut_n_lad_immediate",
@@ -476,30 +476,30 @@ SCENES: dict[str, SweepScene] = {
         "cut_n_lad_released_taut_over_ny", "hold_converged", "nan_reasons", "cut_nan_reasons",
         "wall_s",
         "job_wall_s"), "`knitlad cycle`: protocol B, the damage prediction's loading", stretch_of, CYCLE_RESULTS),
-    "tensile": SweepScene(TensileConfig, run_tensile_job, (
+    "tensile": Experiment(TensileConfig, run_tensile_job, (
         "fx_start", "fy_start", "fx_top", "fy_top", "lx_top_over_l0", "ly_top_over_l0", "fx_end", "fy_end", "coupling",
         "dissipated_per_stitch", "hold_converged", "wall_s", "job_wall_s"),
         "`knitlad tensile`: the fabric's tensile test", stretch_of, TENSILE_RESULTS),
-    "snag": SweepScene(SnagConfig, run_snag_job, (
+    "snag": Experiment(SnagConfig, run_snag_job, (
         "snag_row", "snag_column", "broke", "peak_force_N", "pull_at_break_mm", "break_tension_N", "break_row",
         "break_column", "pin_work_J", "friction_before_break_J", "ladder_released_J", "fx_ini", "n_lad_over_ny",
         "v_lad_over_cb", "v_down_over_cb", "fx_fin", "reached_edge", "wall_s", "job_wall_s"),
         "`knitlad snag`: a pin pulls a loop out until the yarn breaks; the ladder follows", stretch_of, SNAG_RESULTS),
-    "resistance": SweepScene(ResistanceConfig, run_resistance_job, (
+    "resistance": Experiment(ResistanceConfig, run_resistance_job, (
         "design_pattern", "design_band", "design_d_over_l0", "design_mu", "snag_peak_force_N", "snag_broke",
         "snag_pull_at_break_mm", "snag_n_lad_over_ny", "snag_v_down_over_cb", "fx_thr_below", "fx_thr_above", "monotonic",
         "n_lad_over_ny_lowest", "n_lad_over_ny_highest", "v_lad_over_cb_highest", "fx_fin_crossed_highest",
         "wall_s", "job_wall_s"),
         "`knitlad resistance`: a snag, then the cut at a series of tensions: a knit design's ladder resistance",
         stretch_of, RESISTANCE_RESULTS),
-    "loop": SweepScene(LoopConfig, run_loop_job, (
+    "loop": Experiment(LoopConfig, run_loop_job, (
         "tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before", "steps",
         "nodes", "lx_over_l0", "lx_end_over_l0", "climb_over_ly", "wall_s", "job_wall_s"),
         "`knitlad loop`: the single-loop model", results=LOOP_RESULTS),
-    "stitch": SweepScene(StitchConfig, run_stitch_job, (
+    "stitch": Experiment(StitchConfig, run_stitch_job, (
         "fx", "fy", "converged", "max_overlap_over_d", "relax_steps", "wall_s", "job_wall_s"),
         "`knitlad stitch`: the periodised stitch", results=STITCH_RESULTS),
-    "diagram": SweepScene(DiagramConfig, run_diagram_job, ("lx_over_l0_at_fx0", "wall_s", "job_wall_s"),
+    "diagram": Experiment(DiagramConfig, run_diagram_job, ("lx_over_l0_at_fx0", "wall_s", "job_wall_s"),
                           "`knitlad diagram`: the width at which the periodised stitch carries f_x = 0, at l_y",
                           results=DIAGRAM_RESULTS),
 }

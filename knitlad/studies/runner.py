@@ -38,7 +38,7 @@ from knitlad.io.summary import write_summary
 from knitlad.io.progress import ProgressFile, ProgressLine, job_fraction
 from knitlad.studies.columns import write_column_dictionary
 from knitlad.io.provenance import code_identity
-from knitlad.studies.registry import SCENES
+from knitlad.studies.registry import EXPERIMENTS
 from knitlad.studies.sweep import Job, SweepError
 
 
@@ -80,7 +80,7 @@ def run_job(job: Job, jobs_dir: str, threads: int | None = 1, token: str | None 
     t0 = time.perf_counter()
     progress = ProgressFile(path.with_suffix(".progress"))  # read by the sweep's progress line
     try:
-        finished = SCENES[job.scene].run(job.scene_config(), job.output, Path(jobs_dir).parent, progress)
+        finished = EXPERIMENTS[job.scene].run(job.scene_config(), job.output, Path(jobs_dir).parent, progress)
         summary, write = finished.summary, finished.write  # a job keeps the run file alone, not its companions
         record = _record(job, "ok", "", time.perf_counter() - t0)
     except KeyboardInterrupt:
@@ -115,7 +115,7 @@ def summary_row(job: Job, attrs: dict | None) -> dict:
     row["status"] = attrs.get("status", "ok")
     row["error"] = attrs.get("error", "")
     row["knitlad_code"] = made_by(attrs)
-    for key in SCENES[job.scene].summary_keys:
+    for key in EXPERIMENTS[job.scene].summary_keys:
         value = attrs.get(key, float("nan"))
         row[key] = json.dumps(value) if isinstance(value, (list, dict)) else value
     return row
@@ -294,7 +294,7 @@ def _sharing_first(todo: list[Job]) -> list[Job]:
     by the time a job that can reuse the work starts, the work is usually done."""
     rank, seen = {}, {}
     for job in todo:
-        share = SCENES[job.scene].shared_work
+        share = EXPERIMENTS[job.scene].shared_work
         key = (job.scene, share(job.scene_config())) if share else (job.scene, job.id)
         rank[job.id] = seen.get(key, 0)
         seen[key] = rank[job.id] + 1

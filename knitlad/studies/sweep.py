@@ -53,7 +53,7 @@ from pydantic import (
 from knitlad.experiments.config import one_line
 from knitlad.io.atomic import read_config_text
 from knitlad.studies.ensemble import ENSEMBLE_SPREAD, target_offsets
-from knitlad.studies.registry import SCENES
+from knitlad.studies.registry import EXPERIMENTS
 
 MAX_JOBS = 10_000  # a sweep of more jobs is refused unless asked for (--max-jobs)
 COMPRESSIONS = ("gzip", "lzf", "none")
@@ -150,8 +150,8 @@ class SweepConfig(BaseModel):
     """A whole sweep file (see the module docstring)."""
 
     model_config = ConfigDict(extra="forbid")
-    scene: Literal[tuple(SCENES)] = Field(
-        "ladder", description="what each job runs: " + "; ".join(f"{k} = {s.description}" for k, s in SCENES.items()))
+    scene: Literal[tuple(EXPERIMENTS)] = Field(
+        "ladder", description="what each job runs: " + "; ".join(f"{k} = {s.description}" for k, s in EXPERIMENTS.items()))
     fixed: dict[str, Any] = Field(default_factory=dict, description="scene fields common to all jobs (scene units)")
     sweep: Sweep = Field(description="the swept axes and how they combine")
     output: Output = Field(default_factory=Output, description="what each job writes")
@@ -172,12 +172,12 @@ class Job(BaseModel):
         return job_id(self.scene, self.params, self.output)
 
     def scene_config(self) -> BaseModel:
-        return SCENES[self.scene].config.model_validate(self.params)
+        return EXPERIMENTS[self.scene].config.model_validate(self.params)
 
 
 def job_id(scene: str, params: dict, output: Output) -> str:
     """Hash of the resolved parameters, less those a scene added later left at their neutral value."""
-    model = SCENES[scene].config
+    model = EXPERIMENTS[scene].config
     later = getattr(model, "ADDED_LATER", ()) + getattr(model, "ADDED_LATER_FOR_ALL", ())
     neutral = {name: model.model_fields[name].default for name in later}
     params = {k: v for k, v in params.items() if not (k in neutral and v == neutral[k])}
@@ -288,7 +288,7 @@ def expand(cfg: SweepConfig, max_jobs: int = MAX_JOBS) -> list[Job]:
     """All jobs of a sweep, each validated by its scene's config (errors name the YAML key).
 
     The number of jobs is counted before any is built: more than ``max_jobs`` is refused."""
-    model = SCENES[cfg.scene].config
+    model = EXPERIMENTS[cfg.scene].config
     fields = set(model.model_fields)
     counts = cfg.sweep.counts()
     n_jobs = (math.prod(counts.values()) if cfg.sweep.expand == "grid" else max(counts.values())) * cfg.sweep.ensemble

@@ -4,25 +4,25 @@ import pandas as pd
 import pytest
 
 from knitlad.studies.columns import column_dictionary, unit_of
-from knitlad.studies.registry import SCENES
+from knitlad.studies.registry import EXPERIMENTS
 
 
-@pytest.mark.parametrize("scene", list(SCENES))
+@pytest.mark.parametrize("scene", list(EXPERIMENTS))
 def test_every_column_a_summary_can_have_is_in_the_dictionary_with_a_unit_and_a_meaning(scene):
     """The inputs (the config's fields), the frame's columns and every result the scene's summary keeps."""
     rows = column_dictionary(scene)
     names = [name for name, _, _ in rows]
     assert len(names) == len(set(names)), [n for n in names if names.count(n) > 1]
     expected = {"job_id", "scene", "status", "error", "knitlad_code", "fx_nominal", "ensemble_member",
-                *SCENES[scene].config.model_fields,
-                *SCENES[scene].summary_keys}
+                *EXPERIMENTS[scene].config.model_fields,
+                *EXPERIMENTS[scene].summary_keys}
     assert set(names) == expected
     for name, unit, meaning in rows:
         assert unit and len(meaning) > 10, name
 
 
 def test_no_result_is_described_that_no_scene_keeps():
-    for scene, entry in SCENES.items():
+    for scene, entry in EXPERIMENTS.items():
         assert set(entry.results) <= set(entry.summary_keys), scene
 
 

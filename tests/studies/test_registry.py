@@ -8,11 +8,11 @@ import re
 from pathlib import Path
 
 from knitlad.experiments.config import CutConfig
-from knitlad.studies.registry import SCENES, stretch_of
+from knitlad.studies.registry import EXPERIMENTS, stretch_of
 
 
 def test_every_scene_has_a_runner_taking_the_progress_and_distinct_summary_columns():
-    for name, scene in SCENES.items():
+    for name, scene in EXPERIMENTS.items():
         assert list(inspect.signature(scene.run).parameters)[:4] == ["cfg", "output", "folder", "progress"], name
         assert len(set(scene.summary_keys)) == len(scene.summary_keys), name
         assert "job_wall_s" in scene.summary_keys and scene.description, name
@@ -48,7 +48,7 @@ def test_a_point_of_the_diagram_is_the_stitchs_zero_tension_width():
     from knitlad.studies.sweep import Output
 
     cfg = DiagramConfig(ly=0.25, preset="fast")
-    finished = SCENES["diagram"].run(cfg, Output())
+    finished = EXPERIMENTS["diagram"].run(cfg, Output())
     s = cfg.settings()
     direct = zero_tension_lx(0.25, nodes_per_stitch=s.nodes_per_stitch, material=s.material,
                              sagitta_radius_d=s.sagitta_radius_d)
