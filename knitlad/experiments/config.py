@@ -543,13 +543,11 @@ class LoopConfig(_WithPreset):
                                     sinkers_held=self.geometry == "periodic-sinkers", **model_choices)
 
 
-class StitchConfig(_WithPreset):
-    """One periodised stitch (``knitlad stitch``): tensions at imposed (l_x, l_y)."""
+class _StitchCell(_WithPreset):
+    """The periodised stitch's cell but its width: its height, resolution, contact, yarn and pattern."""
 
     PRESETS: ClassVar[dict[str, dict]] = STITCH_PRESETS
-    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law", "pattern")
 
-    lx: float = Field(0.35, gt=0.2, lt=0.6, description="cell width l_x/l0 [-]")
     ly: float = Field(0.25, gt=0.15, lt=0.4, description="cell height l_y/l0 [-]")
     resolution: int | None = Field(None, ge=12, le=280, description="nodes per stitch [-]; default: the preset's")
     sagitta_radius: float | None = Field(None, ge=0, le=1000, description=(
@@ -563,46 +561,39 @@ class StitchConfig(_WithPreset):
         "tensions are per thread and per stitch [-]"))
 
     @model_validator(mode="after")
-    def sagitta_within_reach(self) -> "StitchConfig":
+    def sagitta_within_reach(self) -> "_StitchCell":
         check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
         return self
 
-    def settings(self, **model_choices):
-        """The run's settings; ``model_choices``: other fields of :class:`knitlad.fabric.stitch_model.StitchSettings`."""
+    def cell_settings(self, lx_over_l0: float, **model_choices):
+        """The stitch's settings at width ``lx_over_l0``; ``model_choices``: other fields of
+        :class:`knitlad.fabric.stitch_model.StitchSettings`."""
         from knitlad.fabric.stitch_model import StitchSettings
 
-        return StitchSettings(lx_over_l0=self.lx, ly_over_l0=self.ly, nodes_per_stitch=self.resolution,
+        return StitchSettings(lx_over_l0=lx_over_l0, ly_over_l0=self.ly, nodes_per_stitch=self.resolution,
                               material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
                               contact_law=self.contact_law, pattern=self.pattern, **model_choices)
 
 
-class DiagramConfig(_WithPreset):
+class StitchConfig(_StitchCell):
+    """One periodised stitch (``knitlad stitch``): tensions at imposed (l_x, l_y)."""
+
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law", "pattern")
+
+    lx: float = Field(0.35, gt=0.2, lt=0.6, description="cell width l_x/l0 [-]")
+
+    def settings(self, **model_choices):
+        """The run's settings; ``model_choices``: other fields of :class:`knitlad.fabric.stitch_model.StitchSettings`."""
+        return self.cell_settings(self.lx, **model_choices)
+
+
+class DiagramConfig(_StitchCell):
     """One point of the configuration diagram (``knitlad diagram``): the width l_x at which the periodised stitch
     carries f_x = 0 at l_y (the paper's f_x = 0 curve)."""
 
-    PRESETS: ClassVar[dict[str, dict]] = STITCH_PRESETS
-
-    ly: float = Field(0.25, gt=0.15, lt=0.4, description="cell height l_y/l0 [-]")
-    resolution: int | None = Field(None, ge=12, le=280, description="nodes per stitch [-]; default: the preset's")
-    sagitta_radius: float | None = Field(None, ge=0, le=1000, description=(
-        "the contact's sagitta correction (see knitlad cut --help) [d]; 0: none; default: the preset's"))
-    d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description=(
-        "yarn diameter over stitch length d/l0 [-]; 1/70 means the paper's Nylon (see knitlad stitch --help)"))
-    contact_law: ContactLawName = _contact_law()
-    pattern: PatternName = Field("jersey", description="the knit's pattern: the cell holds one repeat [-]")
-
-    @model_validator(mode="after")
-    def sagitta_within_reach(self) -> "DiagramConfig":
-        check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
-        return self
-
     def settings(self):
         """The stitch's settings at l_y (its l_x, the search's lower bracket, is the one the search replaces)."""
-        from knitlad.fabric.stitch_model import StitchSettings
-
-        return StitchSettings(lx_over_l0=0.22, ly_over_l0=self.ly, nodes_per_stitch=self.resolution,
-                              material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
-                              contact_law=self.contact_law, pattern=self.pattern)
+        return self.cell_settings(0.22)
 
 
 # the longest segment, over the correction's radius of curvature R, at which the sagitta correction
