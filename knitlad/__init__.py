@@ -15,7 +15,7 @@ from knitlad.engine.state import RodModel, Rods, RodState, Scene
 from knitlad.engine import units  # the internal unit system (knitlad.units.LENGTH, ...), as before the folders
 from knitlad.engine.units import NYLON, Material, Scales
 
-__version__ = "0.13.0"
+__version__ = "0.14.0"
 
 # the laddering experiment: name -> module that defines it (loaded on first use, PEP 562)
 _EXPERIMENT = {

@@ -210,7 +210,9 @@ def config_options(model, exclude: tuple[str, ...] = ()):
 
         @functools.wraps(func)
         def command(**kwargs):
-            options = {name: kwargs.pop(name) for name in list(kwargs) if name in model.model_fields}
+            # a field the command takes its own way (diagram's repeated --ly) is its parameter, not an option
+            options = {name: kwargs.pop(name) for name in list(kwargs) if name in model.model_fields
+                       and name not in exclude}
             return func(options={k: v for k, v in options.items() if v is not None}, **kwargs)
 
         params = own + derived
@@ -236,7 +238,10 @@ def validated(model, options: dict, names: dict | None = None):
         fail(text.removeprefix("config: "))
 
 
-def _knit_run(model, options: dict, stitches: str, default_fx: float | None, out: str | None, name: str):
+STITCHES_HELP = "Fabric size: N (N x N) or NXxNY; default: the experiment's config's n_x x n_y (cut 42, others 16)."
+
+
+def _knit_run(model, options: dict, stitches: str | None, default_fx: float | None, out: str | None, name: str):
     """A knit experiment's validated config and output folder, every check made before any compute (a run
     of hours must not end on a full memory or an unwritable folder): --stitches, the config (force control
     to ``default_fx``, if given, when neither --fx nor --lx is), the memory, the folder (default
@@ -244,6 +249,8 @@ def _knit_run(model, options: dict, stitches: str, default_fx: float | None, out
     from knitlad.io.folders import FolderError, writable_folder
     from knitlad.experiments.laddering import KnitTooLarge, require_memory
 
+    if stitches is None:  # the config's size
+        stitches = f"{model.model_fields['n_x'].default}x{model.model_fields['n_y'].default}"
     try:
         n_x, n_y = _config.parse_stitches(stitches)
     except ValueError as e:
@@ -263,7 +270,7 @@ def _knit_run(model, options: dict, stitches: str, default_fx: float | None, out
 @app.command()
 @config_options(_config.CutConfig, exclude=("n_x", "n_y"))
 def cut(
-    stitches: str = typer.Option("42", "--stitches", help="Fabric size: N (N x N) or NXxNY.", rich_help_panel=EXPERIMENT_PANEL),
+    stitches: str = typer.Option(None, "--stitches", help=STITCHES_HELP, rich_help_panel=EXPERIMENT_PANEL),
     out: str = typer.Option(None, "--out", help="Output folder (HDF5 + PNG); default runs/cut-<time>.", rich_help_panel=OUTPUT_PANEL),
     json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object.", rich_help_panel=OUTPUT_PANEL),
     overwrite: bool = typer.Option(False, "--overwrite", rich_help_panel=OUTPUT_PANEL, help="Replace the earlier run in --out (its files, renders "
@@ -359,7 +366,7 @@ def _report_cut(cfg, result, summary: dict, json_out: bool, h5: Path, png: Path,
 @app.command()
 @config_options(_config.CycleConfig, exclude=("n_x", "n_y"))
 def cycle(
-    stitches: str = typer.Option("16", "--stitches", help="Fabric size: N (N x N) or NXxNY.", rich_help_panel=EXPERIMENT_PANEL),
+    stitches: str = typer.Option(None, "--stitches", help=STITCHES_HELP, rich_help_panel=EXPERIMENT_PANEL),
     out: str = typer.Option(None, "--out", help="Output folder; default runs/cycle-<time>.", rich_help_panel=OUTPUT_PANEL),
     resume: bool = typer.Option(False, "--resume", rich_help_panel=OUTPUT_PANEL, help="Continue the run that was "
                                 "stopped in --out (Ctrl-C, a killed job) from its last finished leg, with the same "
@@ -465,7 +472,7 @@ def _cycle_restart(out_dir: Path, cfg, resume: bool) -> dict | None:
 @app.command()
 @config_options(_config.TensileConfig, exclude=("n_x", "n_y"))
 def tensile(
-    stitches: str = typer.Option("16", "--stitches", help="Fabric size: N (N x N) or NXxNY.", rich_help_panel=EXPERIMENT_PANEL),
+    stitches: str = typer.Option(None, "--stitches", help=STITCHES_HELP, rich_help_panel=EXPERIMENT_PANEL),
     out: str = typer.Option(None, "--out", help="Output folder; default runs/tensile-<time>.", rich_help_panel=OUTPUT_PANEL),
     json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object.", rich_help_panel=OUTPUT_PANEL),
     options: dict = None,
@@ -501,7 +508,7 @@ def tensile(
 @app.command()
 @config_options(_config.SnagConfig, exclude=("n_x", "n_y"))
 def snag(
-    stitches: str = typer.Option("16", "--stitches", help="Fabric size: N (N x N) or NXxNY.", rich_help_panel=EXPERIMENT_PANEL),
+    stitches: str = typer.Option(None, "--stitches", help=STITCHES_HELP, rich_help_panel=EXPERIMENT_PANEL),
     out: str = typer.Option(None, "--out", help="Output folder; default runs/snag-<time>.", rich_help_panel=OUTPUT_PANEL),
     json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object.", rich_help_panel=OUTPUT_PANEL),
     options: dict = None,
@@ -550,7 +557,7 @@ def snag(
 @app.command()
 @config_options(_config.ResistanceConfig, exclude=("n_x", "n_y"))
 def resistance(
-    stitches: str = typer.Option("16", "--stitches", help="Fabric size: N (N x N) or NXxNY.", rich_help_panel=EXPERIMENT_PANEL),
+    stitches: str = typer.Option(None, "--stitches", help=STITCHES_HELP, rich_help_panel=EXPERIMENT_PANEL),
     out: str = typer.Option(None, "--out", help="Output folder; default runs/resistance-<time>.", rich_help_panel=OUTPUT_PANEL),
     json_out: bool = typer.Option(False, "--json", help="Print the summary as one JSON object.", rich_help_panel=OUTPUT_PANEL),
     options: dict = None,
@@ -661,17 +668,14 @@ def stitch(
 
 
 @app.command()
+@config_options(_config.DiagramConfig, exclude=("ly",))
 def diagram(
+    options: dict,
     ly: list[float] = typer.Option(None, "--ly", help="l_y/l0 values (repeat the option); default 0.20 to 0.30."),
-    d_over_l0: float = typer.Option(1 / 70, "--d-over-l0", help="Yarn diameter over stitch length."),
-    preset: str = typer.Option("default", "--preset", help="Accuracy preset (fast, default, accurate): the "
-                               "resolution and the contact's sagitta correction, as for knitlad stitch."),
-    resolution: int = typer.Option(None, "--resolution", help="Nodes per stitch; default: the preset's."),
-    pattern: str = typer.Option("jersey", "--pattern", help="The knit's pattern (jersey, rib, garter); rib's curve "
-                                "lies below the search's 0.22 l0 (docs/patterns.md)."),
     out: str = typer.Option("runs/diagram", "--out", help="Folder for fx0_curve.csv and fx0_curve.png."),
 ) -> None:
-    """The f_x = 0 curve of the periodised stitch in the (l_x/l0, l_y/l0) plane (paper, configuration diagram)."""
+    """The f_x = 0 curve of the periodised stitch in the (l_x/l0, l_y/l0) plane (paper, configuration diagram);
+    rib's lies below the search's 0.22 l0 (docs/patterns.md)."""
     import pandas as pd
 
     from knitlad.io.atomic import atomic_path
@@ -679,9 +683,7 @@ def diagram(
     from knitlad.viz.plots import zero_tension_curve_plot
 
     values = ly or [0.20, 0.22, 0.24, 0.26, 0.28, 0.30]
-    configs = [validated(_config.DiagramConfig, dict(ly=v, preset=preset, resolution=resolution, d_over_l0=d_over_l0,
-                                                       pattern=pattern))
-               for v in values]
+    configs = [validated(_config.DiagramConfig, {**options, "ly": v}) for v in values]
     try:  # before any compute
         out_dir = writable_folder(out)
     except FolderError as e:
@@ -1287,7 +1289,7 @@ def experiment_command(name: str):
     knit = "n_x" in entry.config.model_fields
 
     def command(
-        stitches: str = typer.Option("16", "--stitches", help="Fabric size: N (N x N) or NXxNY.",
+        stitches: str = typer.Option(None, "--stitches", help=STITCHES_HELP,
                                      rich_help_panel=EXPERIMENT_PANEL, hidden=not knit),
         out: str = typer.Option(None, "--out", help=f"Output folder; default runs/{name}-<time>.",
                                 rich_help_panel=OUTPUT_PANEL),

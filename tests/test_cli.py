@@ -180,7 +180,7 @@ def test_presets_set_their_settings_and_an_explicit_one_wins():
     assert CutConfig(fx=4, preset="default", sagitta_radius=0).sagitta_radius == 0
     assert CutConfig(fx=4, implicit_axial=False).implicit_axial is False
     settings = CutConfig(fx=4, preset="accurate").stretch_settings()
-    assert (settings.nodes_per_stitch, settings.sagitta_radius_d) == (96, 11)
+    assert (settings.resolution, settings.sagitta_radius) == (96, 11)
 
 
 def test_the_drag_of_cut_reaches_the_laddering_settings_and_defaults_to_none():
@@ -372,3 +372,31 @@ def test_an_experiment_without_a_command_of_its_own_gets_one_from_its_registry_e
     assert bad.exit_code == 2 and "--length" in bad.output and "Traceback" not in bad.output
     again = CliRunner().invoke(app, ["toy", "--out", str(tmp_path)])
     assert again.exit_code == 2 and "earlier toy run" in again.output
+
+
+@pytest.mark.parametrize("model, size", [("CutConfig", 42), ("CycleConfig", 16), ("SnagConfig", 16)])
+def test_without_stitches_a_command_runs_its_configs_size(tmp_path, model, size):
+    """The fabric's size has one default, the config's: --stitches left out gives the size Python and sweeps give."""
+    from knitlad import cli
+    from knitlad.experiments import config
+
+    cfg, _ = cli._knit_run(getattr(config, model), {"lx_max": 0.5} if model == "CycleConfig" else {}, None, 4.0,
+                           str(tmp_path / "out"), "x")
+    assert (cfg.n_x, cfg.n_y) == (size, size) == (getattr(config, model).model_fields["n_x"].default,) * 2
+
+
+def test_the_diagram_takes_its_cells_options_from_the_config_and_its_widths_per_ly(tmp_path):
+    """`knitlad diagram`: the cell's options are DiagramConfig's (a bad one is one line, exit 2), --ly repeats,
+    and each l_y gives its f_x = 0 width, narrower for taller cells (the paper's curve falls: 0.33 at 0.25)."""
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from knitlad.cli import app
+
+    bad = CliRunner().invoke(app, ["diagram", "--ly", "0.25", "--preset", "bogus", "--out", str(tmp_path)])
+    assert bad.exit_code == 2 and "--preset" in bad.output
+    ok = CliRunner().invoke(app, ["diagram", "--ly", "0.25", "--ly", "0.27", "--preset", "fast", "--out", str(tmp_path)])
+    assert ok.exit_code == 0, ok.output
+    curve = pd.read_csv(tmp_path / "fx0_curve.csv")
+    assert list(curve.ly_over_l0) == [0.25, 0.27]
+    assert 0.30 < curve.lx_over_l0_at_fx0[1] < curve.lx_over_l0_at_fx0[0] < 0.36

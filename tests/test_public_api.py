@@ -183,3 +183,18 @@ def test_the_api_guide_s_examples_run(capsys):
             warnings.simplefilter("error", knitlad.MovingSupportWarning)
             exec(compile(block, f"docs/api.md, example {k + 1}", "exec"), {})
     assert "14.8 mN" in capsys.readouterr().out
+
+
+def test_the_settings_renamed_as_their_config_names_them_keep_their_old_names_with_a_warning():
+    """0.14.0 gave each setting of the stretch, the stitch, the loops, protocol B, the tensile test and the snag
+    its config's name (``lx``, not ``lx_over_l0``; ``resolution``, not ``nodes_per_stitch``): a stretched knit's
+    ``settings.fx_target`` and ``StitchConfig.cell_settings(lx_over_l0=)`` still work, and say so."""
+    import knitlad as kl
+
+    settings = kl.CutConfig(fx=4.0, n_x=6, n_y=6).stretch_settings()
+    with pytest.warns(DeprecationWarning, match=r"use \.fx"):
+        assert settings.fx_target == settings.fx == 4.0
+    with pytest.warns(DeprecationWarning, match=r"use \.resolution"):
+        assert settings.nodes_per_stitch == settings.resolution
+    with pytest.warns(DeprecationWarning, match="use lx="):
+        assert kl.StitchConfig().cell_settings(lx_over_l0=0.3).lx == 0.3

@@ -198,11 +198,11 @@ class ContactModel:
     @staticmethod
     def of_settings(settings, **kwargs) -> "ContactModel":
         """The contact of an experiment's settings (:meth:`for_knit`): any object naming ``material``,
-        ``contact_force_f0``, ``overlap_fraction`` and, if it has them, ``sagitta_radius_d`` and ``contact_law``
+        ``contact_force_f0``, ``overlap_fraction`` and, if it has them, ``sagitta_radius`` (in d) and ``contact_law``
         (the laddering's, the stitch's and the single loops' settings); ``kwargs`` as :meth:`for_knit`'s (``mu``,
         dashpots)."""
         return ContactModel.for_knit(settings.material, settings.contact_force_f0, settings.overlap_fraction,
-                                     getattr(settings, "sagitta_radius_d", 0.0),
+                                     getattr(settings, "sagitta_radius", 0.0),
                                      **{"law": getattr(settings, "contact_law", "linear"), **kwargs})
 
     @staticmethod

@@ -33,3 +33,14 @@ def renamed_field(old: str, new: str, since: str):
         return cls
 
     return decorate
+
+
+def renamed_fields(renames: dict[str, str], since: str):
+    """Class decorator: :func:`renamed_field` for each ``old: new`` of ``renames``."""
+
+    def decorate(cls):
+        for old, new in renames.items():
+            cls = renamed_field(old, new, since)(cls)
+        return cls
+
+    return decorate

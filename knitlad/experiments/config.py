@@ -5,6 +5,7 @@ Dimensionless inputs follow the paper: lengths as l/l0, tension as f_x = F_x/(n_
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from typing import Annotated, ClassVar, Literal, get_args, get_origin
@@ -12,12 +13,25 @@ from typing import Annotated, ClassVar, Literal, get_args, get_origin
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP
+from knitlad.engine.dissipation import STITCH_BENDING_HZ
 from knitlad.engine.kernels.contact_law import LAWS, law_mode
 from knitlad.fabric.observers import AUTO_FRAMES
 from knitlad.fabric.patterns import PATTERNS
 from knitlad.fabric.presets import LADDER_PRESETS, LOOP_PRESETS, PRESET_HELP, STITCH_PRESETS
 
 Preset = Literal["fast", "default", "accurate"]
+
+# a field given in a unit of its own and the SI unit its settings take it in: one stem, the unit's suffix
+# (max_time_ms -> max_time_s, pin_radius_mm -> pin_radius_m); every other setting has one name throughout
+SI_SUFFIXES = {"_us": ("_s", 1e-6), "_ms": ("_s", 1e-3), "_mm": ("_m", 1e-3)}
+
+
+def in_si(name: str, value):
+    """(the settings' name, the value) of the config field ``name``: its SI twin if it is in us, ms or mm."""
+    for suffix, (si, factor) in SI_SUFFIXES.items():
+        if name.endswith(suffix):
+            return name[: -len(suffix)] + si, None if value is None else value * factor
+    return name, value
 
 
 class _WithPreset(BaseModel):
@@ -26,6 +40,9 @@ class _WithPreset(BaseModel):
     # no NaN or infinity in any number: a bad value is named as such, not as out of range
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
     PRESETS: ClassVar[dict[str, dict]] = LADDER_PRESETS
+    # the fields that reach the settings made into another value (field -> what it becomes); every other field
+    # reaches them under its own name (tests/experiments/test_config.py)
+    COMPOSED: ClassVar[dict[str, str]] = {"preset": "the resolution and the settings beside it (PRESETS)"}
 
     preset: Preset = Field("default", description=PRESET_HELP)
 
@@ -38,6 +55,15 @@ class _WithPreset(BaseModel):
             old = self.PRESETS.get(self.preset, {})
             data = {k: v for k, v in data.items() if not (k in old and v == old[k] and k not in changes)}
         return type(self).model_validate({**data, **changes})
+
+    def settings_of(self, settings_type, **composed):
+        """``settings_type`` (a frozen settings dataclass) filled from this config: each of its fields the config
+        declares under the same name (or in us, ms or mm: :func:`in_si`), then ``composed``, the values made of
+        several fields or of none (the material of d_over_l0, a band). A setting is declared here once, with
+        its default and unit; the settings carry it under the same name to the kernels."""
+        wanted = {f.name for f in dataclasses.fields(settings_type)}
+        values = dict(in_si(name, getattr(self, name)) for name in type(self).model_fields)
+        return settings_type(**{**{name: v for name, v in values.items() if name in wanted}, **composed})
 
     @classmethod
     def preset_fields(cls) -> tuple[str, ...]:
@@ -93,6 +119,14 @@ def _contact_law():
         "(knitlad.engine.kernels.contact_law) [-]"))
 
 
+def _stitches_per_course(default: int):
+    return Field(default, ge=4, le=200, description="stitches per course [-]")
+
+
+def _courses(default: int):
+    return Field(default, ge=4, le=200, description="courses [-]")
+
+
 class CutConfig(_WithPreset):
     """One laddering run (``knitlad cut``, sweep scene ``ladder``): the one declaration of each of its settings.
 
@@ -113,13 +147,19 @@ class CutConfig(_WithPreset):
     # fields added here after the experiments built on this config (cycle, tensile, snag, resistance) had run
     # sweeps: at their default they stay out of those scenes' job ids too (their ADDED_LATER lists their own)
     ADDED_LATER_FOR_ALL: ClassVar[tuple[str, ...]] = ("band_curvature", "friction_every", "bars", "clip_friction")
+    COMPOSED: ClassVar[dict[str, str]] = {
+        "preset": "the resolution and the settings beside it (PRESETS)",
+        "d_over_l0": "material (material_for)",
+        **{band: "pattern_band, memory_band or friction_band" for band in (
+            "band", "band_row", "band_courses", "band_friction_factor", "band_curvature")},
+    }
 
     fx: float | None = Field(None, gt=0, le=40, description="target tension per thread f_x^ini = F_x/(n_y f0) [-] (force control)")
     lx: float | None = Field(None, gt=0.2, lt=1.0, description="stretch l_x/l0 [-] (position control, instead of fx)")
     ly: float = Field(0.25, gt=0.2, lt=0.5, description="stretch l_y/l0 [-]")
     mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient during laddering [-]")
-    n_x: int = Field(42, ge=4, le=200, description="stitches per course [-]")
-    n_y: int = Field(42, ge=4, le=200, description="courses [-]")
+    n_x: int = _stitches_per_course(42)
+    n_y: int = _courses(42)
     pattern: PatternName = Field("jersey", description=(
         "the knit's pattern: jersey (the paper's), rib (1x1: knit and purl columns) or garter (knit and purl "
         "courses); rib and garter are stretched affinely from a narrower build (docs/patterns.md) [-]"))
@@ -136,7 +176,7 @@ class CutConfig(_WithPreset):
     loss_factor: float = Field(0.0, ge=0, le=1, description=(
         "the yarn's material damping: peak loss factor of its viscoelasticity, a standard linear solid in "
         "stretching and bending [-]; Nylon: 0.03 (0.01 dry to 0.1 humid); 0: none (docs/dissipation.md)"))
-    loss_peak_hz: float = Field(3.1e3, gt=0, le=1e7, description=(
+    loss_peak_hz: float = Field(STITCH_BENDING_HZ, gt=0, le=1e7, description=(
         "frequency of the material damping's loss peak [Hz]; default: a stitch's bending wave, c_b kappa0 / 2 pi"))
     air_drag: bool = Field(False, json_schema_extra={"cli": "--air"}, description=(
         "still air around the yarns during the laddering: a cylinder's cross-flow drag at its Reynolds number "
@@ -293,17 +333,10 @@ class CutConfig(_WithPreset):
     def stretch_settings(self):
         from knitlad.fabric.preparation import StretchSettings
 
-        return StretchSettings(
-            n_x=self.n_x, n_y=self.n_y, lx_over_l0=self.lx, fx_target=self.fx, ly_over_l0=self.ly,
-            nodes_per_stitch=self.resolution, contact_force_f0=self.contact_force_f0,
-            overlap_fraction=self.overlap_fraction, edge=self.edge, stretch_increment=self.stretch_increment,
-            steps_per_increment=self.steps_per_increment, fx_tolerance=self.fx_tolerance, start=self.stretch_start,
-            natural_curvature=self.natural_curvature, memory_peak_ratio=self.memory_peak_ratio,
-            material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
-            contact_law=self.contact_law, pattern=self.pattern, bars=self.bars,
+        return self.settings_of(
+            StretchSettings, material=material_for(self.d_over_l0),
             pattern_band=(self.band, self.band_row, self.band_courses) if self.knitted_band else None,
-            memory_band=self.memory_band,
-        )
+            memory_band=self.memory_band)
 
     @property
     def knitted_band(self) -> bool:
@@ -321,21 +354,10 @@ class CutConfig(_WithPreset):
         from knitlad.engine.contact import Counting
         from knitlad.experiments.laddering import DynamicsSettings
 
-        return DynamicsSettings(
-            mu=self.mu, contact_counting=Counting(self.contact_counting),
-            contact_damping_ratio=self.contact_damping_ratio, stretch_damping_ratio=self.stretch_damping_ratio,
-            dt_safety=self.dt_safety, drag_per_s=self.drag_per_s, twist=self.twist,
-            axial_stiffness_factor=self.axial_stiffness_factor, twist_inertia_factor=self.twist_inertia_factor,
-            framed_twist=self.framed_twist, implicit_axial=self.implicit_axial,
-            predicted_dashpots=self.predicted_dashpots, friction_every=self.friction_every,
-            observe_every_s=self.observe_every_us * 1e-6, arrest_s=self.arrest_ms * 1e-3,
-            max_time_s=self.max_time_ms * 1e-3,
-            frame_every_s=None if self.frame_every_us is None else self.frame_every_us * 1e-6,
-            stop_at_edge=self.stop_at_edge, loss_factor=self.loss_factor, loss_peak_hz=self.loss_peak_hz,
-            air_drag=self.air_drag, stop_after_stitches=self.stop_after_stitches, clip_friction=self.clip_friction,
+        return self.settings_of(
+            DynamicsSettings, contact_counting=Counting(self.contact_counting),
             friction_band=(self.band_row, self.band_courses, self.band_friction_factor)
-            if self.band_row is not None and self.band == "friction" else None,
-        )
+            if self.band_row is not None and self.band == "friction" else None)
 
     def settings(self):
         from knitlad.experiments.laddering import LadderSettings
@@ -375,6 +397,8 @@ class CycleConfig(CutConfig):
     The laddering's settings are those of ``knitlad cut``."""
 
     ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law",)
+    n_x: int = _stitches_per_course(16)  # a loading (a pull) costs many cuts' steps: 16 x 16 unless asked
+    n_y: int = _courses(16)
     fx: float | None = Field(None, gt=0, le=40, description=(
         "tension per thread f_x at Delta x_min, where the knit is stretched at mu = 0 [-] (force control; the "
         "experiments' 0.68)"))
@@ -403,10 +427,7 @@ class CycleConfig(CutConfig):
     def cycle_settings(self):
         from knitlad.experiments.cycling import CycleSettings
 
-        return CycleSettings(
-            lx_max=self.lx_max, cycles=self.cycles, bar_speed_m_s=self.bar_speed,
-            damping_per_s=self.cycle_damping_per_s, readings_per_leg=self.readings_per_leg, hold_s=self.hold_ms * 1e-3,
-            hold_tol_f0=self.hold_tol_f0, fx_thr=self.fx_thr)
+        return self.settings_of(CycleSettings)
 
 
 class TensileConfig(CutConfig):
@@ -415,6 +436,8 @@ class TensileConfig(CutConfig):
     (``lx_max``, ``ly_max``), held, and brought back; f_x and f_y read after every ramp."""
 
     ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law",)
+    n_x: int = _stitches_per_course(16)  # a loading (a pull) costs many cuts' steps: 16 x 16 unless asked
+    n_y: int = _courses(16)
     mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient while pulled [-]")
     lx_max: float | None = Field(None, gt=0.2, lt=1.0, description="the box's l_x/l0 at the top [-] (none: l_x stays)")
     ly_max: float | None = Field(None, gt=0.2, lt=0.5, description="the box's l_y/l0 at the top [-] (none: l_y stays)")
@@ -438,10 +461,7 @@ class TensileConfig(CutConfig):
     def tensile_settings(self):
         from knitlad.experiments.tensile import TensileSettings
 
-        return TensileSettings(
-            lx_max=self.lx_max, ly_max=self.ly_max, unload=self.unload, bar_speed_m_s=self.bar_speed,
-            damping_per_s=self.cycle_damping_per_s, readings_per_leg=self.readings_per_leg,
-            hold_s=self.hold_ms * 1e-3, hold_tol_f0=self.hold_tol_f0)
+        return self.settings_of(TensileSettings)
 
 
 class SnagConfig(CutConfig):
@@ -450,6 +470,8 @@ class SnagConfig(CutConfig):
     breaks; the ladder follows from the break as from the paper's cut."""
 
     ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law",)
+    n_x: int = _stitches_per_course(16)  # a loading (a pull) costs many cuts' steps: 16 x 16 unless asked
+    n_y: int = _courses(16)
     snag_speed: float = Field(1.0, gt=0, le=30, description="the pin's pull speed, out of the fabric's plane [m/s]")
     pin_radius_mm: float = Field(0.2, gt=0, le=2, description="the pin's radius [mm]")
     max_pull_mm: float = Field(10.0, gt=0, le=100, description="the pin lets go after this travel without a break [mm]")
@@ -471,9 +493,7 @@ class SnagConfig(CutConfig):
     def snag_settings(self):
         from knitlad.experiments.snag import SnagSettings
 
-        return SnagSettings(speed_m_s=self.snag_speed, pin_radius_m=self.pin_radius_mm * 1e-3,
-                            max_pull_m=self.max_pull_mm * 1e-3, breaking_force_N=self.breaking_force,
-                            weak_point_N=self.weak_point_force, row=self.snag_row, column=self.snag_column)
+        return self.settings_of(SnagSettings)
 
 
 class ResistanceConfig(SnagConfig):
@@ -500,6 +520,8 @@ class LoopConfig(_WithPreset):
     """One single-loop run (``knitlad loop``, paper Fig. 5b,c)."""
 
     PRESETS: ClassVar[dict[str, dict]] = LOOP_PRESETS
+    COMPOSED: ClassVar[dict[str, str]] = {**_WithPreset.COMPOSED, "geometry": "the settings' type, columns and sinkers_held",
+                                          "columns": "columns (the strip's only)"}
 
     fx: float = Field(8.0, gt=0, le=40, description="tension per thread pulling the loop's ends, f_x = F/f0 [-]")
     mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient after the release [-]")
@@ -533,20 +555,19 @@ class LoopConfig(_WithPreset):
         if self.geometry == "tails":
             from knitlad.experiments.loop_model import LoopSettings
 
-            return LoopSettings(fx=self.fx, mu=self.mu, lx_over_l0=self.lx, ly_over_l0=self.ly,
-                                nodes_per_stitch=self.resolution, max_time_s=self.max_time_ms * 1e-3, **model_choices)
+            return self.settings_of(LoopSettings, **model_choices)
         from knitlad.experiments.periodic_loop import PeriodicLoopSettings
 
-        return PeriodicLoopSettings(fx=self.fx, mu=self.mu, ly_over_l0=self.ly, nodes_per_stitch=self.resolution,
-                                    max_time_s=self.max_time_ms * 1e-3,
-                                    columns=self.columns if self.geometry == "strip" else 1,
-                                    sinkers_held=self.geometry == "periodic-sinkers", **model_choices)
+        return self.settings_of(PeriodicLoopSettings, **{
+            "columns": self.columns if self.geometry == "strip" else 1,
+            "sinkers_held": self.geometry == "periodic-sinkers", **model_choices})
 
 
 class _StitchCell(_WithPreset):
     """The periodised stitch's cell but its width: its height, resolution, contact, yarn and pattern."""
 
     PRESETS: ClassVar[dict[str, dict]] = STITCH_PRESETS
+    COMPOSED: ClassVar[dict[str, str]] = {**_WithPreset.COMPOSED, "d_over_l0": "material (material_for)"}
 
     ly: float = Field(0.25, gt=0.15, lt=0.4, description="cell height l_y/l0 [-]")
     resolution: int | None = Field(None, ge=12, le=280, description="nodes per stitch [-]; default: the preset's")
@@ -565,14 +586,19 @@ class _StitchCell(_WithPreset):
         check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
         return self
 
-    def cell_settings(self, lx_over_l0: float, **model_choices):
-        """The stitch's settings at width ``lx_over_l0``; ``model_choices``: other fields of
-        :class:`knitlad.fabric.stitch_model.StitchSettings`."""
+    def cell_settings(self, lx: float | None = None, **model_choices):
+        """The stitch's settings at width ``lx`` (l_x/l0); ``model_choices``: other fields of
+        :class:`knitlad.fabric.stitch_model.StitchSettings` (``lx_over_l0=``, its name up to 0.13, still
+        works, with a DeprecationWarning)."""
+        import warnings
+
         from knitlad.fabric.stitch_model import StitchSettings
 
-        return StitchSettings(lx_over_l0=lx_over_l0, ly_over_l0=self.ly, nodes_per_stitch=self.resolution,
-                              material=material_for(self.d_over_l0), sagitta_radius_d=self.sagitta_radius,
-                              contact_law=self.contact_law, pattern=self.pattern, **model_choices)
+        if "lx_over_l0" in model_choices:
+            warnings.warn("cell_settings(lx_over_l0=...) is deprecated since 0.14.0: use lx=", DeprecationWarning,
+                          stacklevel=2)
+            lx = model_choices.pop("lx_over_l0")
+        return self.settings_of(StitchSettings, lx=lx, material=material_for(self.d_over_l0), **model_choices)
 
 
 class StitchConfig(_StitchCell):

@@ -11,7 +11,7 @@ crosses the threshold f_x^thr lies the shortening delta l of Eq. 1,
 each laddered column freeing l0 - l_x of yarn. Delta x is the distance between the knit's two held ends,
 n_x l_x in a uniform knit, so a change of the box's l_x/l0 by dl is a Delta x change of n_x dl l0.
 
-Quasi-static with friction. The bars move at ``bar_speed_m_s`` under a mass-proportional damping
+Quasi-static with friction. The bars move at ``bar_speed`` under a mass-proportional damping
 (:meth:`knitlad.engine.simulation.Simulation.ramp_held`, ``knitlad/engine/quasistatic.py``); a hold settles to a stated
 force residual. Readings while moving carry the damping's bias alpha M V and the knit's inertia; the
 answer is rate-independent when halving the speed changes it less than its own error
@@ -42,29 +42,32 @@ from knitlad.experiments.laddering import (
     propagate,
 )
 from knitlad.fabric.preparation import InfeasibleRun, StretchedKnit, stretch
+from knitlad.engine.deprecation import renamed_fields
 from knitlad.engine.simulation import Simulation
 
 LOADING, HOLD, UNLOADING = 1, 0, -1  # the leg column of the readings
 
 
+@renamed_fields({"bar_speed_m_s": "bar_speed", "damping_per_s": "cycle_damping_per_s"}, since="0.14.0")
 @dataclass(frozen=True)
 class CycleSettings:
     """Protocol B's loading (from :meth:`knitlad.experiments.config.CycleConfig.cycle_settings`). l/l0, f_x, SI."""
 
     lx_max: float  # the box's l_x/l0 at Delta x_max
     cycles: int  # loading cycles; the cut comes at Delta x_max of the last
-    bar_speed_m_s: float  # each held end's speed away from (or towards) the knit's centre line
-    damping_per_s: float  # alpha of the mass-proportional damping while the bars move and hold
+    bar_speed: float  # m/s: each held end's speed away from (or towards) the knit's centre line
+    cycle_damping_per_s: float  # alpha of the mass-proportional damping while the bars move and hold
     readings_per_leg: int
     hold_s: float  # the longest hold at Delta x_max (a settle)
     hold_tol_f0: float  # a hold has settled when no free node carries more than this (f0)
     fx_thr: float | None  # delta l is read where the uncut twin's unloading crosses this f_x
+    cut: bool  # cut a copy at Delta x_max of the last cycle and follow its ladder
 
     def __post_init__(self) -> None:
         if self.cycles < 1 or self.readings_per_leg < 1:
             raise ValueError("cycles and readings_per_leg must be at least 1")
-        if not (self.bar_speed_m_s > 0 and self.damping_per_s > 0 and self.hold_s > 0 and self.hold_tol_f0 > 0):
-            raise ValueError("bar_speed_m_s, damping_per_s, hold_s and hold_tol_f0 must be positive")
+        if not (self.bar_speed > 0 and self.cycle_damping_per_s > 0 and self.hold_s > 0 and self.hold_tol_f0 > 0):
+            raise ValueError("bar_speed, cycle_damping_per_s, hold_s and hold_tol_f0 must be positive")
 
 
 class LoadedKnit:
@@ -95,7 +98,7 @@ class LoadedKnit:
         for k, f in enumerate(np.linspace(0.0, 1.0, s.readings_per_leg + 1)[1:], start=1):
             tx, ty = lx0 + (lx - lx0) * f, ly0 + (ly - ly0) * f
             by, clips_by = (self.affine_move(nodes, tx, ty) for nodes in (self.held, self.clips))
-            self.sim.ramp_held(self.held, by_m=by, speed_m_s=s.bar_speed_m_s, damping_per_s=s.damping_per_s,
+            self.sim.ramp_held(self.held, by_m=by, speed_m_s=s.bar_speed, damping_per_s=s.cycle_damping_per_s,
                                rails=self.clips, rails_by_m=clips_by)
             self.lx, self.ly = tx, ty
             if read:
@@ -123,7 +126,7 @@ class LoadedKnit:
         """Keep the bars still until the knit is static (or ``hold_s`` has passed); read f_x."""
         s = self.s
         out = self.sim.settle(force_tol_N=s.hold_tol_f0 * self.knit.settings.material.f0, max_time_s=s.hold_s,
-                              damping_per_s=s.damping_per_s)
+                              damping_per_s=s.cycle_damping_per_s)
         self.readings.append((cycle, HOLD, self.sim.time_s, self.lx, self.tension()))
         return out
 
@@ -212,7 +215,7 @@ class CycleResult:
                 "delta_l_over_l0": self.delta_l_over_l0, "predicted_damage": self.predicted_damage,
                 "fx_thr_own": self.fx_thr_own, "delta_l_own_over_l0": self.delta_l_own_over_l0,
                 "predicted_damage_own": self.predicted_damage_own,
-                "cycles": self.settings.cycles, "bar_speed_m_s": self.settings.bar_speed_m_s,
+                "cycles": self.settings.cycles, "bar_speed_m_s": self.settings.bar_speed,
                 "hold_converged": self.hold_converged, "wall_s": self.wall_s,
                 "nan_reasons": "; ".join(f"{k}: {why}" for k, why in self.nan_reasons().items())}
 
@@ -296,19 +299,19 @@ def run_cycles(knit: StretchedKnit, s: CycleSettings, dynamics: DynamicsSettings
     return result
 
 
-def run_protocol_b(ladder: LadderSettings, s: CycleSettings, cut_at_max: bool = True,
+def run_protocol_b(ladder: LadderSettings, s: CycleSettings,
                    progress: Callable[[str, float], None] | None = None, knit: StretchedKnit | None = None,
                    after_leg: Callable[[np.ndarray], None] | None = None, keep: Callable[[dict], None] | None = None,
                    resume: dict | None = None) -> tuple[CycleResult, LadderResult | None]:
     """Stretch at mu = 0 to Delta x_min (``ladder.stretch``; or start from ``knit``, stretched so), cycle
     (:func:`run_cycles`, with its checkpoints ``keep`` and ``resume``), and at Delta x_max of the last cycle cut
-    a copy and follow its ladder under ``ladder.dynamics`` (``cut_at_max``)."""
+    a copy and follow its ladder under ``ladder.dynamics`` (if ``s.cut``)."""
     if knit is None:
         knit = stretch(ladder.stretch, progress)
     laddered: list[LadderResult] = []
 
     def at_the_cut(snapshot: StretchedKnit, sim: Simulation) -> None:
-        if cut_at_max:
+        if s.cut:
             laddered.append(analyse(propagate(cut_cycled(snapshot, sim, ladder.dynamics), progress=progress)))
 
     result = run_cycles(knit, s, ladder.dynamics, progress, at_the_cut, after_leg, keep, resume)

@@ -36,7 +36,7 @@ import numpy as np
 
 from knitlad.engine import units
 from knitlad.engine.contact import ContactModel, Counting, contact_time_step
-from knitlad.engine.dissipation import STITCH_BENDING_HZ, AirDrag, EnergyLedger, MaterialDamping
+from knitlad.engine.dissipation import AirDrag, EnergyLedger, MaterialDamping
 from knitlad.engine.runloop import Observer, StopRule, run_until
 from knitlad.engine.simulation import Simulation
 from knitlad.engine.state import Rods, cut_edge, with_axial_stiffness, with_twist
@@ -69,7 +69,8 @@ from knitlad.fabric.preparation import (
 
 @dataclass(frozen=True)
 class DynamicsSettings:
-    """How a stretched knit ladders (from :meth:`knitlad.experiments.config.CutConfig.dynamics_settings`). SI."""
+    """How a stretched knit ladders (from :meth:`knitlad.experiments.config.CutConfig.dynamics_settings`, where each
+    field has its default and unit, under the same name or its SI twin: ``observe_every_us`` -> ``observe_every_s``). SI."""
 
     mu: float
     contact_counting: Counting  # of the dynamics (the stretch, a minimisation, counts UNION)
@@ -87,14 +88,14 @@ class DynamicsSettings:
     arrest_s: float
     max_time_s: float
     frame_every_s: float | None  # None: AUTO_FRAMES over the expected ladder duration (frame_interval)
-    stop_at_edge: bool = True  # stop when a ladder reaches an edge course (else: when every front has stopped)
-    loss_factor: float = 0.0  # the yarn's material damping, peak loss factor (0: none; knitlad.engine.dissipation)
-    loss_peak_hz: float = STITCH_BENDING_HZ  # ... at this frequency [Hz]
-    air_drag: bool = False  # still air around the yarns
-    stop_after_stitches: int | None = None  # stop once a front has run this many stitches (enough for v_lad)
-    friction_band: tuple[int, int, float] | None = None  # (first course, courses, factor on mu): a run-stop band
-    friction_every: int = 1  # each contact's friction computed once every this many steps, held between (a study)
-    clip_friction: float = 0.0  # Coulomb coefficient of the clips on the bars they slide along (0: frictionless)
+    stop_at_edge: bool  # stop when a ladder reaches an edge course (else: when every front has stopped)
+    loss_factor: float  # the yarn's material damping, peak loss factor (0: none; knitlad.engine.dissipation)
+    loss_peak_hz: float  # ... at this frequency [Hz]
+    air_drag: bool  # still air around the yarns
+    stop_after_stitches: int | None  # stop once a front has run this many stitches (enough for v_lad)
+    friction_band: tuple[int, int, float] | None  # (first course, courses, factor on mu): a run-stop band
+    friction_every: int  # each contact's friction computed once every this many steps, held between (a study)
+    clip_friction: float  # Coulomb coefficient of the clips on the bars they slide along (0: frictionless)
 
     @property
     def material_damping(self) -> MaterialDamping | None:

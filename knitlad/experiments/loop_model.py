@@ -33,6 +33,7 @@ from typing import NamedTuple, Sequence
 
 from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP, ContactModel
 from knitlad.fabric.observers import LetGo, TimeLimit
+from knitlad.engine.deprecation import renamed_fields
 from knitlad.engine.runloop import Observer, run_until
 from knitlad.fabric.scenes.knit import KnitGeometry
 from knitlad.fabric.scenes.loop import LoopScene, build_single_loop
@@ -50,6 +51,7 @@ def check_tension_and_friction(fx: float, mu: float) -> None:
         raise ValueError(f"mu must be >= 0, got {mu}")
 
 
+@renamed_fields({"lx_over_l0": "lx", "ly_over_l0": "ly", "nodes_per_stitch": "resolution"}, since="0.14.0")
 @dataclass
 class LoopSettings:
     """Inputs of one single-loop run. Lengths as l/l0, tension as f_x, SI otherwise.
@@ -60,9 +62,9 @@ class LoopSettings:
 
     fx: float
     mu: float
-    lx_over_l0: float  # wider, the loops of one column no longer overlap (0.39: none)
-    ly_over_l0: float
-    nodes_per_stitch: int  # release time within 3 % of 48 nodes/stitch (24: up to 8 %, and f_x = 2 stays hooked)
+    lx: float  # l_x/l0; wider, the loops of one column no longer overlap (0.39: none)
+    ly: float  # l_y/l0
+    resolution: int  # release time within 3 % of 48 nodes/stitch (24: up to 8 %, and f_x = 2 stays hooked)
     max_time_s: float  # releases take 50 to 150 us
     contact_force_f0: float = KNIT_CONTACT_FORCE_F0
     overlap_fraction: float = KNIT_OVERLAP
@@ -124,8 +126,8 @@ class LoopRun:
         self.s = settings
         m = settings.material
         l0 = m.stitch_length
-        geometry = KnitGeometry(n_x=1, n_y=1, l_x=settings.lx_over_l0 * l0, l_y=settings.ly_over_l0 * l0,
-                          nodes_per_stitch=settings.nodes_per_stitch, material=m, edge="tail")
+        geometry = KnitGeometry(n_x=1, n_y=1, l_x=settings.lx * l0, l_y=settings.ly * l0,
+                          resolution=settings.resolution, material=m, edge="tail")
         self.scene: LoopScene = build_single_loop(geometry, settings.fx * m.f0)
         contact = ContactModel.of_settings(settings, mu=0.0)
         self.sim = Simulation(self.scene.rods, contact=contact, safety=settings.dt_safety)
@@ -179,7 +181,7 @@ class LoopRun:
             res.released = True
             res.tau_s = let_go.since - 0.5 * self.s.topology_every_s
             res.tau_contact_s = seen["last_touch"] + 0.5 * self.s.observe_every_s
-            l_y = self.s.ly_over_l0 * self.s.material.stitch_length
+            l_y = self.s.ly * self.s.material.stitch_length
             res.v_lad_over_cb = l_y / res.tau_s / self.s.material.c_b
         res.steps = self.sim.steps
         res.wall_s["release"] = time.perf_counter() - t0

@@ -38,6 +38,7 @@ from knitlad.engine import units
 from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP, ContactModel
 from knitlad.experiments.loop_model import LoopReading, LoopResult, check_tension_and_friction
 from knitlad.fabric.observers import LetGo, TimeLimit
+from knitlad.engine.deprecation import renamed_fields
 from knitlad.engine.runloop import Observer, run_until
 from knitlad.fabric.scenes.rows import PeriodicRows, build_periodic_rows
 from knitlad.engine.simulation import Simulation, small_scene_threads
@@ -50,14 +51,15 @@ LOWER, LOOP, UPPER = 0, 1, 2
 MIN_LX = 0.15  # narrowest l_x/l0 force control steps back to
 
 
+@renamed_fields({"ly_over_l0": "ly", "nodes_per_stitch": "resolution"}, since="0.14.0")
 @dataclass
 class PeriodicLoopSettings:
     """Inputs of one run of the periodised single loop; tension as f_x, lengths as l/l0, SI otherwise."""
 
     fx: float
     mu: float
-    ly_over_l0: float = 0.25
-    nodes_per_stitch: int = 36
+    ly: float = 0.25  # l_y/l0
+    resolution: int = 36
     columns: int = 1  # stitches per period: 1, one stitch; more, a strip with one loop removed
     force_controlled: bool | None = None  # the period follows the tension (default: with one column only)
     rows: int = 5  # lower, loop, upper, free rows, railed top row
@@ -169,7 +171,7 @@ class PeriodicLoopRun:
         self.s = s = settings
         m = s.material
         self.l0 = m.stitch_length / units.LENGTH
-        self.cell = StitchRun(StitchSettings(0.30, s.ly_over_l0, s.nodes_per_stitch, m,
+        self.cell = StitchRun(StitchSettings(0.30, s.ly, s.resolution, m,
                                              contact_force_f0=s.contact_force_f0, overlap_fraction=s.overlap_fraction))
         self.result = PeriodicLoopResult(settings, geometry={"columns": s.columns, "rows": s.rows,
                                                              "sinkers_held": s.sinkers_held,
@@ -185,7 +187,7 @@ class PeriodicLoopRun:
     def build(self) -> None:
         """The stitch by force control at f_x, copied into the rows."""
         t0 = time.perf_counter()
-        s, n = self.s, self.s.nodes_per_stitch
+        s, n = self.s, self.s.resolution
         self.cell.relax()
         force_control(self.cell, s.fx, 0.005, self.cell.s.stretch_increment, MIN_LX)
         self.cell.settle()
@@ -234,7 +236,7 @@ class PeriodicLoopRun:
             rows.absent.add(LOWER)
             self.box.rows_carrying = s.rows - 1
         else:
-            n = s.nodes_per_stitch
+            n = s.resolution
             a = nodes.start + self.middle * n
             start, end = x[a].copy(), x[a + n].copy()
             along = np.arange(1, n)[:, None] / n
@@ -243,7 +245,7 @@ class PeriodicLoopRun:
 
     def _loop_edges(self) -> tuple[np.ndarray, np.ndarray, slice]:
         """Edge masks of the loop (its middle column, with its images) and of the upper row; the loop's nodes."""
-        m, rows, n = self.sim.model, self.rows, self.s.nodes_per_stitch
+        m, rows, n = self.sim.model, self.rows, self.s.resolution
         edge_yarn = m.edge_yarn
         first = m.yarn_start[edge_yarn]
         column = (m.edge_a - first) // n
@@ -284,7 +286,7 @@ class PeriodicLoopRun:
         if rule is let_go:
             res.released = True
             res.tau_s = res.tau_contact_s = seen["last_touch"] + 0.5 * n_obs * sim.dt_s
-            res.v_lad_over_cb = s.ly_over_l0 * s.material.stitch_length / res.tau_s / s.material.c_b
+            res.v_lad_over_cb = s.ly * s.material.stitch_length / res.tau_s / s.material.c_b
         res.climb_over_ly = (float(sim.state.x[loop_nodes, 1].mean()) - centroid) / self.rows.ly
         res.lx_end_over_l0 = self.rows.lx / self.l0
         res.peak_overlap_over_d = sim.peak_overlap_m() / s.material.diameter

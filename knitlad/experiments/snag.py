@@ -7,9 +7,9 @@ How runs start in worn fabric, where the paper's experiment cuts a loop with sci
    of course ``row``, column ``column``, between the legs of the course above that pass behind it; as
    long as fits there.
 2. **pull** (:func:`snag`): with friction on (the dynamics' mu, also between pin and yarn), the pin moves
-   out of the fabric's plane (+z, the side the heads face) at ``speed_m_s``. Each yarn segment breaks
+   out of the fabric's plane (+z, the side the heads face) at ``snag_speed``. Each yarn segment breaks
    when its tension exceeds its breaking force (:mod:`knitlad.engine.fracture`: the material's, and a
-   weaker ``weak_point_N`` on the hooked head's segments if given: a worn spot). Recorded every
+   weaker ``weak_point_force`` on the hooked head's segments if given: a worn spot). Recorded every
    ``record_every_s``: the pin's travel and the force the yarn holds it back with (the pull-out curve).
    The pull ends at the first break, or without one at ``max_pull_m``.
 3. **ladder**: at a break the pin lets go (:meth:`~knitlad.engine.simulation.Simulation.release_obstacle`)
@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from knitlad.engine import units
+from knitlad.engine.deprecation import renamed_fields
 from knitlad.engine.fracture import Break
 from knitlad.engine.obstacles import Cylinder
 from knitlad.experiments.laddering import (
@@ -48,27 +49,30 @@ PIN_GAP_D = 0.15  # the pin starts this many yarn diameters behind the head
 PIN_SIDE_MARGIN_D = 0.5  # ... and its caps this far from the legs beside it
 
 
+@renamed_fields({"speed_m_s": "snag_speed", "breaking_force_N": "breaking_force",
+                 "weak_point_N": "weak_point_force", "row": "snag_row", "column": "snag_column"}, since="0.14.0")
 @dataclass(frozen=True)
 class SnagSettings:
-    """The snag's pin and pull (SI). ``row``/``column``: the hooked loop (None: the knit's centre, where the
-    paper cuts); ``breaking_force_N``: every segment's (None: the material's); ``weak_point_N``: the hooked
-    head's segments' (None: as the rest)."""
+    """The snag's pin and pull (SI; from :meth:`knitlad.experiments.config.SnagConfig.snag_settings`, where each
+    field has its default and unit). ``snag_row``/``snag_column``: the hooked loop (None: the knit's centre, where
+    the paper cuts); ``breaking_force`` [N]: every segment's (None: the material's); ``weak_point_force`` [N]: the
+    hooked head's segments' (None: as the rest)."""
 
-    speed_m_s: float = 1.0
-    pin_radius_m: float = 0.2e-3
-    max_pull_m: float = 10e-3
-    breaking_force_N: float | None = None
-    weak_point_N: float | None = None
-    row: int | None = None
-    column: int | None = None
-    record_every_s: float = 20e-6
+    snag_speed: float  # m/s
+    pin_radius_m: float
+    max_pull_m: float
+    breaking_force: float | None
+    weak_point_force: float | None
+    snag_row: int | None
+    snag_column: int | None
+    record_every_s: float = 20e-6  # the pull's readings (the model's choice, not a setting)
 
     def __post_init__(self) -> None:
-        for name in ("speed_m_s", "pin_radius_m", "max_pull_m", "record_every_s"):
+        for name in ("snag_speed", "pin_radius_m", "max_pull_m", "record_every_s"):
             value = getattr(self, name)
             if not (value > 0 and math.isfinite(value)):
                 raise ValueError(f"{name} must be a positive number, got {value!r}")
-        for name in ("breaking_force_N", "weak_point_N"):
+        for name in ("breaking_force", "weak_point_force"):
             value = getattr(self, name)
             if value is not None and not (value > 0 and math.isfinite(value)):
                 raise ValueError(f"{name} must be a positive number of N or None, got {value!r}")
@@ -193,21 +197,21 @@ def snag(knit: StretchedKnit, dynamics: DynamicsSettings, settings: SnagSettings
     """Hook, pull until a break (or ``max_pull_m``), then let the ladder run (module docstring)."""
     t0 = time.perf_counter()
     s, m = knit.settings, knit.settings.material
-    row = s.n_y // 2 if settings.row is None else settings.row
-    column = s.n_x // 2 if settings.column is None else settings.column
+    row = s.n_y // 2 if settings.snag_row is None else settings.snag_row
+    column = s.n_x // 2 if settings.snag_column is None else settings.snag_column
     if not (0 <= row < s.n_y and 0 <= column < s.n_x):
         raise ValueError(f"row, column: ({row}, {column}) is outside the {s.n_x} x {s.n_y} knit")
-    pin = pin_behind_head(knit, row, column, settings.pin_radius_m, settings.speed_m_s, dynamics.mu)
+    pin = pin_behind_head(knit, row, column, settings.pin_radius_m, settings.snag_speed, dynamics.mu)
     rods = dynamics_rods(knit.knit.rods.copy(), dynamics, m)  # the stretched knit stays as it was, for reuse
     sim = dynamics_simulation(rods, knit, dynamics, obstacles=[pin])
-    strength = np.full(sim.model.edge_a.shape[0], settings.breaking_force_N or m.breaking_force)
-    if settings.weak_point_N is not None:
+    strength = np.full(sim.model.edge_a.shape[0], settings.breaking_force or m.breaking_force)
+    if settings.weak_point_force is not None:
         x = sim.positions_m()
         a, b = sim.model.edge_a, sim.model.edge_b
         middle = 0.5 * (x[a] + x[b])
         on_pin = (np.abs(middle[:, 0] - pin.point_m[0]) < 0.5 * pin.length_m + pin.radius_m) & (
             knit.knit.node_course()[a] == row) & (np.abs(middle[:, 1] - pin.point_m[1]) < 4 * pin.radius_m)
-        strength[on_pin] = settings.weak_point_N
+        strength[on_pin] = settings.weak_point_force
     sim.set_breaking_force(strength)
     sim.reset_ledger()
     every = max(1, int(round(settings.record_every_s / sim.dt_s)))

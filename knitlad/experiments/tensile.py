@@ -26,6 +26,7 @@ from typing import Callable
 
 import numpy as np
 
+from knitlad.engine.deprecation import renamed_fields
 from knitlad.engine.units import Material
 from knitlad.experiments.cycling import LoadedKnit
 from knitlad.experiments.laddering import DynamicsSettings
@@ -35,6 +36,7 @@ LOADING, HOLD, UNLOADING = 1, 0, -1  # the leg column of the readings
 COLUMNS = ("leg", "t_s", "box_lx_over_l0", "box_ly_over_l0", "lx_over_l0", "ly_over_l0", "fx", "fy")
 
 
+@renamed_fields({"bar_speed_m_s": "bar_speed", "damping_per_s": "cycle_damping_per_s"}, since="0.14.0")
 @dataclass(frozen=True)
 class TensileSettings:
     """The tensile test's path and pace (from :meth:`knitlad.experiments.config.TensileConfig.tensile_settings`)."""
@@ -42,8 +44,8 @@ class TensileSettings:
     lx_max: float | None  # the box's l_x/l0 at the top (None: l_x stays)
     ly_max: float | None  # the box's l_y/l0 at the top (None: l_y stays)
     unload: bool  # come back to the start after the hold
-    bar_speed_m_s: float
-    damping_per_s: float
+    bar_speed: float  # m/s
+    cycle_damping_per_s: float  # 1/s
     readings_per_leg: int
     hold_s: float
     hold_tol_f0: float
@@ -115,7 +117,7 @@ def run_tensile(knit: StretchedKnit, s: TensileSettings, dynamics: DynamicsSetti
 
     loaded.move_box(*top, report(0), lambda: rows.append(read(loaded, LOADING)))
     held = loaded.sim.settle(force_tol_N=s.hold_tol_f0 * knit.settings.material.f0, max_time_s=s.hold_s,
-                             damping_per_s=s.damping_per_s)
+                             damping_per_s=s.cycle_damping_per_s)
     rows.append(read(loaded, HOLD))
     if s.unload:
         loaded.move_box(*start, report(1), lambda: rows.append(read(loaded, UNLOADING)))

@@ -5,7 +5,7 @@ its first stage), with the box and gauge that measure it.
 
 The knit is built at the target l_y and at l_x = min(target, 0.30 l0) (narrower for l_y > 0.25 l0:
 :func:`build_width`); from there either every course is tiled with the periodised stitch stretched to
-the target (``start="tiled"``, :func:`stretch_tiled`) or the whole fabric is stretched affinely
+the target (``stretch_start="tiled"``, :func:`stretch_tiled`) or the whole fabric is stretched affinely
 (:mod:`knitlad.fabric.stretching`), by position or by force control, and relaxed to a steady f_x. The
 laddering (:mod:`knitlad.experiments.laddering`), protocol B (:mod:`knitlad.experiments.cycling`) and any
 other test of the fabric start from a :class:`StretchedKnit`.
@@ -23,6 +23,7 @@ import numpy as np
 
 from knitlad.engine import units
 from knitlad.engine.contact import ContactModel
+from knitlad.engine.deprecation import renamed_fields
 from knitlad.engine.simulation import Simulation, small_scene_threads
 from knitlad.engine.state import with_twist
 from knitlad.engine.units import Material
@@ -64,7 +65,7 @@ MIN_BUILD_LX = 0.15  # narrowest l_x/l0 tried when a thick yarn does not fit at 
 RELAX_TOL_F0 = 1e-3  # FIRE's force tolerance while stretching, in f0
 
 
-def build_width(ly_over_l0: float, material: Material, nodes_per_stitch: int = 36, sagitta_radius_d: float = 0.0) -> float:
+def build_width(ly: float, material: Material, resolution: int = 36, sagitta_radius: float = 0.0) -> float:
     """l_x/l0 at which to build the knit for this l_y: BUILD_LX, or narrower where the
     periodised stitch's f_x = 0 curve lies left of it (l_y/l0 > 0.25), less 0.01.
 
@@ -75,52 +76,55 @@ def build_width(ly_over_l0: float, material: Material, nodes_per_stitch: int = 3
     0.01 narrower leaves room for force control below the tension the finite knit
     carries there (6 x 8 stitches, 16 nodes/stitch: f_x = 8 at the f_x = 0 width).
     """
-    if ly_over_l0 <= 0.25:
+    if ly <= 0.25:
         return BUILD_LX  # the f_x = 0 width is above 0.30 l0 here (0.337 at l_y/l0 = 0.25)
     try:
-        return min(BUILD_LX, zero_tension_lx(ly_over_l0, material=material, nodes_per_stitch=nodes_per_stitch,
-                                             sagitta_radius_d=sagitta_radius_d) - 0.01)
+        return min(BUILD_LX, zero_tension_lx(ly, material=material, resolution=resolution,
+                                             sagitta_radius=sagitta_radius) - 0.01)
     except ValueError:
         return BUILD_LX
 
 
+@renamed_fields({"lx_over_l0": "lx", "fx_target": "fx", "ly_over_l0": "ly", "nodes_per_stitch": "resolution",
+                 "start": "stretch_start", "sagitta_radius_d": "sagitta_radius"}, since="0.14.0")
 @dataclass(frozen=True)
 class StretchSettings:
-    """What makes a stretched knit (from :meth:`knitlad.experiments.config.CutConfig.stretch_settings`). l/l0, f_x, SI."""
+    """What makes a stretched knit (from :meth:`knitlad.experiments.config.CutConfig.stretch_settings`, where each field
+    has its default and unit, under the same name). l/l0, f_x, SI."""
 
     n_x: int
     n_y: int
-    lx_over_l0: float | None  # position control ...
-    fx_target: float | None  # ... or force control (exactly one of the two)
-    ly_over_l0: float
-    nodes_per_stitch: int
+    lx: float | None  # l_x/l0: position control ...
+    fx: float | None  # ... or f_x^ini: force control (exactly one of the two)
+    ly: float  # l_y/l0
+    resolution: int
     contact_force_f0: float  # the contact force (in f0) at which the overlap is overlap_fraction d
     overlap_fraction: float
     edge: str  # how the course ends are held (knitlad.fabric.scenes.knit.EDGES)
     stretch_increment: float  # l/l0 per affine step
     steps_per_increment: int  # FIRE steps per round
     fx_tolerance: float  # force control: relative
-    start: str  # "tiled" from the periodised stitch (clamped ends), or "affine" from the built knit
+    stretch_start: str  # "tiled" from the periodised stitch (clamped ends), or "affine" from the built knit
     natural_curvature: float  # K = mean (kappa_bar/kappa0)^2 the yarn remembers (0: straight at rest)
     material: Material
-    sagitta_radius_d: float = 0.0  # the contact's sagitta correction, in d (0: none; knitlad.engine.contact)
-    contact_law: str = "linear"  # the contact's normal law (knitlad.engine.kernels.contact_law)
-    memory_peak_ratio: float | None = None  # max/mean of (kappa_bar/kappa0)^2 (None: the scaled copy's own)
-    pattern: str = "jersey"  # the knit's pattern (knitlad.fabric.patterns.PATTERNS)
-    pattern_band: tuple[str, int, int] | None = None  # (pattern, first course, courses) knitted in another pattern
+    sagitta_radius: float  # the contact's sagitta correction, in d (0: none; knitlad.engine.contact)
+    contact_law: str  # the contact's normal law (knitlad.engine.kernels.contact_law)
+    memory_peak_ratio: float | None  # max/mean of (kappa_bar/kappa0)^2 (None: the scaled copy's own)
+    pattern: str  # the knit's pattern (knitlad.fabric.patterns.PATTERNS)
+    pattern_band: tuple[str, int, int] | None  # (pattern, first course, courses) knitted in another pattern
     # (first course, courses, K): a run-stop band of courses whose yarn remembers K instead of natural_curvature
-    memory_band: tuple[int, int, float] | None = None
-    bars: str = "held"  # how the edge courses below and above are held (knitlad.fabric.scenes.knit.BARS)
+    memory_band: tuple[int, int, float] | None
+    bars: str  # how the edge courses below and above are held (knitlad.fabric.scenes.knit.BARS)
 
     def __post_init__(self) -> None:
-        if (self.lx_over_l0 is None) == (self.fx_target is None):
-            raise ValueError("give exactly one of lx_over_l0 (position control) and fx_target (force control)")
-        if self.remembers and (self.start, self.edge) != ("tiled", "clamped"):
+        if (self.lx is None) == (self.fx is None):
+            raise ValueError("give exactly one of lx (position control) and fx (force control)")
+        if self.remembers and (self.stretch_start, self.edge) != ("tiled", "clamped"):
             raise ValueError("natural_curvature (or a memory band) needs the tiled stretch and clamped ends: it is "
                              "set in the periodised stitch and tiled over the knit")
-        if (self.pattern != "jersey" or self.pattern_band is not None) and self.start != "affine":
+        if (self.pattern != "jersey" or self.pattern_band is not None) and self.stretch_start != "affine":
             raise ValueError(f"pattern {self.pattern} (band {self.pattern_band}): the periodised stitch is "
-                             "jersey's; this knit is stretched affinely (start='affine')")
+                             "jersey's; this knit is stretched affinely (stretch_start='affine')")
         if self.memory_band is not None and self.memory_band[2] <= 0:
             raise ValueError(f"memory_band: the band's K must be above 0, not {self.memory_band[2]}")
 
@@ -234,12 +238,12 @@ class KnitBox:
     def __init__(self, s: StretchSettings) -> None:
         self.s = s
         m = s.material
-        self.build_lx = build_width(s.ly_over_l0, m, s.nodes_per_stitch, s.sagitta_radius_d)
-        self.lx = min(s.lx_over_l0, self.build_lx) if s.lx_over_l0 is not None else self.build_lx
-        self.ly = s.ly_over_l0
+        self.build_lx = build_width(s.ly, m, s.resolution, s.sagitta_radius)
+        self.lx = min(s.lx, self.build_lx) if s.lx is not None else self.build_lx
+        self.ly = s.ly
         try:
             band = None if s.pattern_band is None else s.pattern_band[0]
-            lx = widest_fitting_width(self.lx, self.ly, m, s.nodes_per_stitch,
+            lx = widest_fitting_width(self.lx, self.ly, m, s.resolution,
                                       min_loop_overlap=build_loop_overlap(m, s.pattern, band), lx_min=MIN_BUILD_LX,
                                       pattern=s.pattern)
         except CourseTooWide:
@@ -247,12 +251,12 @@ class KnitBox:
                 raise
             # the thickest jersey yarns (d/l0 = 1/20): built where a stitch holds l0 at all; the first
             # relaxation pushes their touching loops apart (docs/history.md: peak overlap 0.005 d)
-            lx = widest_fitting_width(self.lx, self.ly, m, s.nodes_per_stitch, lx_min=MIN_BUILD_LX)
+            lx = widest_fitting_width(self.lx, self.ly, m, s.resolution, lx_min=MIN_BUILD_LX)
         if lx < self.lx:  # thick yarns and purl stitches only fit narrower
             self.lx = self.build_lx = lx
         self.knit = build_knit(KnitGeometry(
             n_x=s.n_x, n_y=s.n_y, l_x=self.lx * m.stitch_length, l_y=self.ly * m.stitch_length,
-            nodes_per_stitch=s.nodes_per_stitch, material=m, edge=s.edge, bars=s.bars, pattern=s.pattern,
+            resolution=s.resolution, material=m, edge=s.edge, bars=s.bars, pattern=s.pattern,
             band=None if s.pattern_band is None else tuple(s.pattern_band),
         ), stretch_damping_ratio=STRETCH_AXIAL_DAMPING)
         self.sim = Simulation(self.knit.rods, contact=stretch_contact(s))
@@ -281,7 +285,7 @@ class KnitBox:
         """Every course, the edge courses too, at the relaxed shape of the periodised stitch ``cell``,
         one copy per column and per course, and the box at the cell's (l_x, l_y).
 
-        Course r is built as n_x stitches of ``nodes_per_stitch`` nodes from a sinker, plus
+        Course r is built as n_x stitches of ``resolution`` nodes from a sinker, plus
         the closing node (clamped ends): node k of it is the cell's node k mod n shifted by
         (k // n) l_x columns and r l_y courses. The cell is periodic, so the tiled knit is
         the infinite relaxed fabric cut to n_x x n_y: it is at equilibrium but at its two
@@ -289,7 +293,7 @@ class KnitBox:
         edge the odd courses are the same, run backwards, and the turning loops are laid again
         between the courses' new ends (:meth:`KnitScene.place_turning_loops`).
         """
-        g, n = self.knit.geometry, self.knit.geometry.nodes_per_stitch
+        g, n = self.knit.geometry, self.knit.geometry.resolution
         l0 = self.s.material.stitch_length / units.LENGTH
         cell_x = cell.sim.state.x[:n]  # the real yarn's nodes come first
         k = np.arange(g.n_x * n + 1)
@@ -315,7 +319,7 @@ class KnitBox:
         cell's hinge j joins its edges j - 1 and j, hinge 0 across the seam). Switches twist on."""
         m = self.s.material
         rods = self.sim.rods if self.sim.twist else with_twist(self.sim.rods, m.twisting_stiffness / m.bending_stiffness)
-        n = self.knit.geometry.nodes_per_stitch
+        n = self.knit.geometry.resolution
         src_model, src = cell.sim.model, cell.sim.state
         model, state = rods.model, rods.state
         edge_yarn = model.edge_yarn
@@ -369,7 +373,7 @@ def stretch(s: StretchSettings, progress: Callable[[str, float], None] | None = 
     report = (lambda frac: progress("stretch", frac)) if progress else None
     box = KnitBox(s)
     within, fx = True, None
-    if s.start == "tiled" and s.edge in ("clamped", "continuous"):
+    if s.stretch_start == "tiled" and s.edge in ("clamped", "continuous"):
         try:
             fx, within = stretch_tiled(box, report)
         except CourseTooWide:
@@ -377,11 +381,11 @@ def stretch(s: StretchSettings, progress: Callable[[str, float], None] | None = 
             # the knit, built narrower, is stretched affinely (natural curvature needs the stitch)
             if s.remembers:
                 raise
-    if fx is None and s.lx_over_l0 is not None:
-        stretch_to(box, s.lx_over_l0, s.ly_over_l0, s.stretch_increment, progress=report)
+    if fx is None and s.lx is not None:
+        stretch_to(box, s.lx, s.ly, s.stretch_increment, progress=report)
         fx = relax_to_steady_tension(box)
     elif fx is None:
-        fx, within = force_control(box, s.fx_target, s.fx_tolerance, s.stretch_increment, box.build_lx,
+        fx, within = force_control(box, s.fx, s.fx_tolerance, s.stretch_increment, box.build_lx,
                                    progress=report)
     knit = box.stretched(fx, within, time.perf_counter() - t0)
     check_whole(knit)
@@ -397,26 +401,26 @@ def check_whole(knit: StretchedKnit) -> None:
     periodised stitch's f_x = 0 curve, where a knit whose loops still hold each other is in tension
     (position control to l_x/l0 = 0.999 gave f_x^ini = -0.98 and every cell undone, exit 0)."""
     s = knit.settings
-    if knit.fx_ini > 0 or s.lx_over_l0 is None or s.pattern != "jersey" or s.pattern_band is not None:
+    if knit.fx_ini > 0 or s.lx is None or s.pattern != "jersey" or s.pattern_band is not None:
         # the f_x = 0 width is jersey's
         return
     try:
-        unloaded = unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material, s.sagitta_radius_d, s.contact_law)
+        unloaded = unloaded_width(s.ly, s.resolution, s.material, s.sagitta_radius, s.contact_law)
     except ValueError:  # no f_x = 0 point on the stitch's range: nothing to hold it against
         return
     if knit.lx_over_l0 > unloaded + 0.02:
         raise KnitCameApart(f"the knit came apart: at l_x/l0 = {knit.lx_over_l0:.3f} it carries f_x = "
                             f"{knit.fx_ini:.3g}, where a knit that holds together is in tension (beyond the "
-                            f"f_x = 0 width {unloaded:.3f} at l_y/l0 = {s.ly_over_l0:g}); stretch it less")
+                            f"f_x = 0 width {unloaded:.3f} at l_y/l0 = {s.ly:g}); stretch it less")
 
 
-def stitch_of(s: StretchSettings, lx_over_l0: float) -> StitchRun:
+def stitch_of(s: StretchSettings, lx: float) -> StitchRun:
     """The periodised stitch of the knit ``s`` (its resolution, contact and increments), built at
-    min(``lx_over_l0``, 0.30) (:class:`knitlad.fabric.stitch_model.StitchRun`) and relaxed."""
+    min(``lx``, 0.30) (:class:`knitlad.fabric.stitch_model.StitchRun`) and relaxed."""
     cell = StitchRun(StitchSettings(
-        lx_over_l0=lx_over_l0, ly_over_l0=s.ly_over_l0, nodes_per_stitch=s.nodes_per_stitch,
+        lx=lx, ly=s.ly, resolution=s.resolution,
         material=s.material, contact_force_f0=s.contact_force_f0, overlap_fraction=s.overlap_fraction,
-        sagitta_radius_d=s.sagitta_radius_d, stretch_increment=s.stretch_increment, contact_law=s.contact_law))
+        sagitta_radius=s.sagitta_radius, stretch_increment=s.stretch_increment, contact_law=s.contact_law))
     cell.relax()
     return cell
 
@@ -437,14 +441,14 @@ def stretch_tiled(box: KnitBox, report: Callable[[float], None] | None = None,
     with small_scene_threads():
         # from the knit's build width: tall cells are built narrower (build_width)
         cell = stitch_of(s, box.build_lx)
-        stretch_to(cell, cell.lx, s.ly_over_l0, s.stretch_increment, min_increments=0)
+        stretch_to(cell, cell.lx, s.ly, s.stretch_increment, min_increments=0)
         if s.remembers:
             remember_unloaded_shape(cell, s)
-        if s.lx_over_l0 is not None:
-            stretch_to(cell, s.lx_over_l0, s.ly_over_l0, s.stretch_increment, min_increments=0)
+        if s.lx is not None:
+            stretch_to(cell, s.lx, s.ly, s.stretch_increment, min_increments=0)
             target = None
         else:
-            target = s.fx_target
+            target = s.fx
             force_control(cell, target, 0.25 * s.fx_tolerance, s.stretch_increment, MIN_BUILD_LX)
         cell_fx = settled_tension(cell)
     check_stitch_held(box, cell)
@@ -500,19 +504,19 @@ def check_stitch_held(box: KnitBox, cell: StitchRun) -> None:
 
 
 @functools.lru_cache(maxsize=16)
-def unloaded_width(ly_over_l0: float, nodes_per_stitch: int, material: Material, sagitta_radius_d: float = 0.0,
+def unloaded_width(ly: float, resolution: int, material: Material, sagitta_radius: float = 0.0,
                    contact_law: str = "linear") -> float:
     """l_x/l0 of the periodised stitch on the f_x = 0 curve at this l_y (cached: a sweep asks it often)."""
-    return zero_tension_lx(ly_over_l0, material=material, nodes_per_stitch=nodes_per_stitch,
-                           sagitta_radius_d=sagitta_radius_d, contact_law=contact_law)
+    return zero_tension_lx(ly, material=material, resolution=resolution,
+                           sagitta_radius=sagitta_radius, contact_law=contact_law)
 
 
 def remember_unloaded_shape(cell: StitchRun, s: StretchSettings) -> None:
     """The stitch is taken to the f_x = 0 curve (the unloaded fabric), relaxed, and remembers that shape
     with mean (kappa_bar/kappa0)^2 = K (:mod:`knitlad.fabric.shape_memory`; K the band's if the knit has a
     memory band, :attr:`StretchSettings.cell_memory`); relaxed again, twist on."""
-    stretch_to(cell, unloaded_width(s.ly_over_l0, s.nodes_per_stitch, s.material, s.sagitta_radius_d, s.contact_law),
-               s.ly_over_l0, s.stretch_increment, min_increments=0)
+    stretch_to(cell, unloaded_width(s.ly, s.resolution, s.material, s.sagitta_radius, s.contact_law),
+               s.ly, s.stretch_increment, min_increments=0)
     cell.settle()
     try:
         cell.remember_shape(s.cell_memory, s.memory_peak_ratio)

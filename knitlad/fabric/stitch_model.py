@@ -32,6 +32,7 @@ import numpy as np
 
 from knitlad.engine import units
 from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP, ContactModel
+from knitlad.engine.deprecation import renamed_fields
 from knitlad.engine.kernels.contact import contact_energy
 from knitlad.engine.kernels.elastic import bending_energy, edge_vectors, framed_bending_twisting_energy, stretching_energy
 from knitlad.engine.kernels.frames import material_frames, transport_reference_frames, update_reference_twist
@@ -47,18 +48,20 @@ from knitlad.engine.units import NYLON, Material
 BUILD_LY = 0.25  # tallest l_y/l0 the stitch is built at
 
 
+@renamed_fields({"lx_over_l0": "lx", "ly_over_l0": "ly", "nodes_per_stitch": "resolution",
+                 "sagitta_radius_d": "sagitta_radius"}, since="0.14.0")
 @dataclass
 class StitchSettings:
     """Inputs of one periodised stitch, built by :meth:`knitlad.experiments.config.StitchConfig.settings` (which has
     the defaults and units of the first three and the material); the rest are the model's own choices."""
 
-    lx_over_l0: float
-    ly_over_l0: float
-    nodes_per_stitch: int
+    lx: float  # l_x/l0
+    ly: float  # l_y/l0
+    resolution: int
     material: Material
     contact_force_f0: float = KNIT_CONTACT_FORCE_F0
     overlap_fraction: float = KNIT_OVERLAP
-    sagitta_radius_d: float = 0.0  # the contact's sagitta correction (knitlad.engine.contact.sagitta_corrected_radius), in d; 0: none
+    sagitta_radius: float = 0.0  # the contact's sagitta correction (knitlad.engine.contact.sagitta_corrected_radius), in d; 0: none
     contact_law: str = "linear"  # the contact's normal law (knitlad.engine.kernels.contact_law)
     pattern: str = "jersey"  # the knit pattern whose repeat the cell holds (knitlad.fabric.patterns)
     stretch_increment: float = 0.005
@@ -78,8 +81,8 @@ class StitchResult:
     wall_s: float = 0.0
 
     def summary(self) -> dict:
-        return {"fx": self.fx, "fy": self.fy, "lx_over_l0": self.settings.lx_over_l0,
-                "ly_over_l0": self.settings.ly_over_l0, "converged": self.converged, "residual_f0": self.residual_f0,
+        return {"fx": self.fx, "fy": self.fy, "lx_over_l0": self.settings.lx,
+                "ly_over_l0": self.settings.ly, "converged": self.converged, "residual_f0": self.residual_f0,
                 "max_overlap_over_d": self.max_overlap_over_d, "relax_steps": self.relax_steps,
                 "wall_s": self.wall_s}
 
@@ -87,7 +90,7 @@ class StitchResult:
 class StitchRun:
     def __init__(self, settings: StitchSettings) -> None:
         self.s = settings
-        self.ly = min(settings.ly_over_l0, BUILD_LY)
+        self.ly = min(settings.ly, BUILD_LY)
         self.lx, geometry = self._build_geometry()
         self.cell: PeriodicStitch = build_periodic_stitch(geometry)
         contact = ContactModel.of_settings(settings, mu=0.0)
@@ -99,12 +102,12 @@ class StitchRun:
         overlaps the next course's by at least d, and as far as thick yarns need
         (:func:`~knitlad.fabric.scenes.knit.build_loop_overlap`: they need narrower cells)."""
         s, m = self.s, self.s.material
-        lx = widest_fitting_width(min(s.lx_over_l0, BUILD_LX), self.ly, m, s.nodes_per_stitch,
+        lx = widest_fitting_width(min(s.lx, BUILD_LX), self.ly, m, s.resolution,
                                   min_loop_overlap=max(m.diameter, build_loop_overlap(m, s.pattern)),
                                   pattern=s.pattern)
         columns, courses = knit_pattern(s.pattern).period
         return lx, KnitGeometry(n_x=columns, n_y=courses, l_x=lx * m.stitch_length, l_y=self.ly * m.stitch_length,
-                                nodes_per_stitch=s.nodes_per_stitch, material=m, pattern=s.pattern)
+                                resolution=s.resolution, material=m, pattern=s.pattern)
 
     def _relax(self, steps: int, tol_f0: float) -> dict:
         info = self.sim.relax(force_tol_N=tol_f0 * self.s.material.f0, max_steps=steps)
@@ -141,7 +144,7 @@ class StitchRun:
         """Relax as built, stretch affinely to the target (knitlad.fabric.stretching), relax to ``force_tol_f0``."""
         s = self.s
         self.relax()
-        stretch_to(self, s.lx_over_l0, s.ly_over_l0, s.stretch_increment, min_increments=0)
+        stretch_to(self, s.lx, s.ly, s.stretch_increment, min_increments=0)
         info = self.settle()
         self.result.converged = info["converged"]
         self.result.residual_f0 = info["max_force_N"] / s.material.f0
@@ -161,33 +164,33 @@ class StitchRun:
         return self.result
 
 
-def stitch_tensions(lx_over_l0: float, ly_over_l0: float, nodes_per_stitch: int | None = None,
-                    material: Material = NYLON, sagitta_radius_d: float | None = None,
+def stitch_tensions(lx: float, ly: float, resolution: int | None = None,
+                    material: Material = NYLON, sagitta_radius: float | None = None,
                     contact_law: str = "linear", pattern: str = "jersey") -> StitchResult:
     """The stitch (one repeat of ``pattern``) at (l_x, l_y) [l/l0]; the resolution and the sagitta correction
     default to the default preset's (:mod:`knitlad.fabric.presets`)."""
     preset = STITCH_PRESETS["default"]
-    if nodes_per_stitch is None:
-        nodes_per_stitch = preset["resolution"]
-    if sagitta_radius_d is None:
-        sagitta_radius_d = preset["sagitta_radius"]
-    return StitchRun(StitchSettings(lx_over_l0, ly_over_l0, nodes_per_stitch, material,
-                                    sagitta_radius_d=sagitta_radius_d, contact_law=contact_law,
+    if resolution is None:
+        resolution = preset["resolution"]
+    if sagitta_radius is None:
+        sagitta_radius = preset["sagitta_radius"]
+    return StitchRun(StitchSettings(lx, ly, resolution, material,
+                                    sagitta_radius=sagitta_radius, contact_law=contact_law,
                                     pattern=pattern)).run()
 
 
-def zero_tension_lx(ly_over_l0: float, lo: float = 0.22, hi: float = 0.40, tol: float = 1e-3, **kwargs) -> float:
+def zero_tension_lx(ly: float, lo: float = 0.22, hi: float = 0.40, tol: float = 1e-3, **kwargs) -> float:
     """l_x/l0 at which the relaxed stitch carries f_x = 0 for this l_y (regula falsi, then bisection)."""
-    f_lo = stitch_tensions(lo, ly_over_l0, **kwargs).fx
-    f_hi = stitch_tensions(hi, ly_over_l0, **kwargs).fx
+    f_lo = stitch_tensions(lo, ly, **kwargs).fx
+    f_hi = stitch_tensions(hi, ly, **kwargs).fx
     if not f_lo < 0 < f_hi:
-        raise ValueError(f"l_y/l0 = {ly_over_l0}: f_x does not change sign between l_x/l0 = {lo} ({f_lo:.3g}) "
+        raise ValueError(f"l_y/l0 = {ly}: f_x does not change sign between l_x/l0 = {lo} ({f_lo:.3g}) "
                          f"and {hi} ({f_hi:.3g})")
     for it in range(60):
         guess = lo - f_lo * (hi - lo) / (f_hi - f_lo) if it % 2 == 0 else 0.5 * (lo + hi)
         if not lo < guess < hi:
             guess = 0.5 * (lo + hi)
-        f = stitch_tensions(guess, ly_over_l0, **kwargs).fx
+        f = stitch_tensions(guess, ly, **kwargs).fx
         if f < 0:
             lo, f_lo = guess, f
         else:
@@ -200,13 +203,13 @@ def zero_tension_lx(ly_over_l0: float, lo: float = 0.22, hi: float = 0.40, tol: 
 @dataclass(frozen=True)
 class ZeroTensionResult:
     """One point of the configuration diagram's f_x = 0 curve: the width l_x/l0 at which the relaxed stitch
-    carries no tension at ``settings.ly_over_l0`` (``settings.lx_over_l0`` is that width)."""
+    carries no tension at ``settings.ly`` (``settings.lx`` is that width)."""
 
     settings: StitchSettings
     wall_s: float
 
     def summary(self) -> dict:
-        return {"ly_over_l0": self.settings.ly_over_l0, "lx_over_l0_at_fx0": self.settings.lx_over_l0,
+        return {"ly_over_l0": self.settings.ly, "lx_over_l0_at_fx0": self.settings.lx,
                 "wall_s": self.wall_s}
 
 
@@ -214,10 +217,10 @@ def zero_tension_width(settings: StitchSettings, lo: float = 0.22, hi: float = 0
     """:func:`zero_tension_lx` for the stitch of ``settings`` at its l_y (its l_x is not read): the diagram's
     experiment (`knitlad diagram`)."""
     t0 = time.perf_counter()
-    lx = zero_tension_lx(settings.ly_over_l0, lo, hi, nodes_per_stitch=settings.nodes_per_stitch,
-                         material=settings.material, sagitta_radius_d=settings.sagitta_radius_d,
+    lx = zero_tension_lx(settings.ly, lo, hi, resolution=settings.resolution,
+                         material=settings.material, sagitta_radius=settings.sagitta_radius,
                          contact_law=settings.contact_law, pattern=settings.pattern)
-    return ZeroTensionResult(dataclasses.replace(settings, lx_over_l0=lx), time.perf_counter() - t0)
+    return ZeroTensionResult(dataclasses.replace(settings, lx=lx), time.perf_counter() - t0)
 
 
 def cell_energy(sim: Simulation, cell: PeriodicStitch) -> float:

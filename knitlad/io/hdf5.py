@@ -424,8 +424,25 @@ def run_settings(attrs: dict) -> dict:
     if isinstance(settings, str):
         settings = json.loads(settings)
     if "stretch" in settings:
-        return {**settings["stretch"], **settings["dynamics"]}
-    return settings
+        return {**renamed_settings(settings["stretch"]), **settings["dynamics"]}
+    return renamed_settings(settings)
+
+
+# the stretch's settings as knitlad 0.13 and earlier stored them (old name: the config's name, which they now share)
+RENAMED_SETTINGS = {"lx_over_l0": "lx", "fx_target": "fx", "ly_over_l0": "ly", "nodes_per_stitch": "resolution",
+                    "start": "stretch_start", "sagitta_radius_d": "sagitta_radius"}
+
+
+# what a knit stretched before a setting existed was stretched with (the tiled start came later: they were affine)
+STRETCHED_BEFORE = {"stretch_start": "affine", "natural_curvature": 0.0, "sagitta_radius": 0.0, "contact_law": "linear",
+                    "memory_peak_ratio": None, "pattern": "jersey", "pattern_band": None, "memory_band": None,
+                    "bars": "held"}
+
+
+def renamed_settings(settings: dict) -> dict:
+    """Stored settings under today's names: a file written before the settings took their config's names
+    (0.14.0) reads as one written now."""
+    return {RENAMED_SETTINGS.get(key, key): value for key, value in settings.items()}
 
 
 # ------------------------------------------------------------------ stretched knits
@@ -467,16 +484,13 @@ def read_stretched_knit(path: str | Path):
     with h5py.File(path, "r") as f:
         if "attrs_sha256" in f.attrs and f.attrs["attrs_sha256"] != attributes_checksum(f):
             raise OSError(f"{path}: its attributes fail their checksum (edited or damaged)")
-        settings = json.loads(f.attrs["settings_json"])
+        settings = renamed_settings(json.loads(f.attrs["settings_json"]))
         material = Material(**settings.pop("material"))
-        settings.setdefault("start", "affine")  # knits stretched before the tiled start were affine
-        settings.setdefault("natural_curvature", 0.0)
-        settings.setdefault("sagitta_radius_d", 0.0)  # knits stretched before the sagitta correction had none
-        settings.setdefault("contact_law", "linear")  # and before the contact laws, the linear one
+        settings = {**STRETCHED_BEFORE, **settings}
         for band in ("pattern_band", "memory_band"):  # JSON has lists, the frozen settings tuples
             if settings.get(band) is not None:
                 settings[band] = tuple(settings[band])
-        geometry = json.loads(f.attrs["geometry_json"])
+        geometry = renamed_settings(json.loads(f.attrs["geometry_json"]))
         geometry["material"] = material
         if geometry.get("band") is not None:
             geometry["band"] = tuple(geometry["band"])

@@ -123,7 +123,7 @@ def run_cycle_job(cfg: CycleConfig, output, folder: Path | None = None, progress
     from knitlad.io.hdf5 import write_cycle_result
 
     knit = None if folder is None else prepared_knit(cfg, folder, progress)[0]
-    cycle, ladder = run_protocol_b(cfg.settings(), cfg.cycle_settings(), cut_at_max=cfg.cut, progress=progress,
+    cycle, ladder = run_protocol_b(cfg.settings(), cfg.cycle_settings(), progress=progress,
                                    knit=knit, **checkpoints)
     summary = {**cycle.summary(), **({f"cut_{k}": v for k, v in ladder.summary().items()} if ladder else {})}
     if ladder is not None and not output.frames:

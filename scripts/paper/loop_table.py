@@ -41,7 +41,7 @@ def paper_fabric(fx: float) -> float:
 def run(geometry: str, fx: float, mu: float, args):
     if geometry == "tails":
         return LoopRun(LoopConfig(fx=fx, mu=mu, max_time_ms=args.max_time_ms, resolution=args.resolution).settings()).run()
-    settings = PeriodicLoopSettings(fx=fx, mu=mu, nodes_per_stitch=args.resolution, max_time_s=args.max_time_ms * 1e-3,
+    settings = PeriodicLoopSettings(fx=fx, mu=mu, resolution=args.resolution, max_time_s=args.max_time_ms * 1e-3,
                                     columns=args.columns if geometry == "strip" else 1,
                                     sinkers_held=geometry == "periodic-sinkers",
                                     force_controlled=True if args.force_controlled else None)

@@ -29,14 +29,14 @@ from knitlad.fabric.stretching import stretch_to
 
 
 def stitch_loading_curve(pattern: str, ly: float, lx_bottom: float, lx_top: float, step: float = 0.01,
-                         nodes_per_stitch: int | None = None, sagitta_radius: float | None = None) -> pd.DataFrame:
+                         resolution: int | None = None, sagitta_radius: float | None = None) -> pd.DataFrame:
     """The pattern's cell at l_y, narrowed from its build to ``lx_bottom``, then widened to ``lx_top``: f_x, f_y
     at each step after the final relaxation."""
     cfg = CutConfig(lx=0.3, ly=ly)
     run = StitchRun(StitchSettings(
-        lx_over_l0=lx_top, ly_over_l0=ly, material=cfg.stretch_settings().material,
-        nodes_per_stitch=nodes_per_stitch or cfg.resolution,
-        sagitta_radius_d=cfg.sagitta_radius if sagitta_radius is None else sagitta_radius, pattern=pattern))
+        lx=lx_top, ly=ly, material=cfg.stretch_settings().material,
+        resolution=resolution or cfg.resolution,
+        sagitta_radius=cfg.sagitta_radius if sagitta_radius is None else sagitta_radius, pattern=pattern))
     rows = []
     with small_scene_threads():
         run.relax()

@@ -5,7 +5,10 @@ from __future__ import annotations
 import pytest
 from pydantic import ValidationError
 
-from knitlad.experiments.config import CutConfig, one_line
+import dataclasses
+
+from knitlad.experiments.config import (CutConfig, CycleConfig, DiagramConfig, LoopConfig, SnagConfig, StitchConfig,
+                                        TensileConfig, in_si, one_line)
 from knitlad.fabric.presets import LADDER_PRESETS
 
 
@@ -72,3 +75,32 @@ def test_each_preset_brings_its_time_step_factor_and_a_given_one_stays():
     assert CutConfig(fx=4.0, preset="accurate").replace(preset="default").dt_safety == 0.35
     assert CutConfig(fx=4.0, preset="accurate", dt_safety=0.35).dt_safety == 0.35
     assert CutConfig(fx=4.0, dt_safety=0.2).replace(preset="accurate").dt_safety == 0.2
+
+
+def _settings_types(cfg) -> list:
+    """The settings dataclasses a config makes (the laddering's halves and the experiment's own)."""
+    made = {"settings": cfg.settings()} if not isinstance(cfg, CutConfig) else {
+        "stretch": cfg.stretch_settings(), "dynamics": cfg.dynamics_settings()}
+    for own in ("cycle_settings", "tensile_settings", "snag_settings"):
+        if hasattr(cfg, own):
+            made[own] = getattr(cfg, own)()
+    return [type(s) for s in made.values()]
+
+
+@pytest.mark.parametrize("cfg", [
+    CutConfig(fx=4.0), CycleConfig(fx=0.68, lx_max=0.5), TensileConfig(fx=1.0, lx_max=0.5), SnagConfig(fx=2.0),
+    LoopConfig(), LoopConfig(geometry="periodic"), StitchConfig(), DiagramConfig()], ids=lambda c: type(c).__name__)
+def test_each_setting_has_one_name_from_the_config_to_the_settings(cfg):
+    """Every field of a config reaches the settings dataclasses under its own name (in SI: ``max_time_ms`` as
+    ``max_time_s``), but the few it declares COMPOSED; and every field of those settings without a default of the
+    model's own is one of the config's: a setting is declared once, with its default, and keeps its name."""
+    fields = {f.name: f for kind in _settings_types(cfg) for f in dataclasses.fields(kind)}
+    unreached = {name for name in type(cfg).model_fields if in_si(name, 0.0)[0] not in fields}
+    if isinstance(cfg, LoopConfig) and cfg.geometry != "tails":
+        unreached.discard("lx")  # the periodic rows take their width from f_x (LoopConfig.geometry_fields)
+    assert unreached <= set(type(cfg).COMPOSED) <= set(type(cfg).model_fields)
+    declared = {in_si(name, 0.0)[0] for name in type(cfg).model_fields}
+    required = {name for name, f in fields.items()
+                if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING}
+    composed_into = {"material", "pattern_band", "memory_band", "friction_band", "contact_counting", "lx"}
+    assert required - declared <= composed_into

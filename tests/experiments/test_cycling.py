@@ -142,8 +142,8 @@ def test_an_unreached_threshold_says_why_delta_l_is_nan():
 
     from knitlad.experiments.cycling import CycleResult, CycleSettings
 
-    s = CycleSettings(lx_max=0.4, cycles=1, bar_speed_m_s=0.25, damping_per_s=2e4, readings_per_leg=2, hold_s=1e-3,
-                      hold_tol_f0=1e-3, fx_thr=0.5)
+    s = CycleSettings(lx_max=0.4, cycles=1, bar_speed=0.25, cycle_damping_per_s=2e4, readings_per_leg=2, hold_s=1e-3,
+                      hold_tol_f0=1e-3, fx_thr=0.5, cut=False)
     readings = np.array([[0, 0, 0.0, 0.35, 1.0], [1, 1, 0.1, 0.40, 9.0], [1, 0, 0.2, 0.40, 8.5],
                          [1, -1, 0.3, 0.37, 4.0], [1, -1, 0.4, 0.35, 1.2]])
     result = CycleResult(settings=s, n_x=6, lx_min=0.35, readings=readings, lx_over_l0=0.39)
@@ -159,8 +159,8 @@ def test_eq1_is_also_read_at_the_runs_own_post_arrest_tension():
     copy's f_x^fin, on the same unloading (from the hold at Delta x_max) as the fixed threshold."""
     from knitlad.experiments.cycling import CycleResult, CycleSettings
 
-    s = CycleSettings(lx_max=0.4, cycles=1, bar_speed_m_s=0.25, damping_per_s=2e4, readings_per_leg=2, hold_s=1e-3,
-                      hold_tol_f0=1e-3, fx_thr=2.0)
+    s = CycleSettings(lx_max=0.4, cycles=1, bar_speed=0.25, cycle_damping_per_s=2e4, readings_per_leg=2, hold_s=1e-3,
+                      hold_tol_f0=1e-3, fx_thr=2.0, cut=False)
     readings = np.array([[0, 0, 0.0, 0.35, 1.0], [1, 1, 0.1, 0.40, 9.0], [1, 0, 0.2, 0.40, 8.0],
                          [1, -1, 0.3, 0.38, 4.0], [1, -1, 0.4, 0.36, 0.0]])
     result = CycleResult(settings=s, n_x=10, lx_min=0.35, readings=readings, lx_over_l0=0.39)

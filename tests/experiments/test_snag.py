@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -19,12 +20,17 @@ def knit_6x6():
     return cfg, kl.stretch(cfg.stretch_settings())
 
 
+def snag_settings(**fields) -> SnagSettings:
+    """The snag's settings as the command line makes them: the config's defaults and ``fields``."""
+    return SnagConfig(n_x=6, n_y=6, fx=4.0, **fields).snag_settings()
+
+
 def test_a_snag_breaks_the_hooked_head_at_its_strength_and_a_ladder_runs(knit_6x6):
     """A worn spot of 0.1 N in the hooked head: the pull-out force rises, the yarn breaks in that loop at
     that tension (within one reading's growth), the pin's work during the pull closes the ledger to 1 %,
     and the ladder from the break undoes cells and relaxes the knit (f_x^fin below f_x^ini)."""
     cfg, knit = knit_6x6
-    result = snag(knit, cfg.dynamics_settings(), SnagSettings(speed_m_s=3.0, weak_point_N=0.1))
+    result = snag(knit, cfg.dynamics_settings(), snag_settings(snag_speed=3.0, weak_point_force=0.1))
     first = result.breaks[0]
     assert result.broke and first.tension_N == pytest.approx(0.1, rel=0.05)
     assert (result.break_row, result.break_column) == (result.row, result.column) == (3, 3)
@@ -41,7 +47,7 @@ def test_a_snag_breaks_the_hooked_head_at_its_strength_and_a_ladder_runs(knit_6x
 def test_a_strong_yarn_holds_the_snag_and_no_ladder_starts(knit_6x6):
     """At the Nylon's own strength (7.9 N) a 0.3 mm pull breaks nothing: no ladder, NaN observables."""
     cfg, knit = knit_6x6
-    result = snag(knit, cfg.dynamics_settings(), SnagSettings(speed_m_s=3.0, max_pull_m=0.3e-3))
+    result = snag(knit, cfg.dynamics_settings(), snag_settings(snag_speed=3.0, max_pull_mm=0.3))
     assert not result.broke and result.ladder is None
     assert result.pull_m[-1] >= 0.3e-3 and result.pin_work_J > 0
     assert math.isnan(result.summary()["n_lad_over_ny"])
@@ -60,8 +66,8 @@ def test_the_pin_sits_behind_the_head_clear_of_the_knit(knit_6x6):
 
 
 def test_a_bad_snag_is_refused_naming_the_field():
-    with pytest.raises(ValueError, match="speed_m_s"):
-        SnagSettings(speed_m_s=0.0)
+    with pytest.raises(ValueError, match="snag_speed"):
+        dataclasses.replace(snag_settings(), snag_speed=0.0)
     with pytest.raises(ValueError, match="snag_row"):
         SnagConfig(n_x=6, n_y=6, snag_row=6)
 
@@ -70,7 +76,7 @@ def test_a_snag_leaves_the_stretched_knit_as_it_was(knit_6x6):
     """The stretched knit is a value: a snag runs on a copy, so one stretch serves many snags (a sweep's)."""
     cfg, knit = knit_6x6
     before = knit.knit.rods.state.x.copy()
-    snag(knit, cfg.dynamics_settings(), SnagSettings(speed_m_s=3.0, max_pull_m=0.1e-3))
+    snag(knit, cfg.dynamics_settings(), snag_settings(snag_speed=3.0, max_pull_mm=0.1))
     np.testing.assert_array_equal(knit.knit.rods.state.x, before)
 
 

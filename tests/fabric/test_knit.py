@@ -20,7 +20,7 @@ L0 = kl.NYLON.stitch_length
 @pytest.fixture(scope="module", params=[0.245, 0.30], ids=["paper-start-0.245", "protocol-build-0.30"])
 def knit(request):
     """The paper's initial l_x = l_y = 0.245 l0, and the l_x = 0.30 l0 the protocol builds at."""
-    return build_knit(KnitGeometry(n_x=5, n_y=4, l_x=request.param * L0, l_y=min(request.param, 0.25) * L0, nodes_per_stitch=36))
+    return build_knit(KnitGeometry(n_x=5, n_y=4, l_x=request.param * L0, l_y=min(request.param, 0.25) * L0, resolution=36))
 
 
 def test_each_stitch_holds_l0_of_yarn(knit):
@@ -97,7 +97,7 @@ def test_edge_courses_are_held_and_courses_are_clamped_at_their_edge_sinkers(kni
 
 
 def test_course_ends_with_tails_are_held_at_one_node():
-    knit = build_knit(KnitGeometry(n_x=3, n_y=2, l_x=0.3 * L0, l_y=0.25 * L0, nodes_per_stitch=24, edge="tail"))
+    knit = build_knit(KnitGeometry(n_x=3, n_y=2, l_x=0.3 * L0, l_y=0.25 * L0, resolution=24, edge="tail"))
     s = knit.rods
     for y in knit.courses:
         held = np.flatnonzero(s.model.held[s.model.yarn_start[y]: s.model.yarn_start[y + 1]])
@@ -106,7 +106,7 @@ def test_course_ends_with_tails_are_held_at_one_node():
 
 @pytest.fixture(scope="module")
 def continuous():
-    return build_knit(KnitGeometry(n_x=5, n_y=5, l_x=0.3 * L0, l_y=0.245 * L0, nodes_per_stitch=24, edge="continuous"))
+    return build_knit(KnitGeometry(n_x=5, n_y=5, l_x=0.3 * L0, l_y=0.245 * L0, resolution=24, edge="continuous"))
 
 
 def test_the_continuous_knit_is_one_yarn_turning_at_the_side_edges_in_clips_that_slide_along_y(continuous):
@@ -167,7 +167,7 @@ def test_the_continuous_knit_reads_each_clip_half_for_each_course_it_joins(conti
     assert tension_per_thread(reactions, k.left_end, k.right_end, 1.0, k.left_share, k.right_share) == pytest.approx(T)
 
 
-@pytest.mark.parametrize("kwargs, match", [(dict(n_x=0), "1 x 1"), (dict(l_x=L0), "l0"), (dict(nodes_per_stitch=4), "nodes_per_stitch"),
+@pytest.mark.parametrize("kwargs, match", [(dict(n_x=0), "1 x 1"), (dict(l_x=L0), "l0"), (dict(resolution=4), "resolution"),
                                            (dict(edge="loose"), "edge must be one of")])
 def test_bad_geometry_is_refused(kwargs, match):
     with pytest.raises(ValueError, match=match):

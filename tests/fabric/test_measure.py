@@ -29,7 +29,7 @@ L0 = kl.NYLON.stitch_length
 
 @pytest.fixture(scope="module")
 def knit():
-    return build_knit(KnitGeometry(n_x=6, n_y=6, l_x=0.3 * L0, l_y=0.25 * L0, nodes_per_stitch=24))
+    return build_knit(KnitGeometry(n_x=6, n_y=6, l_x=0.3 * L0, l_y=0.25 * L0, resolution=24))
 
 
 def rows_of(knit, x):

@@ -62,7 +62,7 @@ def knit(request):
     reach build_loop_overlap past the next course (jersey: 0.30)."""
     overlap = build_loop_overlap(kl.NYLON, request.param)
     lx = widest_fitting_width(0.30, 0.25, kl.NYLON, 36, min_loop_overlap=overlap, pattern=request.param)
-    return build_knit(KnitGeometry(n_x=6, n_y=4, l_x=lx * L0, l_y=0.25 * L0, nodes_per_stitch=36,
+    return build_knit(KnitGeometry(n_x=6, n_y=4, l_x=lx * L0, l_y=0.25 * L0, resolution=36,
                                    pattern=request.param))
 
 
@@ -111,7 +111,7 @@ def test_a_band_of_rib_in_jersey_threads_its_own_courses_as_rib_and_the_rest_as_
                                                                           [1, 1]]
     overlap = build_loop_overlap(kl.NYLON, "jersey", "rib")
     lx = widest_fitting_width(0.30, 0.25, kl.NYLON, 36, min_loop_overlap=overlap, pattern="jersey")
-    knit = build_knit(KnitGeometry(n_x=6, n_y=6, l_x=lx * L0, l_y=0.25 * L0, nodes_per_stitch=36,
+    knit = build_knit(KnitGeometry(n_x=6, n_y=6, l_x=lx * L0, l_y=0.25 * L0, resolution=36,
                                    band=("rib", 2, 2)))
     for r in range(5):
         for i in range(1, 5):

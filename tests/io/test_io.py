@@ -69,6 +69,38 @@ def test_a_stretched_knit_reads_back_to_the_bit(tmp_path):
     assert back.fx_ini == knit.fx_ini
 
 
+def test_a_stretched_knit_written_under_the_settings_old_names_reads_as_today(tmp_path):
+    """Up to 0.13 the stretch's settings had names of their own (lx_over_l0, fx_target, nodes_per_stitch, start,
+    ...) and older files lack later settings: such a file reads back with the config's names, the missing
+    settings as the knit was then stretched, and the same knit."""
+    import dataclasses
+    import json
+
+    import h5py
+
+    from knitlad.experiments.config import CutConfig
+    from knitlad.fabric.preparation import stretch
+    from knitlad.io.hdf5 import attributes_checksum, read_stretched_knit, write_stretched_knit
+
+    knit = stretch(CutConfig(n_x=4, n_y=6, lx=0.36, preset="fast", resolution=12, steps_per_increment=5,
+                             stretch_start="affine").stretch_settings())
+    path = write_stretched_knit(tmp_path / "k.h5", knit)
+    old = {"lx": "lx_over_l0", "fx": "fx_target", "ly": "ly_over_l0", "resolution": "nodes_per_stitch",
+           "stretch_start": "start"}
+    with h5py.File(path, "r+") as f:
+        settings = json.loads(f.attrs["settings_json"])
+        for later in ("sagitta_radius", "contact_law", "pattern", "bars", "pattern_band", "memory_band"):
+            del settings[later]
+        f.attrs["settings_json"] = json.dumps({old.get(k, k): v for k, v in settings.items()})
+        geometry = json.loads(f.attrs["geometry_json"])
+        f.attrs["geometry_json"] = json.dumps({old.get(k, k): v for k, v in geometry.items()})
+        f.attrs["attrs_sha256"] = attributes_checksum(f)
+    back = read_stretched_knit(path)
+    assert dataclasses.asdict(back.settings) == dataclasses.asdict(knit.settings)
+    assert back.knit.geometry == knit.knit.geometry
+    np.testing.assert_array_equal(back.knit.rods.state.x, knit.knit.rods.state.x)
+
+
 def test_outputs_name_the_commit_of_the_checkout_they_came_from():
     """io.provenance: run from a git checkout, the code identity is version+commit (the commit git names)."""
     import subprocess

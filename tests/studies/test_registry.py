@@ -50,7 +50,7 @@ def test_a_point_of_the_diagram_is_the_stitchs_zero_tension_width():
     cfg = DiagramConfig(ly=0.25, preset="fast")
     finished = EXPERIMENTS["diagram"].run(cfg, Output())
     s = cfg.settings()
-    direct = zero_tension_lx(0.25, nodes_per_stitch=s.nodes_per_stitch, material=s.material,
-                             sagitta_radius_d=s.sagitta_radius_d)
+    direct = zero_tension_lx(0.25, resolution=s.resolution, material=s.material,
+                             sagitta_radius=s.sagitta_radius)
     assert finished.summary["lx_over_l0_at_fx0"] == direct and 0.25 < direct < 0.40
-    assert finished.result.settings.lx_over_l0 == direct
+    assert finished.result.settings.lx == direct

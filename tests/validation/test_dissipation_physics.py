@@ -191,8 +191,8 @@ def test_the_ledger_of_a_loaded_knit_closes_within_a_per_cent_of_the_work_done()
 
     cfg = kl.CutConfig(n_x=4, n_y=4, fx=4.0, preset="fast", loss_factor=0.03, air_drag=True)
     knit = kl.stretch(cfg.stretch_settings())
-    loaded = LoadedKnit(knit, CycleSettings(lx_max=0.5, cycles=1, bar_speed_m_s=0.25, damping_per_s=2e4,
-                                            readings_per_leg=4, hold_s=1e-3, hold_tol_f0=1e-3, fx_thr=None),
+    loaded = LoadedKnit(knit, CycleSettings(lx_max=0.5, cycles=1, bar_speed=0.25, cycle_damping_per_s=2e4,
+                                            readings_per_leg=4, hold_s=1e-3, hold_tol_f0=1e-3, fx_thr=None, cut=False),
                         cfg.dynamics_settings())
     loaded.sim.reset_ledger()
     loaded.move_bars(knit.box_lx + 0.03, cycle=1)

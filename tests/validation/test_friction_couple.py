@@ -83,7 +83,7 @@ def test_switching_twist_on_leaves_every_force_unchanged(mode):
     from knitlad.engine.state import Workspace
 
     l0 = kl.NYLON.stitch_length
-    knit = build_knit(KnitGeometry(n_x=3, n_y=4, l_x=0.33 * l0, l_y=0.25 * l0, nodes_per_stitch=24))
+    knit = build_knit(KnitGeometry(n_x=3, n_y=4, l_x=0.33 * l0, l_y=0.25 * l0, resolution=24))
     plain = knit.rods
     plain.state.x[:] += np.random.default_rng(3).normal(scale=0.02 * D / units.LENGTH, size=plain.state.x.shape)  # any shape
     twisted = with_twist(plain, kl.NYLON.twisting_stiffness / kl.NYLON.bending_stiffness)

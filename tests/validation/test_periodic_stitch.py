@@ -77,7 +77,7 @@ def test_the_stitch_changes_from_compression_to_tension_across_the_zero_curve():
 
 def test_the_zero_tension_point_is_converged_in_the_resolution():
     """l_x/l0 at f_x = 0 for l_y/l0 = 0.25: 0.3366 (36 nodes/stitch) and 0.3345 (48); 24 gives 0.3304."""
-    assert zero_tension_lx(0.25, nodes_per_stitch=36) == pytest.approx(zero_tension_lx(0.25, nodes_per_stitch=48),
+    assert zero_tension_lx(0.25, resolution=36) == pytest.approx(zero_tension_lx(0.25, resolution=48),
                                                                         abs=0.005)
 
 
@@ -92,7 +92,7 @@ def test_a_cell_of_two_jersey_stitches_carries_the_tensions_of_one(monkeypatch, 
     # built as jersey is (not with the deeper interlock of patterns that purl): the same stretch path
     jersey_overlap = stitch_model.build_loop_overlap
     monkeypatch.setattr(stitch_model, "build_loop_overlap", lambda material, pattern: jersey_overlap(material))
-    one, two = (stitch_tensions(0.36, 0.25, nodes_per_stitch=16, sagitta_radius_d=0.0, pattern=p)
+    one, two = (stitch_tensions(0.36, 0.25, resolution=16, sagitta_radius=0.0, pattern=p)
                 for p in ("jersey", "jersey2"))
     assert two.fx == pytest.approx(one.fx, rel=1e-3) and two.fy == pytest.approx(one.fy, rel=1e-3)
     assert one.fx > 1  # in tension: the comparison is not of two zeros
@@ -124,7 +124,7 @@ def test_the_fabric_away_from_its_edges_carries_the_tension_of_the_periodic_stit
 
     # the affine stretch: the tiled one starts from the stitch and would agree by construction
     r = stretch(CutConfig(fx=4.0, preset="fast", stretch_start="affine").stretch_settings())
-    stitch = stitch_tensions(r.lx_over_l0, r.ly_over_l0, nodes_per_stitch=24, sagitta_radius_d=0.0)
+    stitch = stitch_tensions(r.lx_over_l0, r.ly_over_l0, resolution=24, sagitta_radius=0.0)
     assert r.fx_ini == pytest.approx(stitch.fx, rel=0.05)
 
 
@@ -139,7 +139,7 @@ def test_the_tiled_knit_carries_the_stitch_tension_through_its_held_ends(lx):
     from knitlad.fabric.preparation import stretch
 
     knit = stretch(CutConfig(n_x=6, n_y=6, lx=lx, preset="fast").stretch_settings())
-    stitch = stitch_tensions(lx, 0.25, nodes_per_stitch=24, sagitta_radius_d=0.0)
+    stitch = stitch_tensions(lx, 0.25, resolution=24, sagitta_radius=0.0)
     assert knit.fx_ini == pytest.approx(stitch.fx, rel=0.005, abs=0.01)
     assert knit.lx_over_l0 == pytest.approx(lx, rel=0.002)
     assert knit.ly_over_l0 == pytest.approx(0.25, rel=0.002)

@@ -54,6 +54,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from knitlad.engine.deprecation import renamed_fields
 from knitlad.engine.state import Rods, Scene
 from knitlad.engine.units import NYLON, Material
 from knitlad.fabric.patterns import fabric_pattern, knit_pattern
@@ -93,6 +94,7 @@ def build_loop_overlap(material: Material, pattern: str = "jersey", band: str | 
     return THICK_LOOP_OVERLAP_D * d
 
 
+@renamed_fields({"nodes_per_stitch": "resolution"}, since="0.14.0")
 @dataclass(frozen=True)
 class KnitGeometry:
     """Geometry of a weft knit of ``pattern`` (:data:`knitlad.fabric.patterns.PATTERNS`; SI units)."""
@@ -101,7 +103,7 @@ class KnitGeometry:
     n_y: int = 42
     l_x: float = 0.245 * NYLON.stitch_length
     l_y: float = 0.245 * NYLON.stitch_length
-    nodes_per_stitch: int = 36
+    resolution: int = 36
     material: Material = NYLON
     depth: float | None = None  # c, default 2 d
     tail: float = 0.5  # straight tail beyond the last sinker, in l_x (edge "tail" only)
@@ -114,8 +116,8 @@ class KnitGeometry:
     def __post_init__(self) -> None:
         if self.n_x < 1 or self.n_y < 1:
             raise ValueError(f"the knit needs at least 1 x 1 stitches, got {self.n_x} x {self.n_y}")
-        if self.nodes_per_stitch < 8:
-            raise ValueError(f"nodes_per_stitch must be >= 8, got {self.nodes_per_stitch}")
+        if self.resolution < 8:
+            raise ValueError(f"resolution must be >= 8, got {self.resolution}")
         if self.edge not in EDGES:
             raise ValueError(f"edge must be one of {', '.join(EDGES)}, got {self.edge!r}")
         if self.bars not in BARS:
@@ -131,7 +133,7 @@ class KnitGeometry:
 
     @property
     def segment(self) -> float:
-        return self.material.stitch_length / self.nodes_per_stitch
+        return self.material.stitch_length / self.resolution
 
     def column_x(self, i: np.ndarray | int) -> np.ndarray | float:
         """x of the head (column centre) of column i; the knit is centred on x = 0."""
@@ -180,7 +182,7 @@ class KnitGeometry:
         t = np.linspace(-math.pi, 2 * math.pi * (self.n_x - 1) + math.pi, fine_per_stitch * self.n_x + 1)
         pts = self.curve(t, row, H)
         s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
-        n_seg = self.nodes_per_stitch * self.n_x
+        n_seg = self.resolution * self.n_x
         targets = np.linspace(0.0, s[-1], n_seg + 1)
         knit = np.column_stack([np.interp(targets, s, pts[:, k]) for k in range(3)])
         tk = np.interp(targets, s, t)
@@ -217,7 +219,7 @@ def turning_segments(geometry: KnitGeometry) -> int:
     return max(2, 2 * int(round(0.25 * math.pi * geometry.l_y / geometry.segment)))
 
 
-def widest_fitting_width(lx_max: float, ly: float, material: Material, nodes_per_stitch: int,
+def widest_fitting_width(lx_max: float, ly: float, material: Material, resolution: int,
                          min_loop_overlap: float = -math.inf, lx_min: float = 0.1, pattern: str = "jersey") -> float:
     """The widest l_x/l0 <= lx_max, in steps of 0.01, at which a stitch holds l0 of yarn and its
     loop reaches ``min_loop_overlap`` [m] past the next course (2 H - l_y); thick yarns need
@@ -225,7 +227,7 @@ def widest_fitting_width(lx_max: float, ly: float, material: Material, nodes_per
     l0 = material.stitch_length
     lx = lx_max
     while lx >= lx_min - 1e-12:
-        geometry = KnitGeometry(n_x=1, n_y=1, l_x=lx * l0, l_y=ly * l0, nodes_per_stitch=nodes_per_stitch,
+        geometry = KnitGeometry(n_x=1, n_y=1, l_x=lx * l0, l_y=ly * l0, resolution=resolution,
                                 material=material, pattern=pattern)
         try:
             if 2 * geometry.loop_half_height() - ly * l0 > min_loop_overlap:
