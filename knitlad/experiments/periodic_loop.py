@@ -54,17 +54,19 @@ MIN_LX = 0.15  # narrowest l_x/l0 force control steps back to
 @renamed_fields({"ly_over_l0": "ly", "nodes_per_stitch": "resolution"}, since="0.14.0")
 @dataclass
 class PeriodicLoopSettings:
-    """Inputs of one run of the periodised single loop; tension as f_x, lengths as l/l0, SI otherwise."""
+    """Inputs of one run of the periodised single loop; tension as f_x, lengths as l/l0, SI otherwise. Built by
+    :meth:`knitlad.experiments.config.LoopConfig.settings`, where the first five have their defaults and units;
+    the rest are the model's own choices."""
 
     fx: float
     mu: float
-    ly: float = 0.25  # l_y/l0
-    resolution: int = 36
+    ly: float  # l_y/l0
+    resolution: int
+    max_time_s: float
     columns: int = 1  # stitches per period: 1, one stitch; more, a strip with one loop removed
     force_controlled: bool | None = None  # the period follows the tension (default: with one column only)
     rows: int = 5  # lower, loop, upper, free rows, railed top row
     sinkers_held: bool = False
-    max_time_s: float = 1e-3
     confirm_s: float = 20e-6  # apart this long: released
     observe_every_s: float = 0.5e-6
     box_response_s: float = 0.3e-6  # the box's relaxation time under its stiffest (affine) response

@@ -28,7 +28,7 @@ import numpy as np
 
 from knitlad.experiments.config import LoopConfig
 from knitlad.experiments.loop_model import LoopRun
-from knitlad.experiments.periodic_loop import PeriodicLoopRun, PeriodicLoopSettings
+from knitlad.experiments.periodic_loop import PeriodicLoopRun
 from knitlad.viz.plots import PAPER_DER_VELOCITY
 
 
@@ -39,13 +39,11 @@ def paper_fabric(fx: float) -> float:
 
 
 def run(geometry: str, fx: float, mu: float, args):
+    cfg = LoopConfig(fx=fx, mu=mu, max_time_ms=args.max_time_ms, resolution=args.resolution, geometry=geometry,
+                     **({"columns": args.columns} if geometry == "strip" else {}))
     if geometry == "tails":
-        return LoopRun(LoopConfig(fx=fx, mu=mu, max_time_ms=args.max_time_ms, resolution=args.resolution).settings()).run()
-    settings = PeriodicLoopSettings(fx=fx, mu=mu, resolution=args.resolution, max_time_s=args.max_time_ms * 1e-3,
-                                    columns=args.columns if geometry == "strip" else 1,
-                                    sinkers_held=geometry == "periodic-sinkers",
-                                    force_controlled=True if args.force_controlled else None)
-    return PeriodicLoopRun(settings).run()
+        return LoopRun(cfg.settings()).run()
+    return PeriodicLoopRun(cfg.settings(force_controlled=True if args.force_controlled else None)).run()
 
 
 def main() -> None:

@@ -15,13 +15,19 @@ import math
 import numpy as np
 import pytest
 
-from knitlad.experiments.periodic_loop import PeriodicLoopRun, PeriodicLoopSettings
+from knitlad.experiments.config import LoopConfig
+from knitlad.experiments.periodic_loop import PeriodicLoopRun
 from knitlad.engine.simulation import numba_threads
 from tests.validation.references import paper_der_line
 
 
-def run(fx: float, mu: float, **kwargs):
-    return PeriodicLoopRun(PeriodicLoopSettings(fx=fx, mu=mu, **kwargs)).run()
+def periodic(fx: float, mu: float, **model_choices):
+    """The periodic rows' settings as `knitlad loop --geometry periodic` makes them (``model_choices``: others)."""
+    return LoopConfig(fx=fx, mu=mu, geometry="periodic").settings(**model_choices)
+
+
+def run(fx: float, mu: float, **model_choices):
+    return PeriodicLoopRun(periodic(fx, mu, **model_choices)).run()
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +39,7 @@ def test_rows_copied_from_the_relaxed_stitch_start_at_its_equilibrium():
     """The inner rows of the stack see the neighbours the periodised stitch saw: the net force on
     their nodes is that of the relaxed stitch up to the contacts two rows away (measured 4.5e-3 f0;
     without the stitch's rest lengths it would be 1.3 f0), far below the end rows' (2.8 f0)."""
-    r = PeriodicLoopRun(PeriodicLoopSettings(fx=4.0, mu=0.0))
+    r = PeriodicLoopRun(periodic(4.0, 0.0))
     with numba_threads(1):
         r.build()
         r.sim.compute_forces()
