@@ -85,8 +85,12 @@ def build_width(ly: float, material: Material, resolution: int = 36, sagitta_rad
         return BUILD_LX
 
 
-@renamed_fields({"lx_over_l0": "lx", "fx_target": "fx", "ly_over_l0": "ly", "nodes_per_stitch": "resolution",
-                 "start": "stretch_start", "sagitta_radius_d": "sagitta_radius"}, since="0.14.0")
+# the stretch's settings' names up to 0.13 -> the config's, which they take since 0.14 (also the stored files')
+RENAMED_STRETCH_SETTINGS = {"lx_over_l0": "lx", "fx_target": "fx", "ly_over_l0": "ly", "nodes_per_stitch": "resolution",
+                            "start": "stretch_start", "sagitta_radius_d": "sagitta_radius"}
+
+
+@renamed_fields(RENAMED_STRETCH_SETTINGS, since="0.14.0")
 @dataclass(frozen=True)
 class StretchSettings:
     """What makes a stretched knit (from :meth:`knitlad.experiments.config.CutConfig.stretch_settings`, where each field

@@ -428,9 +428,6 @@ def run_settings(attrs: dict) -> dict:
     return renamed_settings(settings)
 
 
-# the stretch's settings as knitlad 0.13 and earlier stored them (old name: the config's name, which they now share)
-RENAMED_SETTINGS = {"lx_over_l0": "lx", "fx_target": "fx", "ly_over_l0": "ly", "nodes_per_stitch": "resolution",
-                    "start": "stretch_start", "sagitta_radius_d": "sagitta_radius"}
 
 
 # what a knit stretched before a setting existed was stretched with (the tiled start came later: they were affine)
@@ -441,8 +438,10 @@ STRETCHED_BEFORE = {"stretch_start": "affine", "natural_curvature": 0.0, "sagitt
 
 def renamed_settings(settings: dict) -> dict:
     """Stored settings under today's names: a file written before the settings took their config's names
-    (0.14.0) reads as one written now."""
-    return {RENAMED_SETTINGS.get(key, key): value for key, value in settings.items()}
+    (0.14.0) reads as one written now (their geometry too: its nodes_per_stitch is the stretch's)."""
+    from knitlad.fabric.preparation import RENAMED_STRETCH_SETTINGS
+
+    return {RENAMED_STRETCH_SETTINGS.get(key, key): value for key, value in settings.items()}
 
 
 # ------------------------------------------------------------------ stretched knits
