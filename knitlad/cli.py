@@ -353,8 +353,9 @@ def _report_cut(cfg, result, summary: dict, json_out: bool, h5: Path, png: Path,
         f"{n_x} x {n_y} {cfg.pattern}, mu = {cfg.mu}, {cfg.resolution} nodes/stitch ({result.nodes} nodes)\n"
         f"  f_x^ini     = {result.fx_ini:.3f}\n"
         f"  f_x^fin     = {result.fx_fin:.3f}{_fin_caveat(result)}\n    per course: {result.fx_fin_crossed:.3f} crossed by the ladder, {result.fx_fin_intact:.3f} not\n"
-        f"  n_lad/n_y   = {result.n_lad_over_ny:.3f}  ({result.n_lad} cells; {_loop_line(result)})\n"
+        f"  n_lad/n_y   = {result.n_lad_over_ny:.3f}  ({result.n_lad} cells undone at the stop; {_ever_line(result)})\n"
         f"    of them {_damage_line(result.damage_record())}\n"
+        f"  loops       = {_loop_line(result)}\n"
         f"  v_lad/c_b   = {result.v_lad_over_cb:.3f}  {_velocity_caveat(result)}\n"
         f"  l_x/l0, l_y/l0 = {result.lx_over_l0:.3f}, {result.ly_over_l0:.3f}\n"
         f"  stop: {result.stop_reason}\n"
@@ -594,6 +595,11 @@ def resistance(
                      f"v_lad/c_b {row[4]:.3f}, f_x^fin crossed {row[5]:.2f}" + (", reached an edge" if row[6] else ""))
     lines.append(f"  threshold: between {lo:.2f} and {hi:.2f}" + ("" if summary["monotonic"] else
                                                                    " (the series is not monotonic)"))
+    thr = result.arrest_threshold()
+    if thr["runs"]:
+        lines.append(f"  f_x^thr as the paper reads it (mean f_x^fin after the arrest): {thr['fx_thr']:.2f}"
+                     + (f" +- {thr['fx_thr_sd']:.2f}" if thr["runs"] > 1 else "") + f" over {thr['runs']} cut"
+                     + "s" * (thr["runs"] != 1))
     lines.append(f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/resistance.h5, resistance.csv, "
                  "resistance_report.png")
     typer.echo("\n".join(lines))
@@ -932,6 +938,7 @@ def plot(
             typer.echo(f"knitlad: warning: these results were made by {len(codes)} versions of knitlad "
                        f"({', '.join(codes)}; this one is {code_identity()}): knitlad sweep --rerun-stale makes "
                        "them again with this one", err=True)
+    _say_collapsed_members(df)
     fig_dir = Path(folder) / "plots"
     paths = summary_plots(df, fig_dir, fmt)
     if diagrams:
@@ -959,6 +966,15 @@ def plot(
         raise typer.Exit(1)
 
 
+def _say_collapsed_members(df) -> None:
+    """A warning when ensemble members stretched to the same knit as another (their scatter measures nothing)."""
+    if "same_knit_as" in df and (df["same_knit_as"].fillna(-1) >= 0).any():
+        collapsed = int((df["same_knit_as"].fillna(-1) >= 0).sum())
+        typer.echo(f"knitlad: warning: {collapsed} ensemble member{'s' * (collapsed != 1)} stretched to the same knit "
+                   "as another member of its point (same_knit_as): counted once in the means and error bars",
+                   err=True)
+
+
 def _render_jobs(out_dir, job_ids: list[str]) -> None:
     """The default renders (front view) of each ladder job, in ``out_dir/renders/<id>/``."""
     from knitlad.viz.render import render_run
@@ -971,31 +987,47 @@ def _render_jobs(out_dir, job_ids: list[str]) -> None:
     typer.echo(f"rendered {len(job_ids)} jobs in {out_dir / 'renders'}")
 
 
-def _say_if_compiling() -> None:
-    """One line on stderr when Numba's cache holds no compiled step kernel yet: the first run of a fresh
-    install compiles for one to two minutes, and said nothing."""
-    import numba
+COMPILE_TIME = "about two minutes on 2 cores"  # a fresh cache, measured: docs/performance.md
 
-    if numba.config.CACHE_DIR:  # NUMBA_CACHE_DIR: Numba keeps every cache there, in a tree of its own
-        cached = any(Path(numba.config.CACHE_DIR).rglob("integrate.verlet_steps-*.nbi"))
-    else:
-        cached = any((Path(__file__).resolve().parent / "engine" / "kernels" / "__pycache__").glob("integrate.verlet_steps-*.nbi"))
-    if not cached:
-        typer.echo("knitlad: compiling the kernels (the first run only: one to two minutes, then cached)", err=True)
+
+def _say_if_compiling() -> None:
+    """One line on stderr when Numba's cache holds no step kernel compiled from the present kernel sources: the
+    first run of a fresh install, or after a kernel was edited, compiles first, and said nothing."""
+    from knitlad.engine.kernels import is_compiled
+    from knitlad.engine.kernels.integrate import verlet_steps
+
+    if not is_compiled(verlet_steps):
+        typer.echo(f"knitlad: compiling the kernels (the first run only: {COMPILE_TIME}, then cached)", err=True)
 
 
 MIN_FIT_STITCHES = 5  # a front fitted over fewer stitches is a rough figure
 
 
+def _ever_line(result) -> str:
+    """The cells undone at some time that the stop's count leaves out."""
+    parts = [f"{result.n_lad_ever} undone at some time"]
+    if result.n_lad_rehooked:
+        parts.append(f"{result.n_lad_rehooked} hooked again")
+    if result.n_lad_between:
+        parts.append(f"{result.n_lad_between} neither hooked nor a bar")
+    return ", ".join(parts)
+
+
 def _loop_line(result) -> str:
-    """The ladders the cut started and the freed loops of the paper's Fig. 2d behind them."""
+    """The freed loops of the paper's Fig. 2d whose ladders ran, read from where the cut thread went."""
     r = result.loop_record()
-    line = f"ladders: {r['ladders_up']} up, {r['ladders_down']} down"
-    if r["ladders_down"]:
-        line += f"; loops (2)/(3) from {r['first_down_ms']:.2f} ms"
-    if r["ladders_up"] > 1:
-        line += f"; (4)/(5) from {r['second_up_ms']:.2f} ms"
-    return line + ("; hindered: loops (4)/(5) held" if r["hindered"] else "")
+    if r["loop1_column"] < 0:
+        return "the cut thread left neither needle loop beside the cut: no loop freed"
+    when = {"(1)": r["up_from_1_ms"], "(2)/(3)": r["down_from_2_3_ms"], "(4)/(5)": r["up_from_4_5_ms"]}
+    ran = [f"{loop} at {when[loop]:.2f} ms" for loop in r["loop_sequence"].split(", ") if loop in when]
+    line = ("ladders from " + ", then ".join(ran)) if ran else "no ladder ran from a freed loop"
+    if r["paper_order"] and len(ran) == 3:
+        line += " (the paper's sequence)"
+    if r["cut_thread_held"]:
+        line += "; the cut thread held in loops (4) and (5)" + (": hindered laddering" if r["hindered"] else "")
+    if r["other_ladders"]:
+        line += f"; {r['other_ladders']} ladder{'s' * (r['other_ladders'] != 1)} from no freed loop"
+    return line
 
 
 def _fin_caveat(result) -> str:

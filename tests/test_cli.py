@@ -11,11 +11,13 @@ from pathlib import Path
 import h5py
 import pytest
 
+from tests.conftest import knitlad
+
 KNITLAD = [sys.executable, "-m", "knitlad.cli"]
 
 
 def run(*args, cwd=None):
-    return subprocess.run([*KNITLAD, *args], capture_output=True, text=True, cwd=cwd)
+    return knitlad(*args, cwd=cwd or os.getcwd())
 
 
 @pytest.mark.parametrize(
@@ -74,6 +76,7 @@ def test_cut_runs_a_ladder_end_to_end_on_a_small_knit(tmp_path):
 
 
 @pytest.mark.parametrize("pattern", ["rib", "garter"])
+@pytest.mark.end_to_end
 def test_cut_ladders_and_renders_a_knit_of_another_pattern(tmp_path, pattern):
     """A 6 x 6 knit of rib or garter is built, stretched affinely to f_x^ini 3, cut and rendered; its file
     says its pattern, the read-out names it."""
@@ -90,6 +93,7 @@ def test_cut_ladders_and_renders_a_knit_of_another_pattern(tmp_path, pattern):
     assert len(list((tmp_path / "render").glob("render_front_*.png"))) == 1
 
 
+@pytest.mark.end_to_end
 def test_cycle_runs_protocol_b_end_to_end_on_a_small_knit(tmp_path):
     """One cycle of a 6 x 8 knit (fast preset) to l_x = 0.36 l0 and a cut there: the readings (start, a
     loading, the hold, an unloading) in the CSV and the HDF5 file beside the ladder, Fig. 4a as a PNG."""
@@ -108,6 +112,7 @@ def test_cycle_runs_protocol_b_end_to_end_on_a_small_knit(tmp_path):
     assert run("cycle", "--stitches", "6x8", "--lx-max", "0.36", "--out", str(tmp_path)).returncode == 2  # not over it
 
 
+@pytest.mark.end_to_end
 def test_tensile_pulls_a_small_knit_and_writes_its_loops(tmp_path):
     """`knitlad tensile` on a 6 x 8 knit (fast preset) along x: the readings in the CSV and the HDF5 file (with
     their unit), the loops as a PNG; without --lx-max or --ly-max the box does not move: exit 2."""
@@ -125,6 +130,7 @@ def test_tensile_pulls_a_small_knit_and_writes_its_loops(tmp_path):
     assert bad.returncode == 2 and "lx_max" in bad.stderr and "Traceback" not in bad.stderr
 
 
+@pytest.mark.end_to_end
 def test_snag_breaks_a_worn_loop_and_writes_the_curve_and_the_ladder(tmp_path):
     """`knitlad snag` on a 6 x 6 knit (fast preset) with a 0.1 N worn spot: the break and the ladder said, the
     pull-out curve as CSV and PNG, the ladder's file; a snag outside the knit: exit 2 in one line."""
@@ -223,6 +229,7 @@ def test_a_usage_error_is_one_line(args, where):
     assert len(p.stderr.strip().splitlines()) == 1, p.stderr
 
 
+@pytest.mark.process
 def test_the_version_and_python_dash_m_knitlad():
     from knitlad import __version__
 
@@ -307,6 +314,7 @@ def test_cut_help_groups_its_options_and_keeps_units_and_carries_no_dated_measur
 
 
 @pytest.mark.parametrize("columns", ["80", "150"])
+@pytest.mark.process
 def test_help_writes_every_flag_out_whole_and_no_undefined_default(columns):
     """At 80 columns `cut --help` cut flag names short (`--contact-damping-r…`), so they could not be copied;
     `cycle --help` showed `[default: PydanticUndefined]` for the required --lx-max."""
@@ -321,6 +329,7 @@ def test_help_writes_every_flag_out_whole_and_no_undefined_default(columns):
     assert "Undefined" not in cycle.stdout and "[required]" in cycle.stdout
 
 
+@pytest.mark.end_to_end
 def test_a_stitch_that_does_not_converge_fails_instead_of_printing_its_tensions_as_results():
     """`stitch --d-over-l0 1e-9` printed f_x 2.7e6 with `converged: false` and exited 0."""
     p = subprocess.run([*KNITLAD, "stitch", "--d-over-l0", "1e-9", "--preset", "fast", "--resolution", "12",
@@ -328,6 +337,7 @@ def test_a_stitch_that_does_not_converge_fails_instead_of_printing_its_tensions_
     assert p.returncode == 1 and "did not converge" in p.stderr.strip().splitlines()[-1], p.stderr
 
 
+@pytest.mark.end_to_end
 def test_the_stitch_of_a_pattern_is_one_repeat_and_says_which():
     """`stitch --pattern garter`: the cell of a knit and a purl course, its tensions per thread and stitch."""
     p = subprocess.run([*KNITLAD, "stitch", "--pattern", "garter", "--preset", "fast", "--resolution", "16",
@@ -385,6 +395,7 @@ def test_without_stitches_a_command_runs_its_configs_size(tmp_path, model, size)
     assert (cfg.n_x, cfg.n_y) == (size, size) == (getattr(config, model).model_fields["n_x"].default,) * 2
 
 
+@pytest.mark.end_to_end
 def test_the_diagram_takes_its_cells_options_from_the_config_and_its_widths_per_ly(tmp_path):
     """`knitlad diagram`: the cell's options are DiagramConfig's (a bad one is one line, exit 2), --ly repeats,
     and each l_y gives its f_x = 0 width, narrower for taller cells (the paper's curve falls: 0.33 at 0.25)."""

@@ -52,6 +52,7 @@ def test_a_yarn_pulled_over_a_cylinder_follows_the_capstan_equation():
     assert pull == pytest.approx(law, rel=0.04) and pull > 2.4 * load
 
 
+@pytest.mark.slow
 def test_a_node_pressed_on_a_plane_sticks_below_mu_n_and_slides_above_it_at_the_coulomb_rate():
     """A straight yarn lying on a plane (stiffness 100 N/m, mu = 0.4), each node pressed by N and pulled
     along x by T: at T = 0.5 mu N it holds (drift below the tangential spring's stretch T/k_t); at
@@ -84,6 +85,7 @@ def test_a_yarn_dropped_on_a_cylinder_rests_on_it_as_two_cantilevers_carrying_it
     np.testing.assert_allclose(sag, cantilever, rtol=0.01)
 
 
+@pytest.mark.slow
 def test_pulling_a_course_out_of_a_knit_stores_the_work_without_friction_and_dissipates_with_it():
     """Frictionless statics: the pull's work (trapezoid rule over 10 steps of 0.02 mm) equals the stored
     energy gained within 1 % (measured 0.1 %). At mu = 0.4, every step settled (to 1e-6 N), the work

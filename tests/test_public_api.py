@@ -174,6 +174,7 @@ def test_every_public_method_is_in_the_api_guide():
     assert not missing, "not in docs/api.md: " + ", ".join(missing)
 
 
+@pytest.mark.end_to_end
 def test_the_api_guide_s_examples_run(capsys):
     """Each python block of docs/api.md runs as written, on its own."""
     blocks = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "api.md").read_text(), flags=re.S)

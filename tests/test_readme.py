@@ -4,7 +4,10 @@ import json
 import pathlib
 import re
 
+import pytest
 
+
+@pytest.mark.end_to_end
 def test_readme_python_example_runs(capsys):
     text = (pathlib.Path(__file__).parents[1] / "README.md").read_text()
     blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)

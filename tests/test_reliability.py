@@ -21,21 +21,13 @@ from knitlad.io.folders import LOCK_NAME, FolderError, FolderLock
 from knitlad.io.summary import read_summary
 from knitlad.studies.runner import ABANDONED, job_path, run_job, run_sweep, trusted_attrs
 from knitlad.studies.sweep import SweepError, load_sweep
+from tests.conftest import knitlad, knitlad_process, one_line_error
 
 ROOT = Path(__file__).resolve().parents[1]
 KNITLAD = [sys.executable, "-m", "knitlad.cli"]
 TINY = {"n_x": 6, "n_y": 8, "preset": "fast", "resolution": 16, "max_time_ms": 3, "arrest_ms": 1}
 
 
-def knitlad(*args, **kw):
-    return subprocess.run([*KNITLAD, *args], capture_output=True, text=True, cwd=ROOT, **kw)
-
-
-def one_line_error(p, code: int = 2) -> str:
-    assert p.returncode == code, (p.returncode, p.stderr)
-    lines = p.stderr.strip().splitlines()
-    assert len(lines) == 1 and "Traceback" not in p.stderr, p.stderr
-    return lines[0]
 
 
 def config(tmp_path: Path, cfg: dict, name: str = "c.yaml") -> Path:
@@ -49,6 +41,7 @@ def fake_jobs(tmp_path: Path, mus: list[float]):
 
 
 # ------------------------------------------------------------------ work lost
+@pytest.mark.process
 def test_a_second_sweep_on_the_same_folder_is_refused_and_the_first_runs_every_job_once(tmp_path):
     cfg = config(tmp_path, {"fixed": {**TINY, "lx": 0.38}, "sweep": {"axes": {"mu": [0.1, 0.2]}}})
     out = tmp_path / "out"
@@ -110,6 +103,7 @@ def test_a_job_whose_file_cannot_be_written_fails_alone(tmp_path, monkeypatch):
     assert trusted_attrs(job_path(tmp_path / "jobs", job), job)[0]["status"] == "failed"
 
 
+@pytest.mark.process
 def test_a_failing_task_and_a_dead_worker_fail_only_their_jobs_and_a_rerun_says_so(tmp_path):
     """Two jobs in flight when a worker dies: the pool breaks and both are lost with it; each
     is run again alone, and only the one that kills its worker fails. A task that raises (a
@@ -233,6 +227,7 @@ def test_a_knit_larger_than_the_memory_is_refused_before_allocating(tmp_path):
     assert "GiB" in one_line_error(p) and not (tmp_path / "o").exists()
 
 
+@pytest.mark.process
 def test_bad_files_and_schedulers_are_one_line_within_seconds(tmp_path):
     binary = tmp_path / "binary.yaml"
     binary.write_bytes(bytes(range(256)))
@@ -246,6 +241,7 @@ def test_bad_files_and_schedulers_are_one_line_within_seconds(tmp_path):
     assert "finite number" in one_line_error(knitlad("cut", "--fx", "nan", "--stitches", "6x8"))
 
 
+@pytest.mark.process
 def test_sigterm_ends_a_sweep_with_exit_code_143(tmp_path):
     cfg = config(tmp_path, {"fixed": {**TINY, "lx": 0.38}, "sweep": {"axes": {"mu": [0.1, 0.2]}}})
     proc = subprocess.Popen([*KNITLAD, "sweep", str(cfg), "--out", str(tmp_path / "out"), "--workers", "1"],
@@ -437,6 +433,7 @@ def test_quoted_text_is_not_taken_for_a_number_or_a_yes(tmp_path, field, text):
         load_sweep(cfg)
 
 
+@pytest.mark.process
 def test_sigterm_to_cut_says_so_and_leaves_nothing(tmp_path):
     """It exited with no message. The signal is sent once the laddering runs (a fixed sleep let a cached
     stretch and a quick run finish first)."""
@@ -463,6 +460,7 @@ def test_sigterm_to_cut_says_so_and_leaves_nothing(tmp_path):
 
 
 @pytest.mark.parametrize("reply", [None, b"HTTP/1.1 200 OK\r\nContent-Length: 5\r\n\r\nhello" * 3])
+@pytest.mark.cluster
 def test_an_address_that_answers_but_is_no_dask_scheduler_is_one_line_in_seconds(reply):
     """A server that accepts and stalls hung `--executor dask` for ever; an HTTP port gave a 40-line traceback."""
     import socket
@@ -571,6 +569,7 @@ def test_a_second_cut_into_a_folder_in_use_is_refused_in_one_line(tmp_path):
     assert (out / "ladder.h5").exists() and not (out / LOCK_NAME).exists()
 
 
+@pytest.mark.process
 def test_overwrite_on_a_full_disk_keeps_the_earlier_run(tmp_path):
     """`cut --overwrite` onto an earlier run, on a nearly full disk, deleted the earlier run first and then
     could not write the new one: only summary.json was left. The new run is written beside it first now."""
@@ -604,6 +603,7 @@ def test_a_cycle_whose_stretch_passes_its_lx_max_is_refused_after_the_stretch_in
     assert not (tmp_path / "out" / "cycle.h5").exists()
 
 
+@pytest.mark.process
 def test_a_cycle_keeps_an_earlier_runs_readings_and_says_a_full_disk_in_one_line(tmp_path):
     """A second `cycle` into a folder holding only an interrupted run's cycle.csv replaced it; on a full disk
     `cycle` ended in an OSError traceback, f_x^ini, delta l and the cut's result lost."""
@@ -683,6 +683,7 @@ def test_a_kill_while_the_run_is_written_leaves_no_half_written_file(tmp_path, m
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.process
 def test_a_cycle_stopped_by_ctrl_c_resumes_from_its_last_leg_to_the_same_curve(tmp_path):
     """`cycle` had no resume after Ctrl-C. After each leg it keeps a checkpoint; `--resume` goes on from it
     (with the same settings only) and reads the same curve, to the bit, as a run never stopped."""

@@ -17,10 +17,9 @@ import numba
 import numpy as np
 
 from knitlad.engine import units
-from knitlad.engine.deprecation import renamed_field
+from knitlad.engine.deprecation import removed_field, renamed_field
 from knitlad.engine.kernels.contact import (
     GAPS_KNOWN,
-    HELD_HISTORY_COLUMNS,
     HISTORY_COLUMNS,
     MAX_OVERLAP,
     N_STATS,
@@ -96,7 +95,11 @@ KNIT_CONTACT_FORCE_F0 = 20.0
 KNIT_OVERLAP = 0.05
 
 
+HELD_FRICTION_REMOVED = "the friction held over several steps was a study, measured a no-go: docs/performance.md"
+
+
 @renamed_field("friction", "mu", since="0.5.0")
+@removed_field("friction_every", 1, since="0.15.0", why=HELD_FRICTION_REMOVED)
 @dataclass(frozen=True)
 class ContactModel:
     """Yarn-yarn contact parameters (SI).
@@ -133,9 +136,6 @@ class ContactModel:
                                 A yarn's material is known to the contact by its diameter and Young's
                                 modulus (what sets a contact's stiffness); a material that no edge has
                                 is refused (an EA softened by ``with_axial_stiffness`` hides a material)
-    friction_every  [-]         a touching pair's friction is computed once every this many steps and held in
-                                between (1, the default: every step): a study of the step the friction needs,
-                                as an implicit step with explicit friction would see it (docs/performance.md)
     """
 
     stiffness: float
@@ -153,7 +153,6 @@ class ContactModel:
     law: str = "linear"
     reference_overlap: float | None = None
     yarn_friction: tuple = ()
-    friction_every: int = 1
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "pair_stiffness", tuple(tuple(entry) for entry in self.pair_stiffness))
@@ -179,8 +178,6 @@ class ContactModel:
         if self.sagitta_radius is not None and not (self.sagitta_radius > 0 and math.isfinite(self.sagitta_radius)):
             raise ValueError(f"sagitta_radius must be > 0 m or None, got {self.sagitta_radius!r}")
         check_contact_law(self.law, self.reference_overlap)
-        if not (isinstance(self.friction_every, (int, np.integer)) and self.friction_every >= 1):
-            raise ValueError(f"friction_every must be a whole number of steps >= 1, got {self.friction_every!r}")
         object.__setattr__(self, "yarn_friction", tuple((int(y), float(f)) for y, f in self.yarn_friction))
         for yarn, factor in self.yarn_friction:
             if yarn < 0 or not (factor >= 0 and math.isfinite(factor)):
@@ -376,8 +373,6 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
     edge_radius = yarn_radius  # what the contact sees; the skin and the exclusion keep the yarn's
     if model is not None and model.sagitta_radius is not None:
         edge_radius = sagitta_corrected_radius(yarn_radius, m.rest_length, model.sagitta_radius / units.LENGTH)
-    # a friction held over several steps keeps its force in the pairs' history: wider rows only then
-    history_columns = HELD_HISTORY_COLUMNS if model is not None and model.friction_every > 1 else HISTORY_COLUMNS
     if model is None:
         cap = 0
         params = ContactParams(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -394,7 +389,6 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
             mu=float(model.mu),
             skin=float(skin),
             lookahead_steps=float(LIST_LOOKAHEAD_STEPS),
-            friction_every=float(model.friction_every),
         )
         # exclusion: edges within `exclusion_diameters` d of arc, and always the adjacent edge
         # (per state yarn: an image is a copy of its master, whose id it carries as its physical yarn)
@@ -405,7 +399,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
     contacts = Contacts(
         pairs=np.zeros((cap, 2), dtype=np.int64),
         keys=np.zeros(cap, dtype=np.int64),
-        slip=np.zeros((cap, history_columns)),
+        slip=np.zeros((cap, HISTORY_COLUMNS)),
         n_pairs=np.zeros(1, dtype=np.int64),
         status=np.array([1, 0, 0, 0], dtype=np.int64),  # STALE, PAIRS_NEEDED, GAPS_KNOWN, REBUILDS
         x_ref=rods.state.x.copy(),
@@ -427,7 +421,7 @@ def make_contacts(rods: Rods, model: ContactModel | None, capacity: int | None =
         edge_moved=np.zeros(ne),
         **pair_law_table(m, model, params),
         edge_allowance=np.full(ne, 0.5 * params.skin),
-        list_scratch=list_scratch(ne, cap, history_columns),
+        list_scratch=list_scratch(ne, cap),
         **share_buffers(m, cap),
     )
     if previous is not None:

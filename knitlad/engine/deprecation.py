@@ -44,3 +44,34 @@ def renamed_fields(renames: dict[str, str], since: str):
         return cls
 
     return decorate
+
+
+def removed_argument(kwargs: dict, owner: str, name: str, default, since: str, why: str) -> None:
+    """Take ``name`` out of ``kwargs``: an argument of ``owner`` removed in version ``since``. At its old default it
+    changed nothing, and still works for a version with a DeprecationWarning; any other value is refused
+    (ValueError, saying ``why``)."""
+    if name not in kwargs:
+        return
+    value = kwargs.pop(name)
+    if value != default:
+        raise ValueError(f"{name} was removed in {since} ({why}); only its old default {default!r} is still accepted")
+    warnings.warn(f"{owner}({name}=...) is deprecated since {since} and changes nothing: {why}", DeprecationWarning,
+                  stacklevel=3)
+
+
+def removed_field(name: str, default, since: str, why: str):
+    """Class decorator: the constructor keyword ``name`` of a dataclass, removed in version ``since``
+    (:func:`removed_argument`)."""
+
+    def decorate(cls):
+        init = cls.__init__
+
+        @functools.wraps(init)
+        def __init__(self, *args, **kwargs):
+            removed_argument(kwargs, cls.__name__, name, default, since, why)
+            init(self, *args, **kwargs)
+
+        cls.__init__ = __init__
+        return cls
+
+    return decorate

@@ -293,6 +293,15 @@ class SupportControl:
             x[idx] += finite_vectors("by_m", by_m, (idx.size, 3)) / units.LENGTH
         self.contacts.status[STALE] = 1
 
+    def displace_free(self, by_m) -> None:
+        """Shift every free node by ``by_m`` [m] ((n, 3): the held nodes' rows are ignored) and evaluate the forces
+        there (the contact list rebuilt): a perturbed state to start from."""
+        by = finite_vectors("by_m", by_m, self.state.x.shape) / units.LENGTH
+        free = ~self.model.held
+        self.state.x[free] += by[free]
+        self.contacts.status[STALE] = 1
+        self.compute_forces()
+
     def set_external_forces(self, forces_N) -> None:
         """Replace the constant external forces [N], (n, 3) or one 3-vector for all, from now on (a new model).
 
@@ -440,7 +449,8 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
         self.contact_model = contact
         self.contacts: Contacts = make_contacts(rods, contact)
         self.obstacles = obstacle_state(list(obstacles), self.model.n_nodes) if len(obstacles) else None
-        self._obstacle_args = () if self.obstacles is None else (self.obstacles,)  # none: the kernels as compiled without
+        # the kernels get an empty state rather than None: one compiled step serves scenes with and without
+        self._kernel_obstacles = self.obstacles if self.obstacles is not None else obstacle_state([], self.model.n_nodes)
         contact_limit = contact_time_step(self.model, contact, spin=self.twist, predicted=predicted_dashpots)
         wall_limit = obstacle_time_step(self.model, list(obstacles), predicted=predicted_dashpots)
         if math.isfinite(wall_limit):  # springs in parallel: omega^2 adds
@@ -477,7 +487,7 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
         with self.threads.one_call():
             while not compute_forces(self.model, self.state, self.work, self.contacts, self.twist_mode,
                                      self.has_contact, self.damping, self.dt, self.axial_mode, self.dashpot_mode,
-                                     *self._obstacle_args):
+                                     self._kernel_obstacles):
                 self._grow_contacts()
 
     @property
@@ -514,7 +524,7 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
         follow_images(s.x, s.v, m.image_node, m.image_master, m.image_shift)
         if self.contact_model is None:
             return self.contacts  # empty buffers: nothing to refresh
-        while not refresh_contacts(s.x, m.edge_a, m.edge_b, m.edge_shift, self.contacts):
+        while not refresh_contacts(s.x, m.edge_a, m.edge_b, m.edge_shift, self.contacts, s.v, 0.0):  # no lookahead
             self._grow_contacts()
         return self.contacts
 
@@ -547,7 +557,7 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
             try:
                 done = verlet_steps(self.model, self.state, self.work, self.contacts, self.dt, chunk, self.twist_mode,
                                     self.has_contact, self.damping, self.axial_mode, self.dashpot_mode,
-                                    *self._obstacle_args)
+                                    self._kernel_obstacles)
             finally:
                 numba.set_num_threads(allowed)
             self.threads.record(threads, done, time.perf_counter() - t0)
@@ -615,7 +625,7 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
             while True:
                 steps, fmax, tmax = fire_relax(
                     self.model, self.state, self.work, self.contacts, 0.5 * self.dt, self.dt, int(max_steps), ftol,
-                    ttol, self.twist_mode, self.has_contact, *self._obstacle_args,
+                    ttol, self.twist_mode, self.has_contact, self._kernel_obstacles,
                 )
                 if steps >= 0:
                     break

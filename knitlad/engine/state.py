@@ -159,7 +159,7 @@ class Rods:
             old = getattr(self.model, name)
             if np.shape(value) != old.shape:
                 raise ValueError(f"{name}: shape {np.shape(value)} where the model has {old.shape}")
-        return Rods(self.model._replace(**{k: np.array(v, dtype=getattr(self.model, k).dtype) for k, v in arrays.items()}),
+        return Rods(self.model._replace(**{k: np.array(v, dtype=getattr(self.model, k).dtype, order="C") for k, v in arrays.items()}),
                     self.state, self.twist, self.framed if framed is None else bool(framed))
 
 

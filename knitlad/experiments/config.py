@@ -12,7 +12,8 @@ from typing import Annotated, ClassVar, Literal, get_args, get_origin
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP
+from knitlad.engine.contact import HELD_FRICTION_REMOVED, KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP
+from knitlad.engine.deprecation import removed_argument
 from knitlad.engine.dissipation import STITCH_BENDING_HZ
 from knitlad.engine.kernels.contact_law import LAWS, law_mode
 from knitlad.fabric.observers import AUTO_FRAMES
@@ -142,11 +143,11 @@ class CutConfig(_WithPreset):
         "fx_tolerance", "dt_safety", "stretch_start", "natural_curvature", "axial_stiffness_factor",
         "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
         "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches", "contact_law",
-        "band_row", "band_courses", "band_friction_factor", "pattern", "band", "band_curvature", "friction_every",
-        "bars", "clip_friction")
+        "band_row", "band_courses", "band_friction_factor", "pattern", "band", "band_curvature", "bars",
+        "clip_friction", "knit_seed")
     # fields added here after the experiments built on this config (cycle, tensile, snag, resistance) had run
     # sweeps: at their default they stay out of those scenes' job ids too (their ADDED_LATER lists their own)
-    ADDED_LATER_FOR_ALL: ClassVar[tuple[str, ...]] = ("band_curvature", "friction_every", "bars", "clip_friction")
+    ADDED_LATER_FOR_ALL: ClassVar[tuple[str, ...]] = ("band_curvature", "bars", "clip_friction", "knit_seed")
     COMPOSED: ClassVar[dict[str, str]] = {
         "preset": "the resolution and the settings beside it (PRESETS)",
         "d_over_l0": "material (material_for)",
@@ -220,6 +221,9 @@ class CutConfig(_WithPreset):
         "the courses below and above: held, or sliding along x (the experiment's clips on its bars) [-]"))
     clip_friction: float = Field(0.0, ge=0, le=2, description=(
         "Coulomb coefficient of the clips on their bars (sliding bars, the continuous edge), on at the cut [-]"))
+    knit_seed: int | None = Field(None, ge=0, strict=True, description=(
+        "a knit of an ensemble: after the stretch every free node is displaced across its yarn at random, 0.001 d "
+        "rms, drawn from this seed (a sweep's ensemble gives each member its own); none: the knit as stretched [-]"))
     contact_damping_ratio: float = Field(0.3, ge=0, description=(
         "normal and tangential contact dashpots of the laddering dynamics, fraction of critical [-]"))
     stretch_damping_ratio: float = Field(0.2, ge=0, description=(
@@ -263,13 +267,20 @@ class CutConfig(_WithPreset):
     stop_at_edge: bool = Field(True, description=(
         "stop the run when a ladder reaches an edge course (its damage and f_x^fin are then those of that moment); "
         "false: go on until every front has stopped (or max_time_ms) [-]"))
-    friction_every: int = Field(1, ge=1, description=(
-        "each contact's friction is computed once every this many steps and held in between (1: every step): "
-        "the friction an implicit step that long would see if it kept the friction explicit [steps]"))
     predicted_dashpots: bool = Field(False, description=(
         "the laddering dynamics' dashpots (axial and contact) act on the velocity at the end of each step, "
         "predicted from the last forces (second order in dt), instead of the half-step velocity (first order); "
         "their stability limit is lower (0.57 against 0.74 x the undamped one at the contacts' 0.3 of critical) [-]"))
+
+    @model_validator(mode="before")
+    @classmethod
+    def removed_settings(cls, data):
+        """``friction_every``, removed in 0.15.0 (engine/deprecation.removed_argument): 1 warns, any other value is
+        refused."""
+        if isinstance(data, dict) and "friction_every" in data:
+            data = dict(data)
+            removed_argument(data, cls.__name__, "friction_every", 1, "0.15.0", HELD_FRICTION_REMOVED)
+        return data
 
     @model_validator(mode="before")
     @classmethod

@@ -42,16 +42,27 @@ from knitlad.engine.simulation import Simulation
 from knitlad.engine.state import Rods, cut_edge, with_axial_stiffness, with_twist
 from knitlad.engine.timestep import DEFAULT_SAFETY, MAX_STEPS, critical_time_steps
 from knitlad.engine.units import Material
-from knitlad.fabric.measure import ladders_started
+from knitlad.fabric.measure import (
+    between_cells,
+    laddered_cells,
+    laddering_velocity,
+    loop_sequence,
+    front_heights,
+    front_speed,
+    rehooked_cells,
+    taut_cells,
+)
 from knitlad.fabric.observers import (
     AUTO_FRAMES,
     Arrested,
+    CellReading,
     CellTimes,
     EdgeReached,
     EnergyRecorder,
     FrameRecorder,
     FrontRan,
     FrontRecorder,
+    MidlineRecorder,
     OverlapGuard,
     TOP_ROWS_HELD,
     TensionRecorder,
@@ -94,7 +105,6 @@ class DynamicsSettings:
     air_drag: bool  # still air around the yarns
     stop_after_stitches: int | None  # stop once a front has run this many stitches (enough for v_lad)
     friction_band: tuple[int, int, float] | None  # (first course, courses, factor on mu): a run-stop band
-    friction_every: int  # each contact's friction computed once every this many steps, held between (a study)
     clip_friction: float  # Coulomb coefficient of the clips on the bars they slide along (0: frictionless)
 
     @property
@@ -137,6 +147,11 @@ class Laddering:
         """Cells laddered at the current positions (including the baseline)."""
         k = self.knit
         return k.gauge.laddered(self.sim.state.x, k.box_lx, k.box_ly)
+
+    def overlap_over_ly(self) -> np.ndarray:
+        """Each cell's overlap at the current positions [l_y] (:meth:`KnitGauge.overlap_over_ly`)."""
+        k = self.knit
+        return k.gauge.overlap_over_ly(self.sim.state.x, k.box_lx, k.box_ly)
 
     def tension(self) -> float:
         return self.knit.gauge.tension(self.sim)
@@ -205,8 +220,7 @@ def dynamics_simulation(rods: Rods, knit: StretchedKnit, dynamics: DynamicsSetti
     ``obstacles`` (a snag's pin) if any."""
     contact = stretch_contact(knit.settings, mu=dynamics.mu, damping_ratio=dynamics.contact_damping_ratio,
                               tangential_damping_ratio=dynamics.contact_damping_ratio,
-                              counting=dynamics.contact_counting, yarn_friction=band_yarns(knit, dynamics),
-                              friction_every=dynamics.friction_every)
+                              counting=dynamics.contact_counting, yarn_friction=band_yarns(knit, dynamics))
     # a cut frees two end nodes: keep the smaller of the stretch's step (of a yarn as soft) and the new stable step
     stretch_step = math.inf if dynamics.implicit_axial else knit.dt_s / math.sqrt(dynamics.axial_stiffness_factor)
     sim = Simulation(rods, contact=contact, dt_s=min(stretch_step, laddering_time_step(rods, contact, dynamics)),
@@ -278,8 +292,12 @@ class LadderTrace:
     column_cells: tuple[np.ndarray, ...]  # per column: (n_obs, n_y) laddered flags
     frames: FrameRecorder  # positions, velocities and undone cells at the frame times
     baseline: np.ndarray
-    final_laddered: np.ndarray  # cells undone after the cut
-    undone_at: np.ndarray  # (n_y, n_x) when each cell came undone after the cut [s], NaN: never
+    final_laddered: np.ndarray  # cells undone at the stop, as a photograph shows them (the baseline left out)
+    ever_laddered: np.ndarray  # cells undone at any observation after the cut
+    final_overlap: np.ndarray  # (n_y, n_x) each cell's overlap at the stop [l_y]
+    undone_at: np.ndarray  # (n_y, n_x) when each cell first came undone after the cut [s], NaN: never
+    gone_at: np.ndarray  # (n_y, n_x) when each cell's yarn left it [s], NaN: never
+    midlines: tuple[np.ndarray, ...]  # per column, (n_obs, n_y + 1) each course's mid-line height [l0]
     stop_reason: str
     reached_edge: bool
     steps: int
@@ -335,43 +353,50 @@ def propagate(run: Laddering, observers: Sequence[Observer] = (), progress: Call
               stop_rules: Sequence[StopRule] | None = None) -> LadderTrace:
     """Stage 3: run the free dynamics, calling the observers every ``observe_every_s``, until a stop rule fires.
 
-    The standard recorders (fronts, tension, frames, overlap guard) always run; ``observers``
-    are called after them with (t, run, undone cells): the run loop's one signature
-    (:func:`knitlad.engine.runloop.run_until`). ``stop_rules``: default the ladder
-    reaching an edge course, no cell changed for ``arrest_s``, ``max_time_s``.
+    The standard recorders (fronts, mid-lines, tension, frames, overlap guard) always run; ``observers``
+    are called after them with (t, run, :class:`~knitlad.fabric.observers.CellReading`): the run loop's one
+    signature (:func:`knitlad.engine.runloop.run_until`). ``stop_rules``: default the ladder
+    reaching an edge course, no cell changed its state for ``arrest_s`` (:class:`Arrested`), ``max_time_s``.
     """
     t0 = time.perf_counter()
     d = run.dynamics
     columns = (run.cut_column - 1, run.cut_column)
     guard = OverlapGuard(run.knit.settings.material.diameter)
     fronts, tension, cell_times = FrontRecorder(columns, run.cut_row), TensionRecorder(), CellTimes()
-    frames, energy = FrameRecorder(frame_interval(run)), EnergyRecorder()
+    frames, energy, midlines = FrameRecorder(frame_interval(run)), EnergyRecorder(), MidlineRecorder(columns)
     rules = list(stop_rules) if stop_rules is not None else (
         [EdgeReached()] * d.stop_at_edge + [Arrested(d.arrest_s), TimeLimit(d.max_time_s)]
         + ([FrontRan(d.stop_after_stitches, columns, run.cut_row)] if d.stop_after_stitches else []))
-    undone = np.zeros_like(run.baseline)
-    frames.observe(0.0, run, undone)  # the stretched knit just cut, before the first step
+    ever = np.zeros_like(run.baseline)
+    reading = CellReading(ever.copy(), ever, np.zeros(run.baseline.shape))
+    frames.observe(0.0, run, reading)  # the stretched knit just cut, before the first step
     times: list[float] = []
 
-    def observe(t: float) -> np.ndarray:
+    def observe(t: float) -> CellReading:
+        nonlocal reading
         guard.check(run.sim, f"at t = {t * 1e3:.3f} ms after the cut")
-        undone[...] |= run.laddered() & ~run.baseline  # an undone cell does not knit itself again
+        overlap = run.overlap_over_ly()
+        now = laddered_cells(overlap, 1.0) & ~run.baseline  # a cell may knit itself again
+        ever[...] |= now
         times.append(t)
-        return undone
+        reading = CellReading(now, ever, overlap)
+        return reading
 
-    shown = [fronts, tension, cell_times, frames, energy, *observers]
+    shown = [fronts, midlines, tension, cell_times, frames, energy, *observers]
     if progress:
         shown.append(PropagateProgress(progress, fronts))
     t, rule, reason = run_until(run.sim, max(1, int(round(d.observe_every_s / run.sim.dt_s))), observe, rules,
                                 shown, run)
-    frames.observe(t, run, undone, last=True)  # the state at the stop
-    taut = run.knit.gauge.taut(run.sim.state.x, run.knit.box_lx, run.knit.box_ly) & undone
+    frames.observe(t, run, reading, last=True)  # the state at the stop
+    taut = taut_cells(reading.overlap, 1.0) & reading.undone
     return LadderTrace(
         knit=run.knit, dynamics=d, cut_row=run.cut_row, columns=columns, times_s=np.array(times),
         fx=np.array(tension.fx), fx_courses=np.array(tension.fx_courses), fronts=fronts.extents(),
         column_cells=fronts.cells(), frames=frames, energy=energy.series(),
-        baseline=run.baseline, final_laddered=undone, undone_at=cell_times.undone_at, stop_reason=reason,
-        final_taut=taut, reached_edge=EdgeReached.reached(undone), steps=run.sim.steps,
+        baseline=run.baseline, final_laddered=reading.undone, ever_laddered=ever.copy(),
+        final_overlap=reading.overlap, undone_at=cell_times.undone_at, gone_at=cell_times.gone_at,
+        midlines=midlines.heights(), stop_reason=reason,
+        final_taut=taut, reached_edge=EdgeReached.reached(ever), steps=run.sim.steps,
         yarn_start=run.sim.model.yarn_start.copy(), peak_overlap_over_d=guard.peak_over_d,
         edges=np.column_stack([run.sim.model.edge_a, run.sim.model.edge_b]),
         cut_node=int(run.knit.knit.rods.model.edge_a[run.cut_edge]), cell_centres=cell_centres(run),
@@ -391,17 +416,23 @@ class LadderResult:
     fx_fin_intact: float = math.nan  # ... and of the others
     lx_over_l0: float = math.nan
     ly_over_l0: float = math.nan
-    n_lad: int = 0
+    n_lad: int = 0  # cells undone at the stop, as the paper counts them on its photograph after the arrest
     n_lad_over_ny: float = math.nan
-    v_lad_over_cb: float = math.nan
+    n_lad_ever: int = 0  # cells undone at any time after the cut (some knit themselves again)
+    n_lad_rehooked: int = 0  # ... of them hooked again at the stop (head above the sinkers: intact on a photograph)
+    n_lad_between: int = 0  # ... of them neither: the head below the sinkers by less than the undone margin
+    v_lad_over_cb: float = math.nan  # the paper's: slope of the laddering column's mid-point front, stitches 2-10
+    v_lad_first_arrival_over_cb: float = math.nan  # slope of the cells' first arrival (overlap threshold), same fit
     laddering_column: int = -1  # the column beside the cut whose front is followed (measure.laddering_column)
     reached_edge: bool = False
     stop_reason: str = ""
     v_fit_stitches: tuple = (2, 10)
     wall_s: dict = field(default_factory=dict)
     times_s: list = field(default_factory=list)
-    front_up: list = field(default_factory=list)
+    front_up: list = field(default_factory=list)  # the cells' first arrival [stitches]
     front_down: list = field(default_factory=list)
+    front_y: list = field(default_factory=list)  # the front's height on the column's mid-line [l0] (front_heights)
+    midline: np.ndarray | None = None  # (n_obs, n_y + 1) the laddering column's mid-line heights [l0]
     fx_series: list = field(default_factory=list)
     fx_course_series: np.ndarray | None = None  # (n_obs, n_y) each course's f_x
     column_history: list = field(default_factory=list)  # laddered flags of the laddering column over time
@@ -415,9 +446,13 @@ class LadderResult:
     cell_centres: np.ndarray | None = None  # (n_y, n_x, 2) x, y of each cell [m] at the cut
     edges: np.ndarray | None = None  # (ne, 2) node pairs of the edges after the cut
     stretch_tension: np.ndarray | None = None  # (k, 3) FIRE steps, box l_x/l0, f_x of the stretch's readings
-    final_laddered: np.ndarray | None = None
+    final_laddered: np.ndarray | None = None  # cells undone at the stop
+    ever_laddered: np.ndarray | None = None  # cells undone at any time after the cut
+    final_overlap: np.ndarray | None = None  # (n_y, n_x) each cell's overlap at the stop [l_y]
     baseline_laddered: np.ndarray | None = None
-    undone_at: np.ndarray | None = None  # (n_y, n_x) when each cell came undone [s], NaN: never
+    undone_at: np.ndarray | None = None  # (n_y, n_x) when each cell first came undone [s], NaN: never
+    gone_at: np.ndarray | None = None  # (n_y, n_x) when each cell's yarn left it [s], NaN: never
+    cut_column: int = -1  # the column right of the cut sinker
     final_taut: np.ndarray | None = None  # (n_y, n_x) undone cells whose bar is taut at the stop
     cut_row: int = -1
     yarn_start: np.ndarray | None = None  # topology of the frames
@@ -448,22 +483,27 @@ class LadderResult:
         reasons = {
             "v_lad_over_cb": f"the front ran {ran} stitch{'es' * (ran != 1)} above the cut, short of the fit's last, "
                              f"{last} ({self.stop_reason})",
+            "v_lad_first_arrival_over_cb": f"the cells' first arrival ran {ran} stitch{'es' * (ran != 1)} above the "
+                                           f"cut, short of the fit's last, {last} ({self.stop_reason})",
             "fx_fin_crossed": "the ladder crossed no course",
             "fx_fin_intact": "the ladder crossed every course",
-            "first_down_ms": "no ladder started downwards",
-            "second_up_ms": "no second ladder started upwards",
+            "loop1_freed_ms": "the cut thread left neither needle loop beside the cut",
+            "up_from_1_ms": "no ladder ran up from loop (1)",
+            "down_from_2_3_ms": "no ladder ran down from loops (2)/(3)",
+            "up_from_4_5_ms": "no ladder ran up from loops (4)/(5)",
             "fx_fin": "no tension was read after the cut",
         }
         summary_nan = {k for k in reasons if isinstance(getattr(self, k, None), float) and math.isnan(getattr(self, k))}
         record = self.loop_record()
-        summary_nan |= {k for k in ("first_down_ms", "second_up_ms") if math.isnan(record[k])}
+        summary_nan |= {k for k in reasons if k in record and isinstance(record[k], float) and math.isnan(record[k])}
         return {k: reasons[k] for k in reasons if k in summary_nan}
 
     def summary(self) -> dict:
         """The scalar results, and the settings a reader needs beside them (mu, twist, drag)."""
         d = self.settings.dynamics
         skip = {"settings", "wall_s", "times_s", "front_up", "front_down", "fx_series", "fx_course_series",
-                "column_history", "frames",
+                "column_history", "frames", "front_y", "midline", "ever_laddered",
+                "final_overlap", "gone_at",
                 "frame_times_s", "final_laddered", "baseline_laddered", "yarn_start", "frame_velocities",
                 "frame_laddered", "frame_contact", "stretch_tension", "node_course", "cut_node", "cell_centres", "edges",
                 "undone_at", "final_taut", "energy_series"}
@@ -479,23 +519,28 @@ class LadderResult:
         out["nan_reasons"] = "; ".join(f"{k}: {why}" for k, why in self.nan_reasons().items())
         return out
 
-    def ladders(self) -> list[dict]:
-        """The ladders the cut started, by column and direction, and the freed loop of Fig. 2d behind each
-        (:func:`knitlad.fabric.measure.ladders_started`)."""
-        return [] if self.undone_at is None else ladders_started(self.undone_at, self.cut_row)
+    def loops(self) -> dict:
+        """The freed loops of the paper's Fig. 2d and the ladders that ran from them, read from where the cut thread
+        went (:func:`knitlad.fabric.measure.loop_sequence`); empty for a file without the record."""
+        if self.undone_at is None or self.gone_at is None or self.cut_column < 0:
+            return {}
+        # a ladder is what the photograph at the stop shows: the cells undone then, with when each first came undone
+        at_stop = np.where(self.final_laddered, self.undone_at, np.nan) if self.final_laddered is not None \
+            else self.undone_at
+        return loop_sequence(self.gone_at[self.cut_row], at_stop, self.cut_row, self.cut_column)
 
     def damage_record(self) -> dict:
-        """n_lad split as Eq. 1 reads it (:func:`knitlad.fabric.measure.damage_parts`): the cells of the cut row,
-        those undone within 0.1 ms of the cut, and those the ladder released into loaded courses, with the last
-        over n_y (``n_lad_released_over_ny``: the damage Eq. 1 predicts, like for like), and of those the cells
-        whose bar is taut at the stop (``n_lad_released_taut``: each released l0 - l_x, as Eq. 1 counts; -1 and
-        NaN for a run without the final map)."""
+        """n_lad, the cells undone at the stop, split as Eq. 1 reads it (:func:`knitlad.fabric.measure.damage_parts`):
+        the cells of the cut row, those undone within 0.1 ms of the cut, and those the ladder released into loaded
+        courses, with the last over n_y (``n_lad_released_over_ny``), and of those the cells whose bar is taut at
+        the stop (``n_lad_released_taut``: -1 and NaN for a run without the final map). Every part is counted in
+        n_lad, as on the photograph."""
         from knitlad.fabric.measure import damage_parts
 
         if self.undone_at is None:
             parts = {"cut_row": self.n_lad, "immediate": 0, "released": 0, "released_taut": -1}  # an older file
         else:
-            parts = damage_parts(self.undone_at, self.cut_row, taut=self.final_taut)
+            parts = damage_parts(self.undone_at, self.cut_row, taut=self.final_taut, final=self.final_laddered)
         n_y = self.settings.stretch.n_y
         taut = parts["released_taut"]
         return {"n_lad_cut_row": parts["cut_row"], "n_lad_immediate": parts["immediate"],
@@ -503,24 +548,39 @@ class LadderResult:
                 "n_lad_released_taut": taut, "n_lad_released_taut_over_ny": taut / n_y if taut >= 0 else math.nan}
 
     def loop_record(self) -> dict:
-        """Summary of :meth:`ladders`: ladders up and down, when the first downward (loops (2)/(3)) and the
-        second upward (loops (4)/(5)) started [ms after the cut; NaN: never], and ``hindered``: the pattern
-        the paper calls hindered laddering (appendix "Hindered laddering"), one upward ladder and two or
-        more downward, the cut thread held in loops (4) and (5). Read from the cells, as the paper read its
-        photographs; the thread's topology is not tested."""
-        ladders = self.ladders()
-        start = {loop: next((lad["start_s"] * 1e3 for lad in ladders if lad["loop"] == loop), math.nan)
-                 for loop in ("2/3", "4/5")}
-        up = sum(lad["direction"] > 0 for lad in ladders)
-        down = sum(lad["direction"] < 0 for lad in ladders)
-        return {"ladders_up": up, "ladders_down": down, "first_down_ms": start["2/3"],
-                "second_up_ms": start["4/5"], "hindered": bool(up == 1 and down >= 2)}
+        """Summary of :meth:`loops`: the column of loop (1), when the cut thread freed it and when the ladders from
+        loops (1), (2)/(3) and (4)/(5) started [ms after the cut; NaN: none did], the ladders no freed loop
+        explains, the order the ladders started in, whether that is the paper's, whether the cut thread ends held
+        in loops (4) and (5), and ``hindered``: the paper's hindered laddering (appendix), ladders from (1) and
+        (2)/(3) and the cut thread held in (4) and (5)."""
+        r = self.loops()
+        if not r:
+            return {"loop1_column": -1, "loop1_freed_ms": math.nan, "up_from_1_ms": math.nan,
+                    "down_from_2_3_ms": math.nan, "up_from_4_5_ms": math.nan, "other_ladders": 0,
+                    "loop_sequence": "", "paper_order": False, "cut_thread_held": False, "hindered": False}
+        return {"loop1_column": r["loop1_column"], "loop1_freed_ms": r["loop1_freed_s"] * 1e3,
+                "up_from_1_ms": r["up_from_1_s"] * 1e3, "down_from_2_3_ms": r["down_from_2_3_s"] * 1e3,
+                "up_from_4_5_ms": r["up_from_4_5_s"] * 1e3, "other_ladders": r["other_ladders"],
+                "loop_sequence": r["sequence"], "paper_order": r["paper_order"],
+                "cut_thread_held": r["cut_thread_held"], "hindered": r["hindered"]}
 
 
 def analyse(trace: LadderTrace) -> LadderResult:
     """Stage 4: the laddering column (the one whose ladder ran farthest up, then down, fixed for
-    the run as the paper follows one), n_lad/n_y, f_x^fin and v_lad/c_b (paper Fig. 3d)."""
-    from knitlad.fabric.measure import laddering_column, laddering_velocity
+    the run as the paper follows one), n_lad/n_y, f_x^fin and v_lad/c_b, each as the paper reads it.
+
+    * n_lad: "the total number of destroyed cells", counted "after its arrest" on a photograph: the cells undone
+      at the stop (with those whose yarn has gone); the cells undone at any time are ``n_lad_ever``, those that
+      knit themselves again ``n_lad_rehooked``, those left between the two states ``n_lad_between``.
+    * v_lad: "the slope" of "the front of the defect propagation from stitch 2 to 10" in "spatio-temporal
+      diagrams of the central point column of the ladder" (Fig. 3d, appendix "Simulations"): the front of the
+      laddering column's mid-line (:func:`knitlad.fabric.measure.front_speed`): the lab's y of the first course
+      past the ladder's reach against time, while the reach runs from stitch 2 to 10. The cells' first arrival
+      over the same stitches (stitches l_y over time: the cloth's own frame) is ``v_lad_first_arrival_over_cb``.
+    * f_x^fin: the tension "just after" the sharp drop, once the ladder stopped: the mean over the last half
+      arrest window.
+    """
+    from knitlad.fabric.measure import laddering_column
 
     knit, d = trace.knit, trace.dynamics
     s = knit.settings
@@ -532,7 +592,10 @@ def analyse(trace: LadderTrace) -> LadderResult:
     last = min(10, s.n_y - 1 - TOP_ROWS_HELD - trace.cut_row)
     first = min(2, max(last - 2, 1))
     l_y = knit.box_ly * s.material.stitch_length
-    v_lad = laddering_velocity(trace.times_s, front[:, 0], l_y, first, last)
+    v_first = laddering_velocity(trace.times_s, front[:, 0], l_y, first, last)
+    midline = trace.midlines[best]
+    front_y = front_heights(midline, front[:, 0], trace.cut_row)  # [l0]
+    v_lad = front_speed(trace.times_s, front_y, front[:, 0], first, last) * s.material.stitch_length
     n_lad = int(trace.final_laddered.sum())
     fin_courses = trace.fx_courses[window].mean(axis=0)
     crossed = trace.final_laddered.any(axis=1)  # courses with an undone cell: the ladder relaxed them
@@ -544,16 +607,22 @@ def analyse(trace: LadderTrace) -> LadderResult:
         settings=LadderSettings(s, d), fx_ini=knit.fx_ini, fx_fin=float(np.mean(trace.fx[window])),
         fx_fin_crossed=mean_of(crossed), fx_fin_intact=mean_of(~crossed), fx_course_series=trace.fx_courses,
         lx_over_l0=knit.lx_over_l0, ly_over_l0=knit.ly_over_l0, n_lad=n_lad, n_lad_over_ny=n_lad / s.n_y,
-        v_lad_over_cb=v_lad / s.material.c_b, laddering_column=trace.columns[best], reached_edge=trace.reached_edge,
+        n_lad_ever=int(trace.ever_laddered.sum()),
+        n_lad_rehooked=int(rehooked_cells(trace.final_overlap, trace.ever_laddered).sum()),
+        n_lad_between=int(between_cells(trace.final_overlap, trace.ever_laddered, 1.0).sum()),
+        v_lad_over_cb=v_lad / s.material.c_b, v_lad_first_arrival_over_cb=v_first / s.material.c_b,
+        laddering_column=trace.columns[best], reached_edge=trace.reached_edge,
         stop_reason=trace.stop_reason, v_fit_stitches=(first, last),
         wall_s={"stretch": knit.wall_s, "propagate": trace.wall_s}, times_s=list(trace.times_s),
         front_up=[int(u) for u in front[:, 0]], front_down=[int(v) for v in front[:, 1]], fx_series=list(trace.fx),
+        front_y=[float(y) for y in front_y], midline=midline,
         column_history=list(trace.column_cells[best]), frames=trace.frames.frames,
         frame_times_s=trace.frames.times_s, frame_velocities=trace.frames.velocities,
         frame_laddered=trace.frames.laddered, frame_contact=trace.frames.contact, node_course=knit.knit.node_course(), cut_node=trace.cut_node,
         cell_centres=trace.cell_centres, edges=trace.edges, stretch_tension=knit.tension_history,
-        final_laddered=trace.final_laddered, baseline_laddered=trace.baseline, yarn_start=trace.yarn_start,
-        undone_at=trace.undone_at, cut_row=trace.cut_row, final_taut=trace.final_taut,
+        final_laddered=trace.final_laddered, ever_laddered=trace.ever_laddered, final_overlap=trace.final_overlap,
+        baseline_laddered=trace.baseline, yarn_start=trace.yarn_start, undone_at=trace.undone_at,
+        gone_at=trace.gone_at, cut_column=trace.columns[1], cut_row=trace.cut_row, final_taut=trace.final_taut,
         nodes=knit.knit.rods.model.n_nodes, steps=trace.steps, relax_steps=knit.relax_steps,
         fx_within_tolerance=knit.fx_within_tolerance, box_lx_over_l0=knit.box_lx,
         peak_overlap_over_d=max(knit.peak_overlap_over_d, trace.peak_overlap_over_d), energy_series=trace.energy,

@@ -53,6 +53,14 @@ class ResistanceResult:
         ran = [c.fx_ini for c, lad in zip(self.cuts, self.laddered()) if lad]
         return (max(held) if held else math.nan, min(ran) if ran else math.nan)
 
+    def arrest_threshold(self) -> dict:
+        """f_x^thr as the paper defines it: the mean f_x^fin of the cuts that laddered and arrested, with its scatter
+        (:func:`knitlad.fabric.measure.arrest_threshold`)."""
+        from knitlad.fabric.measure import arrest_threshold
+
+        return arrest_threshold([c.fx_ini for c in self.cuts], [c.fx_fin for c in self.cuts], self.laddered(),
+                                [c.stop_reason.startswith("no cell changed") for c in self.cuts])
+
     def pictured(self) -> LadderResult | None:
         """The ladder the report shows: the highest tension's cut that laddered, else the snag's."""
         ran = [c for c, lad in zip(self.cuts, self.laddered()) if lad]
@@ -77,6 +85,8 @@ class ResistanceResult:
                "snag_v_down_over_cb": snag_row.get("v_down_over_cb", math.nan),
                "snag_fx_ini": snag_row["fx_ini"],
                "fx_thr_below": lo, "fx_thr_above": hi,
+               **{name: self.arrest_threshold()[k] for name, k in (
+                   ("fx_thr_arrest", "fx_thr"), ("fx_thr_arrest_sd", "fx_thr_sd"), ("fx_thr_arrest_runs", "runs"))},
                "monotonic": all(not a or b for a, b in zip(lad, lad[1:])),
                "tensions": len(self.cuts)}
         if self.cuts:

@@ -2,12 +2,15 @@
 
 An observer is any object with ``observe(t, run, reading)``, the run loop's one signature
 (:class:`knitlad.engine.runloop.Observer`): for the laddering, called after every observation interval
-with the time since the cut [s], the running :class:`knitlad.experiments.laddering.Laddering` and the map
-of cells undone since the cut (n_y, n_x). A stop rule has ``check(t, undone) -> str | None``: a reason to
-stop, or None. Write your own and pass them to ``propagate``; these are the standard ones.
+with the time since the cut [s], the running :class:`knitlad.experiments.laddering.Laddering` and a
+:class:`CellReading` (the cells undone now, those ever undone since the cut, each cell's overlap). A stop rule
+has ``check(t, reading) -> str | None``: a reason to stop, or None. Write your own and pass them to
+``propagate``; these are the standard ones.
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 
@@ -15,6 +18,18 @@ from knitlad.fabric.measure import ladder_front
 from knitlad.engine.units import LENGTH, VELOCITY
 
 MAX_OVERLAP_OVER_D = 0.5  # deeper than this, a yarn may pass through another: the run stops with an error
+
+
+class CellReading(NamedTuple):
+    """The laddering's reading at one observation (every map (n_y, n_x), the cells flagged before the cut left
+    out). ``undone``: the cells undone now, as a photograph shows them (the head below the course above's sinkers
+    by the undone margin, or its yarn gone: :func:`knitlad.fabric.measure.cell_overlap`); a cell can knit
+    itself again. ``ever``: the cells undone at any observation since the cut. ``overlap``: each cell's overlap
+    [l_y] (-inf where its yarn has gone, NaN where no head was read)."""
+
+    undone: np.ndarray
+    ever: np.ndarray
+    overlap: np.ndarray
 
 
 class Interpenetration(RuntimeError):
@@ -49,10 +64,10 @@ class FrontRecorder:
         self._fronts: list[list[tuple[int, int]]] = [[] for _ in columns]
         self._cells: list[list[np.ndarray]] = [[] for _ in columns]
 
-    def observe(self, t: float, run, undone: np.ndarray) -> None:
-        for c, col in enumerate(self.columns):
-            self._fronts[c].append(ladder_front(undone, col, self.cut_row))
-            self._cells[c].append(undone[:, col].copy())
+    def observe(self, t: float, run, reading: CellReading) -> None:
+        for c, col in enumerate(self.columns):  # the farthest any cell came undone: the first arrivals
+            self._fronts[c].append(ladder_front(reading.ever, col, self.cut_row))
+            self._cells[c].append(reading.undone[:, col].copy())
 
     def extents(self) -> tuple[np.ndarray, ...]:
         return tuple(np.array(f, dtype=np.int64).reshape(-1, 2) for f in self._fronts)
@@ -72,16 +87,37 @@ class FrontRecorder:
 
 
 class CellTimes:
-    """When each cell came undone (NaN: not yet): the record of which freed loops started ladders, and when
-    (:func:`knitlad.fabric.measure.ladders_started`)."""
+    """When each cell first came undone, and when its yarn left it (NaN: not yet): the record of which freed
+    loops started ladders, and when (:func:`knitlad.fabric.measure.loop_sequence`)."""
 
     def __init__(self) -> None:
         self.undone_at: np.ndarray | None = None
+        self.gone_at: np.ndarray | None = None
 
-    def observe(self, t: float, run, undone: np.ndarray) -> None:
+    def observe(self, t: float, run, reading: CellReading) -> None:
         if self.undone_at is None:
-            self.undone_at = np.full(undone.shape, np.nan)
-        self.undone_at[undone & np.isnan(self.undone_at)] = t
+            self.undone_at = np.full(reading.ever.shape, np.nan)
+            self.gone_at = np.full(reading.ever.shape, np.nan)
+        self.undone_at[reading.ever & np.isnan(self.undone_at)] = t
+        self.gone_at[np.isneginf(reading.overlap) & np.isnan(self.gone_at)] = t
+
+
+class MidlineRecorder:
+    """The paper's spatio-temporal diagram of each followed column: every course's height where it crosses the
+    column's mid-line (:func:`knitlad.fabric.measure.midline_heights`), at every observation [l0]."""
+
+    def __init__(self, columns: tuple[int, ...]) -> None:
+        self.columns = columns
+        self._heights: list[np.ndarray] = []
+
+    def observe(self, t: float, run, reading: CellReading) -> None:
+        k = run.knit
+        self._heights.append(k.gauge.midline_heights(run.sim.state.x, k.box_lx, self.columns))
+
+    def heights(self) -> tuple[np.ndarray, ...]:
+        """Per column, (n_obs, n_courses) mid-line heights [l0]."""
+        stacked = np.array(self._heights)  # (n_obs, n_courses, n_columns)
+        return tuple(stacked[:, :, c] for c in range(len(self.columns)))
 
 
 class EnergyRecorder:
@@ -91,7 +127,7 @@ class EnergyRecorder:
     def __init__(self) -> None:
         self.readings: list[dict[str, float]] = []
 
-    def observe(self, t: float, run, undone: np.ndarray) -> None:
+    def observe(self, t: float, run, reading: CellReading) -> None:
         self.readings.append(run.sim.ledger().as_dict())
 
     def series(self) -> dict[str, np.ndarray]:
@@ -111,8 +147,8 @@ class FrontRan:
     def __init__(self, stitches: int, columns: tuple[int, ...], cut_row: int) -> None:
         self.stitches, self.columns, self.cut_row = stitches, columns, cut_row
 
-    def check(self, t: float, undone: np.ndarray) -> str | None:
-        ran = max(max(ladder_front(undone, col, self.cut_row)) for col in self.columns)
+    def check(self, t: float, reading: CellReading) -> str | None:
+        ran = max(max(ladder_front(reading.ever, col, self.cut_row)) for col in self.columns)
         return f"a front ran {self.stitches} stitches" if ran >= self.stitches else None
 
 
@@ -123,7 +159,7 @@ class TensionRecorder:
         self.fx: list[float] = []
         self.fx_courses: list[np.ndarray] = []
 
-    def observe(self, t: float, run, undone: np.ndarray) -> None:
+    def observe(self, t: float, run, reading: CellReading) -> None:
         self.fx.append(run.tension())
         self.fx_courses.append(run.course_tensions())
 
@@ -166,12 +202,12 @@ class FrameRecorder:
         self.times_s: list[float] = []
         self._next = 0.0
 
-    def observe(self, t: float, run, undone: np.ndarray, last: bool = False) -> None:
+    def observe(self, t: float, run, reading: CellReading, last: bool = False) -> None:
         if t >= self._next or (last and (not self.times_s or self.times_s[-1] < t)):
             self.frames.append(run.sim.positions_m().astype(np.float32))
             self.velocities.append((run.sim.state.v * VELOCITY).astype(np.float32))
             self.contact.append(node_contact_state(run.sim))
-            self.laddered.append(undone.copy())
+            self.laddered.append(reading.undone.copy())  # as a photograph of that instant shows them
             self.times_s.append(t)
             while self._next <= t:
                 self._next += self.every_s
@@ -197,33 +233,35 @@ class EdgeReached:
         top = undone.shape[0] - 1 - TOP_ROWS_HELD
         return bool(undone[top].any() or undone[0].any())
 
-    def check(self, t: float, undone: np.ndarray) -> str | None:
-        return "ladder reached an edge course" if self.reached(undone) else None
+    def check(self, t: float, reading: CellReading) -> str | None:
+        return "ladder reached an edge course" if self.reached(reading.ever) else None
 
 
 class Arrested:
-    """Every front has stopped: no cell has changed for ``arrest_s``, nor for ``pause_factor`` times the
-    longest pause between two changes so far.
+    """The knit has settled: no cell has changed its state (undone now or not: the photograph the paper counts
+    after the arrest) for ``arrest_s``, nor for ``pause_factor`` times the longest pause between two changes
+    so far.
 
     A stick-slip front advances in bursts between pauses of some duration tau; with the second condition it
     is not taken as arrested before it has been still for ``pause_factor`` tau (3 by default), whatever
-    ``arrest_s`` says.
+    ``arrest_s`` says. A cell that knits itself again, or one still crossing the threshold, is a change: the
+    run goes on until the photograph stops changing.
     """
 
     def __init__(self, arrest_s: float, pause_factor: float = 3.0) -> None:
         self.arrest_s, self.pause_factor = arrest_s, pause_factor
-        self._count = -1
+        self._map: np.ndarray | None = None
         self._since = 0.0
         self._changed = False  # a change after the first observation: pauses are counted from it on
         self.longest_pause = 0.0
 
-    def check(self, t: float, undone: np.ndarray) -> str | None:
-        n = int(undone.sum())
-        if n != self._count:
+    def check(self, t: float, reading: CellReading) -> str | None:
+        now = reading.undone
+        if self._map is None or not np.array_equal(now, self._map):
             if self._changed:  # the wait before the first change is the ladder's start, not a pause
                 self.longest_pause = max(self.longest_pause, t - self._since)
-            self._changed = self._count >= 0
-            self._count, self._since = n, t
+            self._changed = self._map is not None
+            self._map, self._since = now.copy(), t
         wait = max(self.arrest_s, self.pause_factor * self.longest_pause)
         return f"no cell changed for {wait * 1e3:.1f} ms" if t - self._since >= wait else None
 

@@ -31,6 +31,7 @@ from knitlad.fabric.measure import (
     cell_overlap,
     course_tensions,
     laddered_cells,
+    midline_heights,
     periodicities,
     taut_cells,
     tension_per_thread,
@@ -119,6 +120,7 @@ class StretchSettings:
     # (first course, courses, K): a run-stop band of courses whose yarn remembers K instead of natural_curvature
     memory_band: tuple[int, int, float] | None
     bars: str  # how the edge courses below and above are held (knitlad.fabric.scenes.knit.BARS)
+    knit_seed: int | None  # an ensemble member's knit: its yarn displaced at random (perturb_knit; None: none)
 
     def __post_init__(self) -> None:
         if (self.lx is None) == (self.fx is None):
@@ -190,15 +192,24 @@ class KnitGauge:
         lx_m, ly_m = periodicities(self.rows(x)[:-1], self.column_centres(box_lx), box_lx * l0)
         return lx_m / l0, ly_m / l0
 
-    def laddered(self, x: np.ndarray, box_lx: float, box_ly: float) -> np.ndarray:
+    def overlap_over_ly(self, x: np.ndarray, box_lx: float, box_ly: float) -> np.ndarray:
+        """Each cell's overlap (:func:`knitlad.fabric.measure.cell_overlap`) in l_y: > 0 holds, -inf its yarn gone."""
         l0 = self.material.stitch_length / units.LENGTH
-        overlap = cell_overlap(self.rows(x), self.column_centres(box_lx), box_lx * l0)
-        return laddered_cells(overlap, box_ly * l0)
+        return cell_overlap(self.rows(x), self.column_centres(box_lx), box_lx * l0) / (box_ly * l0)
+
+    def laddered(self, x: np.ndarray, box_lx: float, box_ly: float) -> np.ndarray:
+        return laddered_cells(self.overlap_over_ly(x, box_lx, box_ly), 1.0)
 
     def taut(self, x: np.ndarray, box_lx: float, box_ly: float) -> np.ndarray:
         """Cells whose bar is taut (:func:`knitlad.fabric.measure.taut_cells`)."""
+        return taut_cells(self.overlap_over_ly(x, box_lx, box_ly), 1.0)
+
+    def midline_heights(self, x: np.ndarray, box_lx: float, columns) -> np.ndarray:
+        """(n_y + 1, len(columns)) each course's height where it crosses each column's mid-line [l0] (the held
+        top course last; :func:`knitlad.fabric.measure.midline_heights`), the columns' x fixed as the box's."""
         l0 = self.material.stitch_length / units.LENGTH
-        return taut_cells(cell_overlap(self.rows(x), self.column_centres(box_lx), box_lx * l0), box_ly * l0)
+        centres = self.column_centres(box_lx)[np.asarray(columns, dtype=np.int64)]
+        return midline_heights(self.rows(x), centres, 0.5 * box_lx * l0) / l0
 
 
 # ------------------------------------------------------------------ stage 1: stretch
@@ -391,9 +402,33 @@ def stretch(s: StretchSettings, progress: Callable[[str, float], None] | None = 
     elif fx is None:
         fx, within = force_control(box, s.fx, s.fx_tolerance, s.stretch_increment, box.build_lx,
                                    progress=report)
+    if s.knit_seed is not None:
+        perturb_knit(box.sim, s.knit_seed, KNIT_NOISE * s.material.diameter)
+        fx = box.gauge.tension(box.sim)
     knit = box.stretched(fx, within, time.perf_counter() - t0)
     check_whole(knit)
     return knit
+
+
+KNIT_NOISE = 0.001  # an ensemble member's knit: each free node displaced across its yarn by this many d, rms
+
+
+def perturb_knit(sim: Simulation, seed: int, rms_m: float) -> None:
+    """Displace every free node of ``sim`` across its yarn (normal to its local tangent, which keeps every
+    segment's length to second order) by a Gaussian of ``rms_m`` [m] per direction, drawn from ``seed``; the
+    forces are evaluated anew. Two seeds give two knits: the paper's ensemble of samples, where one knit
+    ladders by chance as it does (run-to-run scatter of about 20 % at low tension)."""
+    m, x = sim.model, sim.state.x
+    rng = np.random.default_rng(seed)
+    tangent = np.zeros_like(x)
+    for y in range(m.n_yarns):
+        a, b = int(m.yarn_start[y]), int(m.yarn_start[y + 1])
+        if b - a >= 2:
+            tangent[a:b] = np.gradient(x[a:b], axis=0)
+    tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-300)
+    kick = rng.normal(scale=rms_m / units.LENGTH, size=x.shape)  # [internal length]
+    kick -= np.sum(kick * tangent, axis=1, keepdims=True) * tangent
+    sim.displace_free(kick * units.LENGTH)
 
 
 class KnitCameApart(OutOfReach):

@@ -7,12 +7,14 @@ A laddering run (``ladder.h5``, a sweep's ``jobs/<id>.h5``)::
     /frames/positions   (n_frames, n_nodes, 3) float32 [m]; the first frame is the knit just cut, the last the stop
                         (every dataset carries its unit as the attribute "unit": RUN_UNITS)
     /frames/velocities  (n_frames, n_nodes, 3) float32 [m/s]
-    /frames/laddered    (n_frames, n_y, n_x) bool: cells undone since the cut
+    /frames/laddered    (n_frames, n_y, n_x) bool: cells undone at that instant
     /frames/contact     (n_frames, n_nodes) uint8: 0 free, 1 touching another yarn, 2 sliding on it
     /frames/time        (n_frames,) [s]
     /fields/axial_strain, curvature   (n_frames, n_nodes) float32 [-], [1/m]
     /series/time        (n_obs,) [s] since the cut
-    /series/front_up, front_down   ladder extent [stitches]
+    /series/front_up, front_down   ladder extent, the cells' first arrival [stitches]
+    /series/front_y     the front's height on the laddering column's mid-line (v_lad's) [l0]
+    /series/midline     (n_obs, n_y + 1) each course's height on the laddering column's mid-line [l0]
     /series/fx          tension per thread f_x
 /series/fx_courses  (n_obs, n_y) each free course's own f_x (bottom to top)
     /series/laddering_column_cells  (n_obs, n_y) bool
@@ -21,8 +23,11 @@ A laddering run (``ladder.h5``, a sweep's ``jobs/<id>.h5``)::
                         (support_work, obstacle_work, owner_changes), taken out (axial_dashpot, contact_dashpot, friction,
                         global_drag, material, air), start, residual, turnover; time_s [s]
     /stretch/relax_steps, box_lx_over_l0, fx   the stretch's tension readings (FIRE steps so far, box, f_x)
-    /final/laddered     (n_y, n_x) bool
-    /final/taut         (n_y, n_x) bool: of those, the cells whose bar is taut at the stop
+    /final/laddered     (n_y, n_x) bool: cells undone at the stop (n_lad)
+    /final/ever         (n_y, n_x) bool: cells undone at any time after the cut
+    /final/overlap      (n_y, n_x) each cell's overlap at the stop [l_y] (-inf: its yarn has gone)
+    /final/taut         (n_y, n_x) bool: of the undone ones, the cells whose bar is taut at the stop
+    /final/undone_at, gone_at   (n_y, n_x) when each cell first came undone, when its yarn left it [s] (NaN: never)
     /cells/centres      (n_y, n_x, 2) x, y of each cell at the cut [m]
     /topology/yarn_start, edges (ne, 2), node_course (n,): -1 and n_y for the held courses; attr cut_node
 
@@ -207,6 +212,9 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
         checksummed_dataset(g, "time", result.times_s)
         checksummed_dataset(g, "front_up", result.front_up)
         checksummed_dataset(g, "front_down", result.front_down)
+        if getattr(result, "midline", None) is not None:
+            checksummed_dataset(g, "front_y", np.asarray(result.front_y, dtype=float))
+            checksummed_dataset(g, "midline", np.asarray(result.midline, dtype=float))
         checksummed_dataset(g, "fx", result.fx_series)
         if result.fx_course_series is not None:
             checksummed_dataset(g, "fx_courses", np.asarray(result.fx_course_series, dtype=float))
@@ -220,9 +228,13 @@ def write_ladder_result(path: str | Path, result, compression: str | None = "gzi
             checksummed_dataset(f.require_group("final"), "laddered", result.final_laddered)
         if getattr(result, "final_taut", None) is not None:
             checksummed_dataset(f.require_group("final"), "taut", result.final_taut)
+        for name, array in (("ever", "ever_laddered"), ("overlap", "final_overlap"), ("gone_at", "gone_at")):
+            if getattr(result, array, None) is not None:
+                checksummed_dataset(f.require_group("final"), name, getattr(result, array))
         if result.undone_at is not None:
             checksummed_dataset(f.require_group("final"), "undone_at", result.undone_at)
             f["final"].attrs["cut_row"] = result.cut_row
+            f["final"].attrs["cut_column"] = getattr(result, "cut_column", -1)
         if result.stretch_tension is not None:
             g = f.require_group("stretch")
             for k, name in enumerate(("relax_steps", "box_lx_over_l0", "fx")):
@@ -245,6 +257,8 @@ RUN_UNITS = {
     "frames/positions": "m", "frames/velocities": "m/s", "frames/laddered": "1", "frames/contact": "1",
     "frames/time": "s", "fields/axial_strain": "1", "fields/curvature": "1/m", "series/time": "s",
     "series/front_up": "stitches", "series/front_down": "stitches", "series/fx": "f0", "series/fx_courses": "f0",
+    "series/front_y": "l0", "series/midline": "l0",
+    "final/ever": "1", "final/overlap": "l_y", "final/gone_at": "s",
     "series/laddering_column_cells": "1", "stretch/relax_steps": "1", "stretch/box_lx_over_l0": "l0",
     "stretch/fx": "f0", "final/laddered": "1", "final/taut": "1", "final/undone_at": "s", "cells/centres": "m",
     "topology/yarn_start": "1",

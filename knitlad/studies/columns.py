@@ -21,7 +21,11 @@ FRAME = {
     "scene": ("-", "the experiment the job ran: ladder (knitlad cut), cycle (protocol B), tensile, snag, resistance, "
                    "loop, stitch or diagram"),
     "fx_nominal": ("1", "an ensemble's point: the target f_x^ini its members' fx are spread around (sweep.ensemble)"),
-    "ensemble_member": ("index", "which knit of its point's ensemble (targets 0.5 % apart)"),
+    "ensemble_member": ("index", "which knit of its point's ensemble (targets 0.5 % apart, yarn displaced from seed "
+                                 "knit_seed = this index)"),
+    "ensemble_point": ("-", "the id of the point the member belongs to (its params less fx and knit_seed)"),
+    "same_knit_as": ("index", "the member of the same point that stretched to the same knit (f_x^ini, l_x, l_y to "
+                              "the digit): a collapsed member, its scatter measures nothing; -1: none"),
     "status": ("-", "pending (not run yet), ok, or failed"),
     "error": ("-", "why a failed job failed, in one line (empty otherwise)"),
     "knitlad_code": ("-", "the knitlad version and source hash that made the job's file"),
@@ -49,7 +53,8 @@ def column_dictionary(scene: str) -> list[tuple[str, str, str]]:
         kinds = (field.annotation, *get_args(field.annotation))
         words = any(k in (bool, str) or get_origin(k) is Literal for k in kinds)  # a flag or a choice: no unit
         rows.append((name, "-" if words else unit_of(field.description), f"input: {field.description}"))
-    rows += [(name, *FRAME[name]) for name in ("fx_nominal", "ensemble_member", "status", "error", "knitlad_code")]
+    rows += [(name, *FRAME[name]) for name in ("fx_nominal", "ensemble_member", "ensemble_point", "same_knit_as", "status",
+                                                       "error", "knitlad_code")]
     for key in s.summary_keys:
         if key in s.config.model_fields:  # an input the result echoes (natural_curvature): one column
             continue

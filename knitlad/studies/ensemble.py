@@ -1,8 +1,9 @@
 """Paired ensembles: the options of an ensemble study, the targets of its members, a resumable CSV.
 
 An ensemble samples one ladder's run-to-run scatter: force-control targets a fraction of a
-percent apart (:func:`target_offsets`), each knit stretched once and laddered under each
-setting compared. Rows are kept in ``<out>/<name>.csv``, written atomically after every run,
+percent apart (:func:`target_offsets`), each member's yarn displaced at random from its own seed
+(``knit_seed``), each knit stretched once and laddered under each setting compared. A member that
+stretched to the same knit as another (:func:`with_collapsed_members`) is said, not counted twice. Rows are kept in ``<out>/<name>.csv``, written atomically after every run,
 and read back on a rerun so that finished runs are skipped.
 """
 
@@ -54,3 +55,22 @@ def save_rows(csv: Path, rows: list[dict], key: tuple[str, ...] | None = None) -
         df = pd.concat([theirs, df], ignore_index=True).drop_duplicates(subset=list(key), keep="last")
     with atomic_path(csv) as tmp:
         df.to_csv(tmp, index=False)
+
+
+SAME_KNIT = ("fx_ini", "lx_over_l0", "ly_over_l0")  # a knit's identity as the summary records it
+
+
+def with_collapsed_members(rows: list[dict]) -> list[dict]:
+    """The summary's rows, each ensemble member's with ``same_knit_as``: the ensemble_member of another member of
+    its point (``ensemble_point``) listed before it whose stretched knit is the same to the digit (f_x^ini, l_x/l0
+    and l_y/l0), -1 if none. Such a member adds nothing to the point's scatter: its error bar would measure
+    nothing."""
+    seen: dict[tuple, int] = {}
+    out = []
+    for row in rows:
+        if row.get("ensemble_point") is None or row.get("status") != "ok":
+            out.append(row)
+            continue
+        earlier = seen.setdefault((row["ensemble_point"], *(row.get(k) for k in SAME_KNIT)), row["ensemble_member"])
+        out.append({**row, "same_knit_as": earlier if earlier != row["ensemble_member"] else -1})
+    return out

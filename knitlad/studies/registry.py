@@ -293,17 +293,33 @@ LADDER_RESULTS = {
                      "paper's Fig. 3f, else (reached_edge, or the time limit) the tension of that moment"),
     "fx_fin_crossed": ("f0", "f_x at the stop of the courses the ladder crossed (with an undone cell)"),
     "fx_fin_intact": ("f0", "f_x at the stop of the courses it did not cross"),
-    "n_lad": ("cells", "cells undone after the cut"),
+    "n_lad": ("cells", "cells undone at the stop, as the paper counts them on a photograph after the arrest (with "
+                       "those whose yarn has gone, the cut course's pulled out)"),
     "n_lad_over_ny": ("1", "n_lad/n_y: the damage, in columns of the knit's height (paper Fig. 3e)"),
-    "v_lad_over_cb": ("c_b", "v_lad/c_b: the upward front's slope from stitch v_fit_first to v_fit_last (NaN: the "
-                             "front ran fewer than 3 stitches; stop_reason says why)"),
+    "n_lad_ever": ("cells", "cells undone at any time after the cut (some knit themselves again)"),
+    "n_lad_rehooked": ("cells", "of n_lad_ever, the cells hooked again at the stop (intact on a photograph)"),
+    "n_lad_between": ("cells", "of n_lad_ever, the cells at the stop neither hooked nor a bar (head below the "
+                               "sinkers above by less than 0.25 l_y): in neither count"),
+    "v_lad_over_cb": ("c_b", "v_lad/c_b as the paper reads it: the slope of the laddering column's mid-point front "
+                             "(spatio-temporal diagram) from stitch v_fit_first to v_fit_last (NaN: the front ran "
+                             "fewer than 3 stitches; stop_reason says why)"),
+    "v_lad_first_arrival_over_cb": ("c_b", "the same fit to the cells' first arrival (head 0.25 l_y below the "
+                                           "sinkers): knitlad's v_lad before 0.15"),
     "lx_over_l0": ("l0", "l_x/l0 measured on the stretched knit (not the box's: box_lx_over_l0)"),
     "ly_over_l0": ("l0", "l_y/l0 measured on the stretched knit"),
-    "ladders_up": ("1", "ladders the cut started upwards (from loops (1) and (4)/(5) of the paper's Fig. 2d)"),
-    "ladders_down": ("1", "ladders it started downwards (from loops (2)/(3))"),
-    "first_down_ms": ("ms", "when the first downward ladder started after the cut (NaN: none did)"),
-    "second_up_ms": ("ms", "when the second upward ladder started (NaN: none did)"),
-    "hindered": ("-", "the paper's hindered laddering: one ladder up and two or more down"),
+    "loop1_column": ("index", "the column of loop (1): the needle loop beside the cut the cut thread left first "
+                              "(-1: it left neither)"),
+    "loop1_freed_ms": ("ms", "when the cut thread left loop (1)"),
+    "up_from_1_ms": ("ms", "when the ladder up from loop (1) started (NaN: none ran)"),
+    "down_from_2_3_ms": ("ms", "when the first ladder down from loops (2)/(3), the heads below the cut, started"),
+    "up_from_4_5_ms": ("ms", "when the second upward ladder, from loops (4)/(5), the cut thread's next needle "
+                             "loops, started (NaN: none ran)"),
+    "other_ladders": ("1", "ladders no freed loop of the cut thread explains"),
+    "loop_sequence": ("-", "the freed loops whose ladders ran, in the order they started ('(1), (2)/(3), (4)/(5)')"),
+    "paper_order": ("-", "the ladders started in the paper's order: (1), then (2)/(3), then (4)/(5)"),
+    "cut_thread_held": ("-", "the cut thread ends held in both loops (4) and (5)"),
+    "hindered": ("-", "the paper's hindered laddering: ladders from (1) and (2)/(3), the cut thread held in (4) "
+                      "and (5), no second upward ladder"),
     "n_lad_cut_row": ("cells", "undone cells of the cut's own course (its yarn is cut: they free no length into a "
                       "loaded course)"),
     "n_lad_immediate": ("cells", "other cells undone within 0.1 ms of the cut (its recoil, not the ladder's run)"),
@@ -359,10 +375,10 @@ CYCLE_RESULTS = {
     "cut_fx_fin": ("f0", "the cut copy's f_x^fin"),
     "cut_fx_fin_crossed": ("f0", "the cut copy's f_x at the stop of the courses its ladder crossed"),
     "cut_reached_edge": ("-", "the cut copy's ladder reached an edge course"),
-    "cut_ladders_up": ("1", "ladders the cut started upwards"),
-    "cut_ladders_down": ("1", "ladders the cut started downwards"),
-    "cut_second_up_ms": ("ms", "when the second upward ladder started (NaN: none did)"),
-    "cut_hindered": ("-", "hindered laddering (one ladder up, two or more down)"),
+    "cut_n_lad_ever": ("cells", "the cut copy's cells undone at any time"),
+    "cut_loop_sequence": ("-", "the freed loops whose ladders ran, in order (loop_sequence)"),
+    "cut_up_from_4_5_ms": ("ms", "when the second upward ladder, from loops (4)/(5), started (NaN: none ran)"),
+    "cut_hindered": ("-", "the paper's hindered laddering: the cut thread held in loops (4) and (5)"),
     "cut_n_lad_cut_row": ("cells", "the cut copy's undone cells of the cut course"),
     "cut_n_lad_immediate": ("cells", "the cut copy's other cells undone within 0.1 ms of the cut"),
     "cut_n_lad_released": ("cells", "the cut copy's cells released into loaded courses (Eq. 1's count)"),
@@ -450,6 +466,9 @@ RESISTANCE_RESULTS = {
     "snag_v_down_over_cb": ("c_b", "the snag's ladder: its downward front's velocity"),
     "fx_thr_below": ("f0", "the highest f_x^ini of the series whose cut did not ladder (NaN: every one did)"),
     "fx_thr_above": ("f0", "the lowest f_x^ini of the series whose cut laddered (NaN: none did)"),
+    "fx_thr_arrest": ("f0", "the paper's f_x^thr: the mean f_x^fin of the cuts that laddered and arrested (NaN: none)"),
+    "fx_thr_arrest_sd": ("f0", "its scatter (standard deviation over those cuts; NaN below two)"),
+    "fx_thr_arrest_runs": ("1", "the cuts it is the mean of"),
     "monotonic": ("-", "no cut laddered below a tension whose cut held"),
     "n_lad_over_ny_lowest": ("1", "the damage of the cut at the lowest tension"),
     "n_lad_over_ny_highest": ("1", "the damage of the cut at the highest tension"),
@@ -460,8 +479,10 @@ RESISTANCE_RESULTS = {
 
 EXPERIMENTS: dict[str, Experiment] = {
     "ladder": Experiment(CutConfig, run_ladder_job, (
-        "fx_ini", "fx_fin", "fx_fin_crossed", "fx_fin_intact", "n_lad", "n_lad_over_ny", "v_lad_over_cb", "natural_curvature", "lx_over_l0", "ly_over_l0",
-        "ladders_up", "ladders_down", "first_down_ms", "second_up_ms", "hindered", "n_lad_cut_row", "n_lad_immediate", "n_lad_released",
+        "fx_ini", "fx_fin", "fx_fin_crossed", "fx_fin_intact", "n_lad", "n_lad_over_ny", "n_lad_ever", "n_lad_rehooked", "n_lad_between",
+        "v_lad_over_cb", "v_lad_first_arrival_over_cb", "natural_curvature", "lx_over_l0", "ly_over_l0",
+        "loop1_column", "loop1_freed_ms", "up_from_1_ms", "down_from_2_3_ms", "up_from_4_5_ms", "other_ladders",
+        "loop_sequence", "paper_order", "cut_thread_held", "hindered", "n_lad_cut_row", "n_lad_immediate", "n_lad_released",
         "n_lad_released_over_ny", "n_lad_released_taut", "n_lad_released_taut_over_ny",
         "box_lx_over_l0", "fx_within_tolerance", "peak_overlap_over_d", "reached_edge", "stop_reason",
         "laddering_column", "v_fit_stitches", "v_fit_first", "v_fit_last", "energy_start_J", "energy_end_J", "dissipated_friction_J",
@@ -470,8 +491,8 @@ EXPERIMENTS: dict[str, Experiment] = {
         "wall_stretch_s", "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment", stretch_of, LADDER_RESULTS),
     "cycle": Experiment(CycleConfig, run_cycle_job, (
         "fx_ini", "lx_over_l0", "ly_over_l0", "lx_max", "fx_thr", "delta_l_over_l0", "predicted_damage",
-        "fx_thr_own", "delta_l_own_over_l0", "predicted_damage_own", "cut_n_lad_over_ny", "cut_fx_fin", "cut_fx_fin_crossed", "cut_reached_edge", "cut_ladders_up",
-        "cut_ladders_down", "cut_second_up_ms", "cut_hindered", "cut_n_lad_cut_row", "cut_n_lad_immediate",
+        "fx_thr_own", "delta_l_own_over_l0", "predicted_damage_own", "cut_n_lad_over_ny", "cut_fx_fin", "cut_fx_fin_crossed", "cut_reached_edge", "cut_n_lad_ever",
+        "cut_loop_sequence", "cut_up_from_4_5_ms", "cut_hindered", "cut_n_lad_cut_row", "cut_n_lad_immediate",
         "cut_n_lad_released", "cut_n_lad_released_over_ny", "cut_n_lad_released_taut",
         "cut_n_lad_released_taut_over_ny", "hold_converged", "nan_reasons", "cut_nan_reasons",
         "wall_s",
@@ -487,7 +508,8 @@ EXPERIMENTS: dict[str, Experiment] = {
         "`knitlad snag`: a pin pulls a loop out until the yarn breaks; the ladder follows", stretch_of, SNAG_RESULTS),
     "resistance": Experiment(ResistanceConfig, run_resistance_job, (
         "design_pattern", "design_band", "design_d_over_l0", "design_mu", "snag_peak_force_N", "snag_broke",
-        "snag_pull_at_break_mm", "snag_n_lad_over_ny", "snag_v_down_over_cb", "fx_thr_below", "fx_thr_above", "monotonic",
+        "snag_pull_at_break_mm", "snag_n_lad_over_ny", "snag_v_down_over_cb", "fx_thr_below", "fx_thr_above", "fx_thr_arrest",
+        "fx_thr_arrest_sd", "fx_thr_arrest_runs", "monotonic",
         "n_lad_over_ny_lowest", "n_lad_over_ny_highest", "v_lad_over_cb_highest", "fx_fin_crossed_highest",
         "wall_s", "job_wall_s"),
         "`knitlad resistance`: a snag, then the cut at a series of tensions: a knit design's ladder resistance",

@@ -35,6 +35,7 @@ from knitlad.io.atomic import atomic_path
 from knitlad.io.folders import FolderLock, lock_holds, writable_folder
 from knitlad.io.hdf5 import read_attrs, verify_datasets, write_record
 from knitlad.io.summary import write_summary
+from knitlad.studies.ensemble import with_collapsed_members
 from knitlad.io.progress import ProgressFile, ProgressLine, job_fraction
 from knitlad.studies.columns import write_column_dictionary
 from knitlad.io.provenance import code_identity
@@ -109,7 +110,7 @@ def summary_row(job: Job, attrs: dict | None) -> dict:
     """One table row: the job's inputs, then its status and results."""
     row = {"job_id": job.id, "scene": job.scene, **job.params}
     if job.fx_nominal is not None:  # a member of an ensemble: its point's target, and which knit
-        row.update(fx_nominal=job.fx_nominal, ensemble_member=job.ensemble_member)
+        row.update(fx_nominal=job.fx_nominal, ensemble_member=job.ensemble_member, ensemble_point=job.point)
     if attrs is None:
         return {**row, "status": "pending", "error": ""}
     row["status"] = attrs.get("status", "ok")
@@ -357,7 +358,7 @@ def _locked_sweep(jobs, out: Path, executor, workers, scheduler, rerun: tuple[bo
             with atomic_path(out / "sweep.yaml") as tmp:
                 tmp.write_text(config_text)
         todo = _sharing_first(_plan(jobs, jobs_dir, force, retry_failed, outcome, rerun_stale))
-        write_summary(out, list(outcome.rows.values()))
+        write_summary(out, with_collapsed_members(list(outcome.rows.values())))
         write_column_dictionary(out, [job.scene for job in jobs])  # what each column of summary.csv means
         _remove_files(jobs_dir.glob("*.progress"))  # of a job killed mid-run: no job runs now
         bar = SweepProgress(len(jobs), outcome.skipped, jobs_dir=jobs_dir) if progress else None
@@ -370,7 +371,7 @@ def _locked_sweep(jobs, out: Path, executor, workers, scheduler, rerun: tuple[bo
             # the job files are the record; the table follows them at most every SUMMARY_EVERY_S (a
             # 10,000-job sweep spent 36 min rewriting it) and always at the end, also after Ctrl-C
             if time.monotonic() - written[0] >= SUMMARY_EVERY_S:
-                write_summary(out, list(outcome.rows.values()))
+                write_summary(out, with_collapsed_members(list(outcome.rows.values())))
                 written[0] = time.monotonic()
             if bar:
                 try:
@@ -386,7 +387,7 @@ def _locked_sweep(jobs, out: Path, executor, workers, scheduler, rerun: tuple[bo
             lock.release()  # from here on, a job still running elsewhere writes nothing
             _remove_files(jobs_dir.glob("*.tmp"))
             _take_late_files(todo, jobs_dir, outcome)
-            write_summary(out, list(outcome.rows.values()))
+            write_summary(out, with_collapsed_members(list(outcome.rows.values())))
             if bar:
                 bar.close()
 

@@ -23,7 +23,9 @@ its file ``DIR/jobs/<id>.h5``. The summary table is rebuilt from those files,
 so it is always consistent with what is on disk, whatever interrupted the sweep.
 
 An ensemble (``ensemble: N``, force control) runs each point on N knits stretched to targets a fraction of a
-per cent apart (:func:`knitlad.studies.ensemble.target_offsets`): one run's velocity at low tension is one
+per cent apart (:func:`knitlad.studies.ensemble.target_offsets`), member k's yarn displaced at random from seed k
+(``knit_seed``: force control alone left members within its tolerance the same knit): one run's velocity at low
+tension is one
 sample of a stick-slip sequence, scattering by about 20 %. Jobs of one point that differ only in the
 dynamics (mu, the dissipations, ...) share each member's stretched knit, so the comparison is paired. The
 summary gives each job's ``ensemble_member`` and ``fx_nominal``; ``knitlad plot`` draws means with their
@@ -170,6 +172,11 @@ class Job(BaseModel):
     @property
     def id(self) -> str:
         return job_id(self.scene, self.params, self.output)
+
+    @property
+    def point(self) -> str:
+        """The id of the point an ensemble's member belongs to: its params less the member's own fx and knit seed."""
+        return job_id(self.scene, {k: v for k, v in self.params.items() if k not in ("fx", "knit_seed")}, self.output)
 
     def scene_config(self) -> BaseModel:
         return EXPERIMENTS[self.scene].config.model_validate(self.params)
@@ -338,8 +345,11 @@ def expand(cfg: SweepConfig, max_jobs: int = MAX_JOBS) -> list[Job]:
                 text = f"{key(named)}: {rest}" if named in fields and rest else "fixed: " + text.removeprefix("config: ")
             raise SweepError(text) from None
         members = ensemble_targets(cfg, resolved)
+        seeded = "knit_seed" in type(resolved).model_fields
         for k, fx in enumerate(members):
-            params_k = resolved.model_dump() if fx is None else {**resolved.model_dump(), "fx": fx}
+            # each member its own knit: its target, and its own perturbation of the stretched yarn
+            params_k = resolved.model_dump() if fx is None else {
+                **resolved.model_dump(), "fx": fx, **({"knit_seed": k} if seeded else {})}
             job = Job(scene=cfg.scene, params=params_k, output=cfg.output, ensemble_member=k,
                       fx_nominal=None if fx is None else resolved.fx)
             if job.id in seen:

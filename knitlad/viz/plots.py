@@ -113,6 +113,9 @@ def column_midline_diagram(h5_path: str | Path, path: str | Path) -> Path:
 
     attrs = read_attrs(h5_path)
     with h5py.File(h5_path, "r") as f:
+        if "series/midline" in f:  # every observation's mid-line heights, and the front v_lad is fitted to
+            return _midline_tracks(attrs, f["series/time"][()], f["series/midline"][()], f["series/front_up"][()],
+                                   f["series/front_y"][()], path)
         x = f["frames/positions"][()]
         t_ms = f["frames/time"][()] * 1e3
         centres = f["cells/centres"][()]
@@ -127,6 +130,35 @@ def column_midline_diagram(h5_path: str | Path, path: str | Path) -> Path:
     ax.set_xlabel("time since the cut [ms]")
     ax.set_ylabel("yarn's $y$ on the column's mid-line [mm]")  # short: a longer one was clipped
     ax.set_title(_title(float(attrs["fx_ini"]), float(attrs["v_lad_over_cb"])) + f", column {column}", fontsize=9)
+    fig.tight_layout()
+    return _save(fig, Path(path))
+
+
+def _midline_tracks(attrs: dict, t_s, heights, front_up, front_y, path) -> Path:
+    """Each course's height on the laddering column's mid-line against time (the paper's spatio-temporal
+    diagram), the front (the first course past the ladder's reach) and the line v_lad is its slope of, over the
+    fit's stitches."""
+    l0_mm = float(attrs["scale_l0_m"]) * 1e3
+    t_ms = np.asarray(t_s) * 1e3
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    ax.plot(t_ms, np.asarray(heights) * l0_mm, "k-", lw=0.5)
+    ax.plot(t_ms, np.asarray(front_y) * l0_mm, "-", color="tab:blue", lw=1.2, label="front (first course past it)")
+    first, last = int(attrs.get("v_fit_first", 2)), int(attrs.get("v_fit_last", 10))
+    up = np.asarray(front_up)
+    fit = np.zeros(up.shape, dtype=bool)
+    if up.size and up.max() >= last:  # from the front's arrival at stitch first to its arrival at last (front_speed)
+        fit[int(np.argmax(up >= first)):int(np.argmax(up >= last)) + 1] = True
+    fit &= np.isfinite(front_y)
+    if fit.sum() >= 2 and np.isfinite(float(attrs["v_lad_over_cb"])):
+        slope, intercept = np.polyfit(t_ms[fit], np.asarray(front_y)[fit] * l0_mm, 1)
+        ax.plot(t_ms[fit], slope * t_ms[fit] + intercept, "r-", lw=2, alpha=0.7,
+                label=f"stitches {first}-{last}: its slope is $v_{{lad}}$")
+        ax.legend(fontsize=7, loc="lower right")
+    ax.set_xlabel("time since the cut [ms]")
+    ax.set_ylabel("yarn's $y$ on the column's mid-line [mm]")
+    ax.set_title(_title(float(attrs["fx_ini"]), float(attrs["v_lad_over_cb"]))
+                 + f", column {int(attrs['laddering_column'])}", fontsize=9)
     fig.tight_layout()
     return _save(fig, Path(path))
 
@@ -282,10 +314,14 @@ def summary_plots(df, out_dir: str | Path, fmt: str = "png") -> list[Path]:
             key = key if isinstance(key, tuple) else (key,)
             legend = ", ".join(f"{symbol(k)} = {v}" for k, v in zip(keys, key) if k is not None) or "knitlad"
             if "fx_nominal" in g and g["fx_nominal"].notna().all():  # an ensemble: each point's mean and its s.e.
-                stats = g.groupby("fx_nominal").agg(x=("fx_ini", "mean"), y=(column, "mean"), se=(column, "sem"),
-                                                    n=(column, "count"))
+                distinct = g[g["same_knit_as"] < 0] if "same_knit_as" in g else g  # a collapsed member counts once
+                stats = distinct.groupby("fx_nominal").agg(x=("fx_ini", "mean"), y=(column, "mean"),
+                                                           se=(column, "sem"), n=(column, "count"))
+                collapsed = len(g) - len(distinct)
+                label = f"{legend}: mean of {int(stats['n'].max())} knits +- s.e." + (
+                    f" ({collapsed} member{'s' * (collapsed != 1)} the same knit as another)" if collapsed else "")
                 line = ax.errorbar(stats["x"], stats["y"], yerr=stats["se"].fillna(0.0), fmt="D-", ms=5, lw=0.8,
-                                   capsize=3, label=f"{legend}: mean of {int(stats['n'].max())} knits +- s.e.")[0]
+                                   capsize=3, label=label)[0]
                 ax.plot(g["fx_ini"], g[column], ".", ms=3, color=line.get_color(), alpha=0.5)
                 continue
             line, = ax.plot(g["fx_ini"], g[column], "-", lw=0.8, label=legend)

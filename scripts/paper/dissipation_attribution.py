@@ -152,7 +152,7 @@ def main() -> None:
     for fx, k, n, variant in runs(args.points, args.members, args.variants, args.shard, args.shards):
         if (fx, k, variant, args.preset) in done:
             continue
-        base = CutConfig(n_x=args.size, n_y=args.size, fx=fx * (1 + target_offsets(n)[k]),
+        base = CutConfig(n_x=args.size, n_y=args.size, fx=fx * (1 + target_offsets(n)[k]), knit_seed=k,
                          preset=args.preset, stop_after_stitches=args.stop_after,
                          **{"ly": args.ly, **VARIANTS[variant][0]})
         if knit_key != base.stretch_settings():  # a new knit; the runs of one knit come together

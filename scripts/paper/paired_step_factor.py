@@ -2,13 +2,12 @@
 
     python scripts/paper/paired_step_factor.py runs/step_factor_accurate [--reference 0.35] [--csv FILE]
     python scripts/paper/paired_step_factor.py docs/reference/step_factor_accurate_summary.csv
-    python scripts/paper/paired_step_factor.py runs/friction_every_accurate --factor friction_every
     python scripts/paper/paired_step_factor.py runs/continuous_edge16 --factor edge+bars --reference clamped+held
 
 Reads a sweep over (f_x target, ``dt_safety``) (``docs/reference/step_factor_accurate.yaml``): the knits of one
 nominal tension are targets a fraction of a percent apart, and every knit is laddered at every factor from the
-same stretch (``--factor``: another column of the sweep that every knit was laddered at, such as
-``friction_every``, ``docs/reference/friction_every_accurate.yaml``; columns joined by ``+`` for a grid of
+same stretch (``--factor``: another column of the sweep that every knit was laddered at, such as ``edge``;
+columns joined by ``+`` for a grid of
 several, such as ``edge+bars``). Per nominal tension and factor it prints the mean observables and, per knit, the change against
 the smallest factor (the reference): mean +- standard error over the knits. A factor may replace the reference
 only where its paired change lies within two standard errors of zero and under the preset's stated error.

@@ -75,7 +75,7 @@ def main() -> None:
             for res in args.resolutions:
                 if (fx, res, k, variant) in done:
                     continue
-                cfg = CutConfig(n_x=args.size, n_y=args.size, fx=fx * (1 + offsets[k]), resolution=res,
+                cfg = CutConfig(n_x=args.size, n_y=args.size, fx=fx * (1 + offsets[k]), resolution=res, knit_seed=k,
                                 sagitta_radius=args.sagitta, implicit_axial=args.implicit_axial,
                                 loss_factor=args.loss_factor, air_drag=args.air)
                 t0 = time.perf_counter()

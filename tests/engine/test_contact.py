@@ -91,7 +91,8 @@ def touching_in_broad_phase(rods):
     from knitlad.engine.kernels.contact import refresh_contacts, segment_distance
 
     c = make_contacts(rods, ContactModel(stiffness=1e3))
-    assert refresh_contacts(rods.state.x, rods.model.edge_a, rods.model.edge_b, rods.model.edge_shift, c)
+    assert refresh_contacts(rods.state.x, rods.model.edge_a, rods.model.edge_b, rods.model.edge_shift, c,
+                            rods.state.v, 0.0)
     touching = {
         (int(i), int(j))
         for i, j in c.pairs[: c.n_pairs[0]]
@@ -128,7 +129,8 @@ def test_a_non_finite_position_finds_no_pair_for_its_edges_and_crashes_nothing()
     rods = pressed_weave()
     rods.state.x[3] = np.nan
     c = make_contacts(rods, ContactModel(stiffness=1e3))
-    assert refresh_contacts(rods.state.x, rods.model.edge_a, rods.model.edge_b, rods.model.edge_shift, c)
+    assert refresh_contacts(rods.state.x, rods.model.edge_a, rods.model.edge_b, rods.model.edge_shift, c,
+                            rods.state.v, 0.0)
     bad = set(np.flatnonzero((rods.model.edge_a == 3) | (rods.model.edge_b == 3)).tolist())
     assert c.n_pairs[0] > 0
     assert not any(int(i) in bad or int(j) in bad for i, j in c.pairs[: c.n_pairs[0]])
@@ -352,11 +354,11 @@ def test_the_contact_sum_rod_by_rod_is_the_serial_sum_over_the_pairs_to_the_bit(
     v = rng.normal(scale=2.0, size=x.shape) / units.VELOCITY
     omega = rng.normal(size=m.edge_a.shape[0])
     c = make_contacts(rods, ContactModel(stiffness=1e3, mu=0.3, capacity_per_edge=8))
-    assert kc.refresh_contacts(x, m.edge_a, m.edge_b, m.edge_shift, c)
+    assert kc.refresh_contacts(x, m.edge_a, m.edge_b, m.edge_shift, c, v, 0.0)
     base, base_torque = rng.normal(size=x.shape), rng.normal(size=m.edge_a.shape[0])
     for evaluation in range(2):  # the list's first evaluation, then one that skips pairs by their gaps
         force, torque = base.copy(), base_torque.copy()
-        kc.contact_forces(x, v, omega, spin, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, 1e-5, force, torque, v,
+        kc.contact_forces(x, v, omega, int(spin), m.mass, m.edge_a, m.edge_b, m.edge_shift, c, 1e-5, force, torque, v,
                           omega, False, np.zeros((4, N_LEDGER)))
         n = int(c.n_pairs[0])
         assert n >= 2 * kc.MIN_PAIRS_PER_THREAD  # the rods run in parallel where there are two threads
@@ -558,7 +560,7 @@ def test_a_pair_that_parts_while_skipped_loses_its_tangential_spring():
     first = slice(m.yarn_start[0], m.yarn_start[1])
 
     def evaluate(x, v):
-        assert refresh_contacts(x, m.edge_a, m.edge_b, m.edge_shift, c)
+        assert refresh_contacts(x, m.edge_a, m.edge_b, m.edge_shift, c, v, 0.0)
         force[:] = 0.0
         contact_forces(x, v, omega, 0, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, 1e-5, force, torque, v, omega,
                        False, np.zeros((4, N_LEDGER)))

@@ -31,6 +31,7 @@ def weak_point(sim):
     return strength
 
 
+@pytest.mark.slow
 def test_a_yarn_pulled_steadily_breaks_at_its_breaking_force():
     """The Nylon (7.9 N, 27 % strain at EA = 28.9 N) with a weak point 1 % below it breaks there when its
     tension reaches that: the recorded tension within 0.5 %, the pull then at (F_b/EA) L within 1 %; one
@@ -53,6 +54,7 @@ def test_a_yarn_pulled_steadily_breaks_at_its_breaking_force():
     assert abs(sim.reaction_forces_N()[0, 0]) < 0.05 * strength
 
 
+@pytest.mark.slow
 def test_the_ledger_books_the_energy_a_break_cuts_away():
     """The broken segment's spring held T^2 l/(2 EA): the ledger's ``fracture``, within 2 %; with it the
     balance of the whole pull (the work of the moving end) closes within 1 %."""
@@ -111,6 +113,7 @@ def test_a_stretched_knit_holds_its_yarn_whole():
     assert run.sim.tensions_N().max() < 0.1 * kl.NYLON.breaking_force
 
 
+@pytest.mark.slow
 def test_a_uniform_yarn_under_uniform_tension_fragments():
     """Without a weak point every segment reaches the limit together: several break within a few steps, each
     at its limit, none at the held ends' segments (a piece of one node is no rod)."""

@@ -96,9 +96,6 @@ def test_models_refuse_values_that_would_break_later_naming_them():
         kl.ContactModel(stiffness=100.0, tangential_stiffness_ratio=math.inf)
     with pytest.raises(ValueError, match="damping_ratio"):
         kl.ContactModel(stiffness=100.0, damping_ratio=math.nan)
-    for every in (0, 1.5):
-        with pytest.raises(ValueError, match="friction_every"):
-            kl.ContactModel(stiffness=100.0, friction_every=every)
     with pytest.raises(ValueError, match="point_m"):
         kl.Plane(stiffness=100.0, point_m=(0.0, math.nan, 0.0))
     with pytest.raises(ValueError, match="point_m"):
@@ -109,3 +106,16 @@ def test_models_refuse_values_that_would_break_later_naming_them():
         crossing_yarns().build(stretch_damping_ratio=math.nan)
     with pytest.raises(ValueError, match="guard_every"):
         kl.Simulation(crossing_yarns().build(), guard_every=-5)
+
+
+def test_a_removed_setting_still_works_at_its_old_default_with_a_warning_and_refuses_any_other_value():
+    """friction_every (the held-friction study, removed in 0.15.0): 1 changed nothing and still works, with a
+    DeprecationWarning; 3 would have changed the run, so it is refused, naming the setting."""
+    with pytest.warns(DeprecationWarning, match="friction_every"):
+        kl.ContactModel(stiffness=100.0, friction_every=1)
+    with pytest.warns(DeprecationWarning, match="friction_every"):
+        assert kl.CutConfig(fx=3.0, friction_every=1) == kl.CutConfig(fx=3.0)
+    with pytest.raises(ValueError, match="friction_every"):
+        kl.ContactModel(stiffness=100.0, friction_every=3)
+    with pytest.raises(ValueError, match="friction_every"):
+        kl.CutConfig(fx=3.0, friction_every=3)

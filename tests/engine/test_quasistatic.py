@@ -47,6 +47,7 @@ def test_a_yarn_over_a_cylinder_settles_below_the_capstan_ratio_and_slides_above
     assert np.abs(sliding.positions_m()[[0, -1], 1] - start).min() > 1e-3
 
 
+@pytest.mark.slow
 def test_settle_reaches_the_static_answer_of_a_frictionless_cantilever_and_restores_the_drag():
     """A cantilever with a tip load, settled by damped dynamics, bends as FIRE's relaxation does: both
     to a residual of 1e-11 N, which on its tip stiffness 3B/L^3 = 0.013 N/m leaves 1e-9 m, 1e-5 of the
@@ -86,6 +87,7 @@ def pulled_course(knit, mu=0.4):
     return sim, end[1:]
 
 
+@pytest.mark.slow
 def test_a_course_pulled_by_a_ramp_gives_one_pull_at_any_slow_speed_and_jumps_give_less(small_knit):
     """With friction the path counts: ramps at 0.04 and 0.02 m/s (and two dampings) end on one settled
     pull within 1e-3; jumps of 50 um, each settled, leave the knit ringing and slipping, 5 % or more
@@ -139,6 +141,7 @@ def test_a_reaction_read_while_the_supports_move_under_a_drag_warns_with_its_bia
     assert not np.any(sim.reaction_bias_N())
 
 
+@pytest.mark.slow
 def test_a_ramp_carries_a_clip_across_its_rail_and_the_ledger_counts_the_rail_s_work():
     """ramp_held(rails=...): a yarn along y, held at one end, its other end in a clip on a rail along y and
     pushed across the rail by F along +x. Both ends carried by dx along x: the clip lands on dx to round-off

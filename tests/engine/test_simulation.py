@@ -124,6 +124,7 @@ def test_the_damped_limit_factor_is_the_integrators_stability_limit(predicted):
     """A mass on a spring and dashpot (zeta 0.3), stepped by the kernels at 2 % below and above
     2 f(zeta) / omega (:func:`knitlad.engine.timestep.damped_limit_factor`): bounded below, growing above."""
     from knitlad.engine.kernels.integrate import DASHPOTS_HALF_STEP, DASHPOTS_PREDICTED, compute_forces, verlet_steps
+    from knitlad.engine.obstacles import obstacle_state
     from knitlad.engine.timestep import damped_limit_factor
 
     mode = DASHPOTS_PREDICTED if predicted else DASHPOTS_HALF_STEP
@@ -141,8 +142,9 @@ def test_the_damped_limit_factor_is_the_integrators_stability_limit(predicted):
         s.x[1, 0] += 1e-6
         sim = kl.Simulation(rods)  # its workspace and buffers; the steps below bypass its limit
         sim.work.v_damp[:] = s.v
-        compute_forces(m, s, sim.work, sim.contacts, 0, False, sim.damping, dt, 0, mode)
-        verlet_steps(m, s, sim.work, sim.contacts, dt, 3000, 0, False, sim.damping, 0, mode)
+        none = obstacle_state([], m.n_nodes)
+        compute_forces(m, s, sim.work, sim.contacts, 0, False, sim.damping, dt, 0, mode, none)
+        verlet_steps(m, s, sim.work, sim.contacts, dt, 3000, 0, False, sim.damping, 0, mode, none)
         amplitudes.append(abs(s.x[1, 0] - x0) / 1e-6)
     assert amplitudes[0] < 1.0 and amplitudes[1] > 1e3, amplitudes
 

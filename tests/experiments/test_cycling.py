@@ -48,6 +48,7 @@ def cycled():
     return cfg, knit, result, seen
 
 
+@pytest.mark.slow
 def test_the_cycles_collapse_onto_one_loop_from_the_first_retraction(cycled):
     """The paper's observation (Fig. 4a): the first loading, from the knit stretched at mu = 0, differs; the
     unloadings of both cycles agree within 3 % where f_x > 1, as do the holds at Delta x_max."""
@@ -67,6 +68,7 @@ def test_the_cycles_collapse_onto_one_loop_from_the_first_retraction(cycled):
     assert result.predicted_damage == pytest.approx(result.delta_l_over_l0 / (1 - result.lx_over_l0))
 
 
+@pytest.mark.slow
 def test_a_cycled_knit_is_cut_with_the_friction_history_its_loading_left(cycled):
     """Every pair of the loaded knit but the cut edge's is in the cut run's contacts with its spring (to 1e-4:
     the first evaluation after the cut advances each spring by its slip over one step, the settled knit's
@@ -172,6 +174,7 @@ def test_eq1_is_also_read_at_the_runs_own_post_arrest_tension():
     assert result.summary()["fx_thr_own"] == 6.0 and "predicted_damage_own" not in result.nan_reasons()
 
 
+@pytest.mark.slow
 def test_protocol_b_resumed_from_a_checkpoint_file_reads_the_same_curve_to_the_bit(cycled, tmp_path):
     """A run stopped after a leg (Ctrl-C, a killed job) goes on from its last checkpoint: after the first cycle's
     return, and after the last hold at Delta x_max (before the cut, which is then made again)."""

@@ -94,20 +94,20 @@ def test_a_stretched_knit_written_and_read_back_ladders_the_same(tmp_path):
 
 
 def test_observers_and_stop_rules_are_handed_to_the_run_loop():
-    """propagate calls the observers it is given with (t, run, undone cells) and stops by the rules."""
+    """propagate calls the observers it is given with (t, run, the cells' reading) and stops by the rules."""
     from knitlad.fabric.observers import TimeLimit
 
     cfg = config(n_x=4, n_y=4, resolution=16, lx=0.34)
     seen = []
 
     class Counter:
-        def observe(self, t, run, undone):
-            seen.append((t, undone.shape))
+        def observe(self, t, run, reading):
+            seen.append((t, reading.undone.shape, reading.ever.shape, reading.overlap.shape))
 
     trace = propagate(cut(stretch(cfg.stretch_settings()), cfg.dynamics_settings()), observers=[Counter()],
                       stop_rules=[TimeLimit(50e-6)])
     assert trace.stop_reason == "max_time_s reached" and not trace.reached_edge
-    assert len(seen) == len(trace.times_s) == 3 and seen[0][1] == (4, 4)
+    assert len(seen) == len(trace.times_s) == 3 and seen[0][1:] == ((4, 4),) * 3
 
 
 def test_with_twist_the_laddering_yarns_spin_at_the_twist_free_step_held_stable():

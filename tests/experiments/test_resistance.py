@@ -25,7 +25,8 @@ SMALL = ["--stitches", "6x8", "--preset", "fast", "--tensions", "1", "--tensions
 
 def a_cut(fx: float, cells: int):
     return SimpleNamespace(fx_ini=fx, n_lad=cells, n_lad_over_ny=cells / 8, v_lad_over_cb=0.2, fx_fin_crossed=1.0,
-                           reached_edge=False, damage_record=lambda: {"n_lad_released_over_ny": cells / 16})
+                           fx_fin=1.0 + 0.05 * fx, stop_reason="no cell changed for 1.0 ms", reached_edge=False,
+                           damage_record=lambda: {"n_lad_released_over_ny": cells / 16})
 
 
 def a_result(cells: list[int]) -> ResistanceResult:
@@ -45,6 +46,8 @@ def test_the_threshold_lies_between_the_highest_tension_that_holds_and_the_lowes
     assert row["fx_thr_below"] == 4.0 and row["fx_thr_above"] == 6.0 and row["monotonic"]
     assert row["n_lad_over_ny_lowest"] == 0.25 and row["n_lad_over_ny_highest"] == 1.5
     assert result.table().shape == (4, 7) and result.table()[2, 3] == pytest.approx(5 / 16)
+    # the paper's f_x^thr: the mean f_x^fin of the cuts that laddered (at 6 and 8: 1.3 and 1.4)
+    assert row["fx_thr_arrest"] == pytest.approx(1.35) and row["fx_thr_arrest_runs"] == 2
 
 
 def test_a_series_that_all_ladders_or_none_leaves_one_side_of_the_bracket_open_and_a_dip_is_said():
@@ -59,6 +62,7 @@ def test_a_bad_series_is_refused(tensions, match):
         ResistanceConfig(fx=4.0, tensions=tensions)
 
 
+@pytest.mark.end_to_end
 def test_the_command_runs_the_snag_and_the_series_and_writes_its_report(tmp_path):
     """6 x 8, fast preset, a worn spot of 0.1 N: the pin breaks the yarn, the cuts at f_x^ini 1 and 3 run; the
     series, the snag's curve and the pictured ladder are in the file, the report is drawn."""
@@ -75,6 +79,7 @@ def test_the_command_runs_the_snag_and_the_series_and_writes_its_report(tmp_path
     assert (tmp_path / "resistance_report.png").stat().st_size > 50_000
 
 
+@pytest.mark.end_to_end
 def test_a_resistance_sweep_writes_each_designs_report(tmp_path):
     """The sweep scene `resistance` (one design): its summary row, its file and its report beside it."""
     config = tmp_path / "resistance.yaml"

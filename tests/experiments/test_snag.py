@@ -25,6 +25,7 @@ def snag_settings(**fields) -> SnagSettings:
     return SnagConfig(n_x=6, n_y=6, fx=4.0, **fields).snag_settings()
 
 
+@pytest.mark.slow
 def test_a_snag_breaks_the_hooked_head_at_its_strength_and_a_ladder_runs(knit_6x6):
     """A worn spot of 0.1 N in the hooked head: the pull-out force rises, the yarn breaks in that loop at
     that tension (within one reading's growth), the pin's work during the pull closes the ledger to 1 %,

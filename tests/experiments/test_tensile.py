@@ -25,6 +25,7 @@ def pulled():
                   for mu in (0.0, 0.4)}
 
 
+@pytest.mark.slow
 def test_at_mu_0_the_knit_pulled_carries_the_periodised_stitchs_tension(pulled):
     """At the top, held until static, the knit's f_x is the periodised stitch's at the knit's own (l_x, l_y)
     within 5 % (its edges: +4 % measured on 6 columns); its f_y lies above the stitch's by the pull the
@@ -39,6 +40,7 @@ def test_at_mu_0_the_knit_pulled_carries_the_periodised_stitchs_tension(pulled):
     assert fy < top[7] < 1.25 * fy
 
 
+@pytest.mark.slow
 def test_friction_opens_a_loop_that_mu_0_does_not(pulled):
     """At mu = 0.4 the unloading lies below the loading at every box between the ends and the closed path
     costs work (f0 l0 per stitch); at mu = 0 only the damping of the moving bars takes any (its bias alpha M V
@@ -56,6 +58,7 @@ def test_friction_opens_a_loop_that_mu_0_does_not(pulled):
     assert abs(runs[0.0].dissipated_per_stitch) < 0.05 * work
 
 
+@pytest.mark.slow
 def test_pulled_along_x_between_held_bars_the_courses_draw_together_and_pull_on_the_bars(pulled):
     """The Poisson coupling at fixed bars: the knit's own l_y falls inside its box and f_y rises with f_x."""
     _, runs = pulled
@@ -76,6 +79,7 @@ def test_sliding_bars_are_pulled_along_x_only():
     assert config(bars="sliding").bars == "sliding"
 
 
+@pytest.mark.slow
 def test_a_moving_box_carries_the_continuous_edges_clips_with_its_sides():
     """The tensile test on the experiment's boundary (edge continuous, bars sliding), at mu 0: the box pulled
     from l_x/l0 0.36 to 0.38 carries each turning loop's clip across its rail as its side moves, to

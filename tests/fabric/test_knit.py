@@ -39,7 +39,7 @@ def test_no_two_non_neighbouring_segments_are_closer_than_d(knit):
     """No overlap: non-neighbouring yarn axes stay >= d apart (measured 2.83 d at 0.245 l0, 1.56 d at 0.30 l0)."""
     s = knit.rods
     c = make_contacts(s, ContactModel(stiffness=1.0, skin=3 * D))
-    assert refresh_contacts(s.state.x, s.model.edge_a, s.model.edge_b, s.model.edge_shift, c)
+    assert refresh_contacts(s.state.x, s.model.edge_a, s.model.edge_b, s.model.edge_shift, c, s.state.v, 0.0)
     dists = [segment_distance(s.state.x, s.model.edge_a, s.model.edge_b, s.model.edge_shift, i, j)[0] for i, j in c.pairs[: c.n_pairs[0]]]
     assert len(dists) > 0
     assert min(dists) * kl.units.LENGTH > D

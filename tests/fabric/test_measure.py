@@ -11,7 +11,7 @@ import knitlad as kl
 from knitlad.fabric.measure import (
     cell_overlap,
     ladder_front,
-    ladders_started,
+    loop_sequence,
     laddered_cells,
     laddering_column,
     front_arrivals,
@@ -137,33 +137,114 @@ def test_each_course_carries_its_own_tension_and_their_mean_is_the_knit_s():
     assert tension_per_thread(reactions, left, right, f0) == pytest.approx(4.0)
 
 
-def test_the_loop_record_names_each_ladder_by_the_freed_loop_that_started_it():
-    """A cut at row 4 between columns 2 and 3: column 2 ladders up first (loop 1), then both columns
-    down (loops 2 and 3), then column 3 up (loop 4 or 5); cells of the cut row start no ladder."""
-    at = np.full((9, 6), np.nan)
-    at[5:8, 2] = [1e-4, 2e-4, 3e-4]           # up in column 2 from 0.1 ms
-    at[4, 2] = 0.5e-4                           # the cut row's own cell
-    at[2:4, 2] = [6e-4, 5e-4]                   # down in column 2 from 0.5 ms
-    at[1:4, 3] = [9e-4, 8e-4, 7e-4]             # down in column 3 from 0.7 ms
-    at[5, 3] = 1.2e-3                           # up in column 3 at 1.2 ms
-    ladders = ladders_started(at, cut_row=4)
-    assert [(lad["column"], lad["direction"], lad["loop"], lad["cells"]) for lad in ladders] == [
-        (2, 1, "1", 3), (2, -1, "2/3", 2), (3, -1, "2/3", 3), (3, 1, "4/5", 1)]
-    assert [lad["start_s"] for lad in ladders] == pytest.approx([1e-4, 5e-4, 7e-4, 1.2e-3])
-    assert ladders_started(np.full((9, 6), np.nan), cut_row=4) == []
+def cut_at_row_4_between_columns_2_and_3():
+    """A hand-made run on 9 rows x 6 columns, the cut at row 4's sinker between columns 2 and 3: when the cut
+    thread left each needle loop (``withdrawn``) and when each cell came undone (``undone``), empty."""
+    return np.full(6, np.nan), np.full((9, 6), np.nan)
 
 
-def test_one_upward_and_two_downward_ladders_are_the_hindered_pattern():
-    """The paper's hindered laddering: the second upward ladder never starts (loops (4) and (5) held)."""
-    at = np.full((9, 6), np.nan)
-    at[5:8, 2] = 1e-4                      # loop (1): up in column 2
-    at[2:4, 2], at[1:4, 3] = 5e-4, 7e-4    # loops (2) and (3): down in columns 2 and 3
-    record = kl.LadderResult(settings=None, undone_at=at, cut_row=4).loop_record()
-    assert record["hindered"] and (record["ladders_up"], record["ladders_down"]) == (1, 2)
-    assert math.isnan(record["second_up_ms"]) and record["first_down_ms"] == pytest.approx(0.5)
-    at[5, 3] = 1.2e-3                      # loop (4)/(5) lets go: a second upward ladder
-    record = kl.LadderResult(settings=None, undone_at=at, cut_row=4).loop_record()
-    assert not record["hindered"] and record["second_up_ms"] == pytest.approx(1.2)
+def test_the_loops_are_named_by_where_the_cut_thread_went_and_the_ladders_by_the_loop_they_ran_from():
+    """The cut thread leaves column 3 first: loop (1) is column 3 and the ladder up it is (1)'s; the heads
+    below the cut, row 3 of columns 2 and 3, are loops (2)/(3), and a ladder runs down once row 2 comes undone;
+    the thread's next needle loops are column 2 (its left end's first) and column 4 (its right end's second):
+    a ladder up either is (4)/(5). In that order the sequence is the paper's."""
+    withdrawn, undone = cut_at_row_4_between_columns_2_and_3()
+    withdrawn[3] = 1e-4
+    undone[4, 3], undone[5:8, 3] = 1e-4, [2e-4, 3e-4, 4e-4]  # the cut course's cell, then the ladder up (1)
+    undone[3, 2:4] = 0.5e-4  # the heads below the cut drop with it: freed, not yet a ladder
+    r = loop_sequence(withdrawn, undone, cut_row=4, cut_column=3)
+    assert r["loop1_column"] == 3 and r["sequence"] == "(1)" and r["down_from_2_3_s"] != r["down_from_2_3_s"]
+    undone[0:3, 2] = [9e-4, 8e-4, 7e-4]  # row 2 and below in column 2: a ladder down from (2)/(3)
+    withdrawn[2], undone[5, 2] = 1.0e-3, 1.1e-3  # the left end leaves column 2 and the course above ladders
+    r = loop_sequence(withdrawn, undone, cut_row=4, cut_column=3)
+    assert r["sequence"] == "(1), (2)/(3), (4)/(5)" and r["paper_order"]
+    assert (r["up_from_1_s"], r["down_from_2_3_s"], r["up_from_4_5_s"]) == pytest.approx((2e-4, 7e-4, 1.1e-3))
+    assert not r["cut_thread_held"] and not r["hindered"] and r["other_ladders"] == 0
+
+
+def test_a_ladder_before_loop_one_is_not_the_papers_order_and_one_away_from_the_cut_is_no_freed_loops():
+    withdrawn, undone = cut_at_row_4_between_columns_2_and_3()
+    withdrawn[3], undone[5, 3] = 5e-4, 6e-4  # loop (1) lets go late ...
+    undone[2, 2] = 1e-4  # ... after a ladder ran down from (2)/(3)
+    undone[6, 0] = 2e-4  # a ladder up column 0, which the cut thread never left
+    r = loop_sequence(withdrawn, undone, cut_row=4, cut_column=3)
+    assert r["sequence"] == "(2)/(3), (1)" and not r["paper_order"] and r["other_ladders"] == 1
+    withdrawn[:] = np.nan  # the thread left no needle loop: no loop (1), whatever undid cells
+    r = loop_sequence(withdrawn, undone, cut_row=4, cut_column=3)
+    assert r["loop1_column"] == -1 and r["sequence"] == "(2)/(3)"
+
+
+def test_the_cut_thread_held_in_loops_four_and_five_after_ladders_from_one_and_two_three_is_hindered():
+    """The paper's appendix: "the second upward ladder that was expected to propagate was hindered because the
+    cut thread got pinched in loops (4) and (5)"."""
+    withdrawn, undone = cut_at_row_4_between_columns_2_and_3()
+    withdrawn[2] = 1e-4  # loop (1): column 2, the left end's first; (4)/(5): column 3 and column 1
+    undone[5:8, 2] = 2e-4  # the ladder up from (1)
+    undone[0:3, 2], undone[0:3, 3] = 5e-4, 7e-4  # ladders down from (2) and (3)
+    r = loop_sequence(withdrawn, undone, cut_row=4, cut_column=3)
+    assert r["loop1_column"] == 2 and r["cut_thread_held"] and r["hindered"]
+    withdrawn[3], undone[5, 3] = 1.0e-3, 1.2e-3  # the right end lets go of (4)/(5): a second upward ladder
+    r = loop_sequence(withdrawn, undone, cut_row=4, cut_column=3)
+    assert not r["cut_thread_held"] and not r["hindered"] and r["up_from_4_5_s"] == pytest.approx(1.2e-3)
+
+
+def test_a_cell_whose_yarn_has_gone_is_destroyed_and_one_without_a_head_reading_is_not():
+    """Three columns of two courses and the held top one. Course 0 pulled out of column 1 (a cut course's
+    retracted yarn): cell (0, 1) is -inf, undone; the course above pulled out of both sides of column 2: cell
+    (1, 2) is -inf too; a column whose head is not read (the yarn only at its edge) is NaN, not undone."""
+    l_x, l_y = 1.0, 1.0
+    columns = np.array([0.0, 1.0, 2.0])
+
+    def course(y0, xs):
+        t = np.linspace(-0.5, 2.5, 121)
+        keep = np.zeros_like(t, dtype=bool)
+        for lo, hi in xs:
+            keep |= (t >= lo) & (t <= hi)
+        # a head (+0.3 l_y) at each column, sinkers between
+        return np.column_stack([t, y0 + 0.3 * np.cos(2 * np.pi * t), np.zeros_like(t)])[keep]
+
+    rows = [course(0.0, [(-0.5, 0.55), (1.45, 2.5)]), course(0.7, [(-0.5, 1.35)]), course(1.4, [(-0.5, 2.5)])]
+    overlap = cell_overlap(rows, columns, l_x)
+    assert np.isneginf(overlap[0, 1]) and np.isneginf(overlap[1, 2])
+    assert laddered_cells(overlap, l_y)[0, 1] and laddered_cells(overlap, l_y)[1, 2]
+    assert not laddered_cells(overlap, l_y)[1, 0] and np.isfinite(overlap[1, 0])
+    # course 0 absent within l_x/4 of column 0 but there within 0.4 l_x (an end passing): no head, not gone
+    gap = [course(0.0, [(-0.5, -0.3), (0.3, 0.55), (1.45, 2.5)]), rows[1], rows[2]]
+    overlap = cell_overlap(gap, columns, l_x)
+    assert np.isnan(overlap[0, 0]) and not laddered_cells(overlap, l_y)[0, 0]
+
+
+def test_a_cell_once_undone_is_hooked_again_above_its_sinkers_and_between_below_them():
+    from knitlad.fabric.measure import between_cells, rehooked_cells
+
+    overlap = np.array([[0.3, 0.1, -0.1, -0.3, -np.inf]])
+    ever = np.array([[False, True, True, True, True]])
+    assert rehooked_cells(overlap, ever).tolist() == [[False, True, False, False, False]]
+    assert between_cells(overlap, ever, 1.0).tolist() == [[False, False, True, False, False]]
+    assert laddered_cells(overlap, 1.0).tolist() == [[False, False, False, True, True]]
+
+
+def test_the_front_is_read_on_the_mid_line_in_the_labs_frame():
+    """Two courses crossing the mid-line x = 0: the highest crossing, interpolated; a gap between two pieces
+    (farther apart than an edge) crosses nothing. The front's height is the first course past the reach, and
+    its speed the slope of that height while the reach runs from stitch ``first`` to ``last``."""
+    from knitlad.fabric.measure import front_heights, front_speed, midline_heights
+
+    loop = np.array([[-1.0, 0.0, 0], [-0.5, 1.0, 0], [0.5, 2.0, 0], [1.0, 0.0, 0]])  # crosses x = 0 at y = 1.5
+    cut = np.array([[-1.0, 5.0, 0], [-0.2, 5.0, 0], [0.2, 7.0, 0], [1.0, 7.0, 0]])  # pieces 0.4 apart, no edge
+    heights = midline_heights([loop, cut], np.array([0.0]), longest_edge=1.5)
+    assert heights[0, 0] == pytest.approx(1.5) and np.isnan(heights[1, 0])
+    # a front running 1 stitch per ms over courses 1 apart, the cloth above it moving down at 0.2 per ms
+    t = np.arange(12) * 1e-3
+    extent = np.arange(12)
+    courses = np.arange(20)[None, :] - 0.2 * t[:, None] * 1e3 + 0.0
+    y = front_heights(courses, extent, cut_row=0)
+    assert y[3] == pytest.approx(4.0 - 0.6)
+    assert front_speed(t, y, extent, 2, 10) == pytest.approx(0.8e3)  # 1 - 0.2 course per ms, in the lab
+    assert math.isnan(front_speed(t, y, np.minimum(extent, 9), 2, 10))  # it never reached stitch 10
+    # arrested at stitch 6 while the cloth goes on moving: the fit ends at the arrival at stitch 6
+    stopped = np.minimum(extent, 6)
+    assert front_speed(t, front_heights(courses, stopped, cut_row=0), stopped, 2, 6) == pytest.approx(0.8e3)
 
 
 def test_damage_is_split_into_the_cut_row_the_cut_s_recoil_and_what_the_ladder_released():
@@ -219,3 +300,21 @@ def test_the_fronts_arrivals_step_speeds_and_mean_speed_of_a_stick_slip_front():
     assert speeds == pytest.approx([25.0, 25.0, 5.0, 25.0, 25.0])
     assert mean_front_speed(arrive, l_y) == pytest.approx(5 * l_y / 0.9e-3)
     assert np.isnan(mean_front_speed(arrive[:1], l_y))
+
+
+def test_the_threshold_is_the_mean_arrest_tension_of_the_runs_that_laddered_and_its_flatness_a_slope():
+    """f_thr = mean f_fin over the runs that laddered and arrested (the paper's definition), its scatter and
+    standard error; a flat f_fin has a slope within its error of 0, a rising one does not."""
+    from knitlad.fabric.measure import arrest_threshold
+
+    fx_ini = np.array([1.0, 3.0, 5.0, 7.0, 9.0, 11.0])
+    flat = np.array([9.9, 2.1, 1.9, 2.0, 2.2, 1.8])  # the first did not ladder: left out
+    laddered = np.array([False, True, True, True, True, True])
+    r = arrest_threshold(fx_ini, flat, laddered, np.ones(6, dtype=bool))
+    assert r["runs"] == 5 and r["fx_thr"] == pytest.approx(2.0) and r["fx_thr_sd"] == pytest.approx(np.std(flat[1:], ddof=1))
+    assert abs(r["slope"]) < 2 * r["slope_se"]
+    rising = 1.0 + 0.2 * fx_ini
+    r = arrest_threshold(fx_ini, rising + np.array([0, 0.01, -0.01, 0.01, -0.01, 0]), laddered,
+                         np.array([True] * 5 + [False]))  # the last did not arrest: left out
+    assert r["runs"] == 4 and r["slope"] == pytest.approx(0.2, abs=0.01) and r["slope"] > 5 * r["slope_se"]
+    assert math.isnan(arrest_threshold([1.0], [2.0], [True], [False])["fx_thr"])

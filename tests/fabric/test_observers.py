@@ -5,7 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from knitlad.fabric.observers import TOP_ROWS_HELD, Arrested, EdgeReached
+from knitlad.fabric.observers import TOP_ROWS_HELD, Arrested, CellReading, EdgeReached
+
+
+def reading(undone: np.ndarray, ever: np.ndarray | None = None) -> CellReading:
+    """A reading of ``undone`` cells now (and ``ever``, by default the same)."""
+    return CellReading(undone.copy(), undone.copy() if ever is None else ever, np.zeros(undone.shape))
 
 
 def test_the_top_edge_is_the_row_below_the_held_course():
@@ -14,22 +19,38 @@ def test_the_top_edge_is_the_row_below_the_held_course():
     undone = np.zeros((16, 16), dtype=bool)
     rule = EdgeReached()
     undone[5:15 - TOP_ROWS_HELD, 7] = True
-    assert rule.check(0.0, undone) is None
+    assert rule.check(0.0, reading(undone)) is None
     undone[15 - TOP_ROWS_HELD, 7] = True
-    assert rule.check(0.0, undone) == "ladder reached an edge course"
+    assert rule.check(0.0, reading(undone)) == "ladder reached an edge course"
     bottom = np.zeros((16, 16), dtype=bool)
     bottom[0, 3] = True
-    assert rule.check(0.0, bottom) is not None
+    assert rule.check(0.0, reading(bottom)) is not None
 
 
 def test_arrest_is_declared_after_the_window_without_change():
     rule = Arrested(arrest_s=1e-3)
     undone = np.zeros((4, 4), dtype=bool)
-    assert rule.check(0.0, undone) is None
+    assert rule.check(0.0, reading(undone)) is None
     undone[1, 1] = True
-    assert rule.check(0.5e-3, undone) is None
-    assert rule.check(1.4e-3, undone) is None
-    assert rule.check(1.5e-3, undone) is not None
+    assert rule.check(0.5e-3, reading(undone)) is None
+    assert rule.check(1.4e-3, reading(undone)) is None
+    assert rule.check(1.5e-3, reading(undone)) is not None
+
+
+def test_a_cell_that_knits_itself_again_or_crosses_the_threshold_again_keeps_the_run_going():
+    """The arrest is judged on the photograph: a cell hooked again changes it as a new one does (the count
+    read 14, 16, 14, 12 over a run's last 0.3 ms while every latched cell stayed set)."""
+    rule = Arrested(arrest_s=1e-3, pause_factor=0.0)
+    undone, ever = np.zeros((4, 4), dtype=bool), np.zeros((4, 4), dtype=bool)
+    undone[1, 1] = ever[1, 1] = True
+    assert rule.check(0.0, reading(undone, ever)) is None
+    undone[1, 1] = False  # hooked again: the latched map is unchanged, the photograph is not
+    assert rule.check(0.9e-3, reading(undone, ever)) is None
+    assert rule.check(1.5e-3, reading(undone, ever)) is None  # 0.6 ms since the change
+    undone[1, 1], undone[2, 2] = True, True  # ... and a swap of two cells, at the same count
+    undone[1, 1] = False
+    assert rule.check(1.8e-3, reading(undone, ever)) is None
+    assert rule.check(2.9e-3, reading(undone, ever)) is not None
 
 
 def test_a_pair_that_separated_is_not_read_as_sliding():
@@ -62,13 +83,13 @@ def test_the_progress_of_a_ladder_is_how_far_its_front_has_gone():
     n_y, cut = 10, 5
     fronts = FrontRecorder((2, 3), cut)
     undone = np.zeros((n_y, 6), dtype=bool)
-    fronts.observe(0.0, None, undone)
+    fronts.observe(0.0, None, reading(undone))
     assert fronts.reach(n_y) == 0.0
     undone[cut:cut + 3, 3] = True  # three cells up the column beside the cut
-    fronts.observe(1e-4, None, undone)
+    fronts.observe(1e-4, None, reading(undone))
     assert 0.4 < fronts.reach(n_y) < 1.0
     undone[cut:, 3] = True  # up to the last free course: the ladder is at the edge
-    fronts.observe(2e-4, None, undone)
+    fronts.observe(2e-4, None, reading(undone))
     assert fronts.reach(n_y) == 1.0
 
 
@@ -108,7 +129,7 @@ def test_a_stick_slip_front_is_not_taken_as_arrested_during_its_pauses():
     fired = None
     for t in np.round(np.arange(0.0, 40e-3, 1e-4), 7):
         undone.flat[:sum(c <= t + 1e-9 for c in changes)] = True
-        if (reason := rule.check(t, undone)) is not None:
+        if (reason := rule.check(t, reading(undone))) is not None:
             fired = (t, reason)
             break
     assert rule.longest_pause == pytest.approx(4e-3)

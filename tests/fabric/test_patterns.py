@@ -85,7 +85,7 @@ def test_no_two_yarns_overlap_as_built(knit):
     """Non-neighbouring yarn axes >= 1.5 d apart (measured at l_y/l0 0.25: jersey 1.59 d, rib 2.4 d, garter 2.2 d)."""
     s = knit.rods
     c = make_contacts(s, ContactModel(stiffness=1.0, skin=3 * D))
-    assert refresh_contacts(s.state.x, s.model.edge_a, s.model.edge_b, s.model.edge_shift, c)
+    assert refresh_contacts(s.state.x, s.model.edge_a, s.model.edge_b, s.model.edge_shift, c, s.state.v, 0.0)
     dists = [segment_distance(s.state.x, s.model.edge_a, s.model.edge_b, s.model.edge_shift, i, j)[0]
              for i, j in c.pairs[: c.n_pairs[0]]]
     assert min(dists) * kl.units.LENGTH > 1.5 * D

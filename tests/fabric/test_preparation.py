@@ -3,6 +3,8 @@ control, the edges."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -10,7 +12,7 @@ from knitlad.engine import units as kl_units
 from knitlad.engine.simulation import Simulation
 from knitlad.experiments.config import CutConfig
 from knitlad.experiments.laddering import cut
-from knitlad.fabric.preparation import KnitBox, build_width, stretch, stretch_contact
+from knitlad.fabric.preparation import KNIT_NOISE, KnitBox, build_width, stretch, stretch_contact
 from knitlad.fabric.scenes.knit import BUILD_LX
 from knitlad.fabric.stretching import OutOfReach, stretch_to
 from knitlad.engine.units import NYLON
@@ -21,6 +23,7 @@ def config(**kw) -> CutConfig:
     return CutConfig(**{"preset": "fast", **kw})
 
 
+@pytest.mark.slow
 def test_tall_cells_are_built_narrower_so_that_the_loops_interlock():
     """At l_y/l0 = 0.302, Crane loops built at 0.30 l0 overlap the next course by 0.12 d only and the
     knit comes apart; at the stitch's f_x = 0 width they overlap by more than 2 d."""
@@ -34,6 +37,7 @@ def test_tall_cells_are_built_narrower_so_that_the_loops_interlock():
 
 
 @pytest.mark.parametrize("start", ["tiled", "affine"])
+@pytest.mark.slow
 def test_force_control_reaches_its_target_in_a_tall_knit(start):
     knit = stretch(config(n_x=6, n_y=8, fx=4.0, ly=0.302, resolution=16, stretch_start=start).stretch_settings())
     assert knit.fx_within_tolerance
@@ -65,6 +69,7 @@ def _relax_in_rounds(box: KnitBox, rounds: int) -> tuple[list[float], dict]:
     return readings, info
 
 
+@pytest.mark.slow
 def test_at_mu_0_a_knit_with_clamped_course_ends_reaches_equilibrium_at_a_fixed_box():
     """Course ends clamped at the edge sinkers (position and tangent, the mirror symmetry of the
     periodic stitch there): FIRE reaches its force tolerance (1e-3 f0), so f_x has settled. Ends held at the tip of
@@ -86,6 +91,7 @@ def test_an_unknown_edge_is_refused_before_anything_runs():
         config(n_x=4, n_y=4, lx=0.35, edge="loose")
 
 
+@pytest.mark.slow
 def test_force_control_says_when_the_knit_as_built_is_already_past_the_target():
     """With tails, the 8 x 10 knit built at l_x/l0 = 0.30 carries f_x ~ 0.4: a target of 0.05
     cannot be reached by stretching, and force control says so (position control is advised)."""
@@ -200,3 +206,20 @@ def test_clip_friction_needs_clips():
     with pytest.raises(ValueError, match="clip_friction: this knit has no clips"):
         config(fx=4.0, clip_friction=0.3)
     assert config(fx=4.0, bars="sliding", clip_friction=0.3).dynamics_settings().clip_friction == 0.3
+
+
+def test_two_knit_seeds_give_two_knits_of_the_same_stretch_and_the_same_seed_the_same_knit():
+    """An ensemble's members differ in their stretched knits: each free node displaced across its yarn, KNIT_NOISE d
+    rms from its seed (segments keep their length to second order); the held nodes stay; the same seed is the
+    same knit to the bit."""
+    base = CutConfig(n_x=4, n_y=4, preset="fast", resolution=16, lx=0.36).stretch_settings()
+    plain = stretch(base)
+    knits = [stretch(dataclasses.replace(base, knit_seed=seed)) for seed in (0, 1, 1)]
+    moved = [k.knit.rods.state.x - plain.knit.rods.state.x for k in knits]
+    d = base.material.diameter / kl_units.LENGTH
+    held = plain.knit.rods.model.held
+    for m in moved:
+        rms = np.sqrt(np.mean(m[~held] ** 2) * 3)
+        assert 0.5 * KNIT_NOISE * d < rms < 1.5 * KNIT_NOISE * d and not m[held].any()
+    assert not np.array_equal(moved[0], moved[1]) and np.array_equal(moved[1], moved[2])
+    assert knits[0].fx_ini != knits[1].fx_ini and abs(knits[0].fx_ini / plain.fx_ini - 1) < 0.02

@@ -15,14 +15,18 @@ SWEEP = {"scene": "ladder", "fixed": {"n_x": 4, "n_y": 6, "preset": "fast", "res
                                       "max_time_ms": 0.01}, "sweep": {"axes": {"mu": [0.4]}}}
 
 
+def knitlad(*args, env=None):
+    from tests.conftest import knitlad as run
+
+    return run(*args, env=env, timeout=120)
+
+
 def files(tmp_path, cluster: dict):
     (tmp_path / "s.yaml").write_text(yaml.safe_dump(SWEEP))
     (tmp_path / "c.yaml").write_text(yaml.safe_dump(cluster))
     return str(tmp_path / "s.yaml"), str(tmp_path / "c.yaml")
 
 
-def knitlad(*args, env=None):
-    return subprocess.run([*KNITLAD, *args], capture_output=True, text=True, cwd=ROOT, env=env, timeout=120)
 
 
 def one_line(p, code=2) -> str:

@@ -14,6 +14,7 @@ def test_every_column_a_summary_can_have_is_in_the_dictionary_with_a_unit_and_a_
     names = [name for name, _, _ in rows]
     assert len(names) == len(set(names)), [n for n in names if names.count(n) > 1]
     expected = {"job_id", "scene", "status", "error", "knitlad_code", "fx_nominal", "ensemble_member",
+                "ensemble_point", "same_knit_as",
                 *EXPERIMENTS[scene].config.model_fields,
                 *EXPERIMENTS[scene].summary_keys}
     assert set(names) == expected

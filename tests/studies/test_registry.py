@@ -7,6 +7,8 @@ import inspect
 import re
 from pathlib import Path
 
+import pytest
+
 from knitlad.experiments.config import CutConfig
 from knitlad.studies.registry import EXPERIMENTS, stretch_of
 
@@ -41,6 +43,7 @@ def test_the_command_line_runs_each_experiment_through_its_entry():
         assert f'_experiment("{name}"' in source, name
 
 
+@pytest.mark.end_to_end
 def test_a_point_of_the_diagram_is_the_stitchs_zero_tension_width():
     """The diagram's entry (a sweep's job, `knitlad diagram`) gives what zero_tension_lx gives for its settings."""
     from knitlad.experiments.config import DiagramConfig

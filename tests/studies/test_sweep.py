@@ -19,14 +19,11 @@ from knitlad.io.hdf5 import read_attrs
 from knitlad.io.summary import TIMING_COLUMNS, read_summary
 from knitlad.studies.runner import run_sweep
 from knitlad.studies.sweep import Job, SweepConfig, SweepError, expand, job_id, load_sweep
+from tests.conftest import knitlad
 
 ROOT = Path(__file__).resolve().parents[2]
 KNITLAD = [sys.executable, "-m", "knitlad.cli"]
 TINY = {"n_x": 6, "n_y": 8, "preset": "fast", "resolution": 16, "max_time_ms": 3, "arrest_ms": 1}
-
-
-def knitlad(*args, **kw):
-    return subprocess.run([*KNITLAD, *args], capture_output=True, text=True, cwd=ROOT, **kw)
 
 
 def write_config(path: Path, cfg: dict) -> Path:
@@ -158,6 +155,7 @@ def test_rerunning_skips_finished_jobs_and_force_reruns_them(smoke):
     assert [f.stat().st_mtime_ns for f in files] == stamps
 
 
+@pytest.mark.end_to_end
 def test_a_sweep_renders_its_ladder_jobs_on_request(smoke):
     p = knitlad("sweep", "configs/smoke.yaml", "--out", str(smoke), "--render")
     assert p.returncode == 0 and "rendered 2 jobs" in p.stdout, p.stderr
@@ -173,11 +171,13 @@ def _same_summary_as_the_pool(smoke, out, *options):
     pd.testing.assert_frame_equal(read_summary(smoke).drop(columns=ignored), read_summary(out).drop(columns=ignored))
 
 
+@pytest.mark.cluster
 def test_dask_on_a_local_cluster_gives_the_same_summary_as_the_pool(smoke, tmp_path):
     pytest.importorskip("distributed")
     _same_summary_as_the_pool(smoke, tmp_path, "--executor", "dask")
 
 
+@pytest.mark.cluster
 def test_a_batch_cluster_file_runs_the_sweep_through_dask_jobqueue(smoke, tmp_path):
     """--cluster configs/cluster/local.yaml: dask-jobqueue's cluster with its workers as local processes (the
     path a Slurm cluster takes, but for the batch system): the same summary as the pool."""
@@ -239,6 +239,7 @@ def test_a_failing_job_is_recorded_and_the_others_go_on(tmp_path):
     assert "failed" in p.stderr and "Traceback" not in p.stderr
 
 
+@pytest.mark.process
 def test_a_dead_worker_fails_only_its_job_and_the_pool_is_restarted(tmp_path):
     cfg = {"fixed": {**TINY, "lx": 0.4}, "sweep": {"axes": {"mu": [0.1, 0.0, 0.3, 0.4]}}}
     _, jobs = load_sweep(write_config(tmp_path / "c.yaml", cfg))
@@ -255,6 +256,7 @@ def test_a_dead_worker_fails_only_its_job_and_the_pool_is_restarted(tmp_path):
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.process
 def test_ctrl_c_keeps_finished_jobs_and_a_consistent_summary_and_the_rerun_goes_on(tmp_path, sig):
     """Ctrl-C (SIGINT to the process group) and kill (SIGTERM to the parent): the same clean stop."""
     cfg = write_config(tmp_path / "c.yaml", {"fixed": {**TINY, "lx": 0.38}, "sweep": {"axes": {"mu": [0.1, 0.2, 0.3]}}})
@@ -290,6 +292,7 @@ def test_ctrl_c_keeps_finished_jobs_and_a_consistent_summary_and_the_rerun_goes_
     assert (read_summary(out)["status"] == "ok").all()
 
 
+@pytest.mark.end_to_end
 def test_a_single_loop_sweep_tabulates_velocity_against_tension_and_friction(tmp_path):
     cfg = write_config(tmp_path / "loop.yaml", {"scene": "loop", "sweep": {"axes": {"mu": [0.0, 0.8], "fx": [4.0]}}})
     p = knitlad("sweep", str(cfg), "--out", str(tmp_path / "out"), "--workers", "1")
@@ -301,6 +304,7 @@ def test_a_single_loop_sweep_tabulates_velocity_against_tension_and_friction(tmp
     assert p.returncode == 0 and (tmp_path / "out" / "plots" / "loop_velocity_vs_fx.png").stat().st_size > 1000
 
 
+@pytest.mark.end_to_end
 def test_a_stitch_sweep_maps_the_tension_sign(tmp_path):
     cfg = write_config(tmp_path / "s.yaml", {"scene": "stitch", "fixed": {"ly": 0.25},
                                              "sweep": {"axes": {"lx": [0.30, 0.40]}}})
@@ -311,6 +315,7 @@ def test_a_stitch_sweep_maps_the_tension_sign(tmp_path):
     assert df["fx"][0] < 0 < df["fx"][1]  # compressed at 0.30 l0, stretched at 0.40 l0 (l_y = 0.25 l0)
 
 
+@pytest.mark.end_to_end
 def test_jobs_that_share_a_stretch_stretch_once_and_ladder_as_fresh_runs(tmp_path):
     """A sweep over the dynamics (here mu) stretches its knit once (`<out>/stretched/`); the job
     that reuses it gives the very ladder a fresh run gives."""
@@ -391,6 +396,8 @@ def test_an_ensemble_is_a_sweep_axis_of_paired_knits_and_its_plot_draws_means_wi
     fx = sorted({job.params["fx"] for job in jobs})
     assert fx == pytest.approx([4.0 * 0.995, 4.0, 4.0 * 1.005])  # each member's knit shared by both mu: paired
     assert {job.fx_nominal for job in jobs} == {4.0} and {job.ensemble_member for job in jobs} == {0, 1, 2}
+    assert all(job.params["knit_seed"] == job.ensemble_member for job in jobs)  # each member its own knit
+    assert len({job.point for job in jobs}) == 2  # one point per mu, its members' seeds and targets aside
     run_sweep(jobs, tmp_path / "out", workers=1, runner=fake_runner, progress=False)
     df = read_summary(tmp_path / "out")
     assert set(df["ensemble_member"]) == {0, 1, 2} and set(df["fx_nominal"]) == {4.0}
@@ -401,6 +408,7 @@ def test_an_ensemble_is_a_sweep_axis_of_paired_knits_and_its_plot_draws_means_wi
                                                        "sweep": {"axes": {"mu": [0.1]}, "ensemble": 2}}))
 
 
+@pytest.mark.end_to_end
 def test_a_tensile_sweep_writes_its_summary_and_plot_draws_each_jobs_loops(tmp_path):
     """The sweep scene `tensile` (one 6 x 8 job): its summary columns, its file's readings, and `knitlad plot`
     drawing the job's force-displacement loops."""
@@ -422,6 +430,7 @@ def test_a_tensile_sweep_writes_its_summary_and_plot_draws_each_jobs_loops(tmp_p
     assert len(list((out / "plots").glob("tensile_*.png"))) == 1
 
 
+@pytest.mark.end_to_end
 def test_a_snag_sweep_breaks_worn_loops_and_writes_the_curve_and_the_ladder(tmp_path):
     """The sweep scene `snag` (one 6 x 6 job, a 0.1 N worn spot): its summary says the break and the ladder,
     its file holds the pull-out curve with units and the ladder's series."""
@@ -444,6 +453,7 @@ def test_a_snag_sweep_breaks_worn_loops_and_writes_the_curve_and_the_ladder(tmp_
         assert again[key][0] == pytest.approx(df[key][0], rel=1e-9), key
 
 
+@pytest.mark.end_to_end
 def test_a_sweep_over_patterns_ladders_each_and_tabulates_its_pattern(tmp_path):
     """The knit's pattern is a sweep axis: jersey and garter 6 x 6 jobs at f_x^ini 3 both ladder; the summary
     says each job's pattern, and the jersey job's id is the one it had before patterns existed."""
@@ -472,3 +482,16 @@ def test_a_field_added_to_the_laddering_config_later_keeps_every_scenes_ids(scen
     before = {k: v for k, v in job.params.items() if k != "band_curvature"}
     assert job.id == job_id(scene, before, job.output)
     assert job_id(scene, {**job.params, "band_curvature": 2.0}, job.output) != job.id
+
+
+def test_an_ensemble_member_that_stretched_to_another_members_knit_is_said_and_counted_once():
+    """Two members of a point with the same f_x^ini, l_x and l_y (to the digit) are one knit: the second says
+    which it repeats, its point's mean counts it once, and `knitlad plot` warns."""
+    from knitlad.studies.ensemble import with_collapsed_members
+
+    knit = {"fx_ini": 7.990334, "lx_over_l0": 0.3811, "ly_over_l0": 0.2502}
+    rows = [{"ensemble_point": "p", "ensemble_member": k, "status": "ok", **knit, "fx_nominal": 8.0} for k in range(3)]
+    rows[2]["fx_ini"] = 8.02
+    rows.append({"ensemble_point": "q", "ensemble_member": 0, "status": "ok", **knit, "fx_nominal": 8.0})
+    marked = with_collapsed_members(rows)
+    assert [r["same_knit_as"] for r in marked] == [-1, 0, -1, -1]

@@ -8,7 +8,9 @@ import pytest
 import knitlad as kl
 from knitlad.engine.contact import make_contacts
 from knitlad.engine.kernels.dissipation import no_damping
-from knitlad.engine.kernels.integrate import TWIST_FRAMED, TWIST_OFF, TWIST_STRAIGHT, compute_forces, potential_energy
+from knitlad.engine.kernels.integrate import (AXIAL_EXPLICIT, DASHPOTS_HALF_STEP, TWIST_FRAMED, TWIST_OFF, TWIST_STRAIGHT,
+                                              compute_forces, potential_energy)
+from knitlad.engine.obstacles import obstacle_state
 from knitlad.engine.state import Workspace
 
 
@@ -30,7 +32,8 @@ def energy(rods: kl.Rods, twist: int) -> float:
 def forces(rods: kl.Rods, twist: int) -> Workspace:
     """Forces and torques of ``rods`` (no contact) into a new workspace."""
     w = Workspace.for_model(rods.model)
-    compute_forces(rods.model, rods.state, w, make_contacts(rods, None), twist, False, no_damping(), 1.0)
+    compute_forces(rods.model, rods.state, w, make_contacts(rods, None), twist, False, no_damping(), 1.0,
+                   AXIAL_EXPLICIT, DASHPOTS_HALF_STEP, obstacle_state([], rods.model.n_nodes))
     return w
 
 

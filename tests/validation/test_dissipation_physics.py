@@ -183,6 +183,7 @@ def test_a_yarn_falling_in_air_reaches_the_cylinders_terminal_speed(orientation)
     del y
 
 
+@pytest.mark.slow
 def test_the_ledger_of_a_loaded_knit_closes_within_a_per_cent_of_the_work_done():
     """A 4 x 4 knit stretched at mu = 0, then pulled wider with friction on (mu = 0.4) by its held ends, as
     protocol B loads it: the work the bars did is what the knit stored, what friction, the dashpots and the
@@ -218,6 +219,7 @@ def test_every_ladder_reports_its_ledger_closing_within_a_per_cent(law):
     assert len(series["friction"]) == len(result.times_s) and np.all(np.diff(series["friction"]) >= -1e-15)
 
 
+@pytest.mark.slow
 def test_at_fine_resolution_the_ledger_closes_with_either_counting_once_owner_changes_are_booked():
     """At 96 nodes per stitch (edges shorter than d) the default union counting is not a potential: a contact
     whose closest point passes a shared node changes owner, and the counted energy jumps (kernels/contact.py).
@@ -236,6 +238,7 @@ def test_at_fine_resolution_the_ledger_closes_with_either_counting_once_owner_ch
     assert abs(ledgers["union"]["owner_changes"]) > abs(ledgers["union"]["residual"])
 
 
+@pytest.mark.slow
 def test_what_the_union_counting_leaves_unbooked_is_the_steps_error_and_halves_with_it():
     """The residual left once owner changes are booked is the integrator's, not a missing channel: on the 6 x 6
     ladder at 96 nodes it halves with the step (0.32, 0.15, 0.069 % at 0.35, 0.175, 0.0875 x the limit,

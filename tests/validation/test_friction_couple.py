@@ -77,7 +77,9 @@ def test_switching_twist_on_leaves_every_force_unchanged(mode):
     """Either twist path (framed DER; the frame-free path of yarns straight at rest) gives the
     twist-free forces at the cut, where the reference frames are Bishop's and theta = 0."""
     from knitlad.engine.contact import make_contacts
-    from knitlad.engine.kernels.integrate import TWIST_FRAMED, TWIST_OFF, TWIST_STRAIGHT, compute_forces, potential_energy
+    from knitlad.engine.kernels.integrate import (AXIAL_EXPLICIT, DASHPOTS_HALF_STEP, TWIST_FRAMED, TWIST_OFF,
+                                                  TWIST_STRAIGHT, compute_forces, potential_energy)
+    from knitlad.engine.obstacles import obstacle_state
     from knitlad.engine.kernels.dissipation import no_damping
     from knitlad.fabric.scenes.knit import KnitGeometry, build_knit
     from knitlad.engine.state import Workspace
@@ -92,7 +94,8 @@ def test_switching_twist_on_leaves_every_force_unchanged(mode):
     for rods, twist in ((plain, TWIST_OFF), (twisted, TWIST_FRAMED if mode == "framed" else TWIST_STRAIGHT)):
         w = Workspace.for_model(rods.model)
         c = make_contacts(rods, contact)
-        assert compute_forces(rods.model, rods.state, w, c, twist, True, no_damping(), 1e-3)
+        assert compute_forces(rods.model, rods.state, w, c, twist, True, no_damping(), 1e-3, AXIAL_EXPLICIT,
+                              DASHPOTS_HALF_STEP, obstacle_state([], rods.model.n_nodes))
         forces.append(w.force.copy())
         if twist:
             assert np.abs(w.torque).max() < 1e-9 * np.abs(w.force).max()

@@ -139,6 +139,7 @@ def undamped_ladder_energy(safety: float, counting: str) -> float:
     return float(np.max(np.abs(total[1:] - total[0])) / kinetic.max())
 
 
+@pytest.mark.slow
 def test_a_long_undamped_frictionless_ladder_keeps_its_energy_with_all_pairs_counting():
     """The laddering scene itself, undamped, mu = 0, at the laddering step (0.35 x the limit)
     and half of it. Bound: 1 % of the peak kinetic energy, falling with dt (measured 0.045 %

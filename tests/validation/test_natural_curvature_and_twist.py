@@ -10,7 +10,8 @@ import pytest
 import knitlad as kl
 from knitlad.engine.contact import make_contacts
 from knitlad.engine.kernels.dissipation import no_damping
-from knitlad.engine.kernels.integrate import TWIST_FRAMED, compute_forces
+from knitlad.engine.kernels.integrate import AXIAL_EXPLICIT, DASHPOTS_HALF_STEP, TWIST_FRAMED, compute_forces
+from knitlad.engine.obstacles import obstacle_state
 from knitlad.engine.state import Workspace
 
 B = kl.NYLON.bending_stiffness
@@ -35,7 +36,8 @@ def test_pre_curved_ring_is_force_free_in_its_rest_shape():
     scene.add_yarn(circle(R, 40), closed=True, natural_curvature="rest")
     rods = scene.build()
     w = Workspace.for_model(rods.model)
-    compute_forces(rods.model, rods.state, w, make_contacts(rods, None), TWIST_FRAMED, False, no_damping(), 1.0)
+    compute_forces(rods.model, rods.state, w, make_contacts(rods, None), TWIST_FRAMED, False, no_damping(), 1.0,
+                   AXIAL_EXPLICIT, DASHPOTS_HALF_STEP, obstacle_state([], rods.model.n_nodes))
     scale = B / R**2 / kl.units.FORCE
     assert np.max(np.abs(w.force)) < 1e-9 * scale
     assert np.max(np.abs(w.torque)) < 1e-9 * scale * R / kl.units.LENGTH
@@ -85,6 +87,7 @@ def test_twisted_rod_carries_torque_GJ_phi_over_L():
     np.testing.assert_allclose(rate, phi / (n - 2), rtol=1e-6)
 
 
+@pytest.mark.slow
 def test_a_course_freed_of_the_knit_relaxes_to_the_natural_curvature_it_was_given():
     """The paper's extraction measurement, in simulation: a 4 x 4 knit whose yarn remembers the
     unloaded fabric's shape with K = mean (kappa_bar/kappa0)^2 = 1 (CutConfig.natural_curvature),

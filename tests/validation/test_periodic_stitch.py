@@ -75,6 +75,7 @@ def test_the_stitch_changes_from_compression_to_tension_across_the_zero_curve():
     assert tensions[0] < 0 < tensions[1] < tensions[2]  # measured -1.40, 1.56, 17.4
 
 
+@pytest.mark.slow
 def test_the_zero_tension_point_is_converged_in_the_resolution():
     """l_x/l0 at f_x = 0 for l_y/l0 = 0.25: 0.3366 (36 nodes/stitch) and 0.3345 (48); 24 gives 0.3304."""
     assert zero_tension_lx(0.25, resolution=36) == pytest.approx(zero_tension_lx(0.25, resolution=48),

@@ -57,6 +57,7 @@ def test_friction_slows_the_release():
     assert v[0] > v[1] > v[2]
 
 
+@pytest.mark.slow
 def test_the_freed_loop_leaves_on_its_momentum_not_quasi_statically():
     """Why the model is inertial at every f_x (the paper's mu = 0 law is, its mu > 0 ones are not):
     a weak drag (2e3 /s, decay time 0.5 ms, longer than the ~70 us release) changes v_lad by a few

@@ -11,15 +11,16 @@ import h5py
 import numpy as np
 import pytest
 
+from tests.conftest import knitlad
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
 def run_folder(tmp_path_factory):
     out = tmp_path_factory.mktemp("run") / "cut"
-    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "cut", "--stitches", "6x8", "--lx", "0.40",
-                        "--preset", "fast", "--resolution", "16", "--max-time-ms", "0.3", "--out", str(out)],
-                       capture_output=True, text=True, cwd=ROOT)
+    p = knitlad("cut", "--stitches", "6x8", "--lx", "0.40",
+                        "--preset", "fast", "--resolution", "16", "--max-time-ms", "0.3", "--out", str(out))
     assert p.returncode == 0, p.stderr
     return out
 
@@ -62,11 +63,11 @@ def test_a_movie_has_every_frame(run_folder):
     assert seen == [(k, n) for k in range(1, n + 1)]  # the progress line's count, frame by frame
 
 
+@pytest.mark.end_to_end
 def test_movie_and_render_show_their_progress_in_a_log(run_folder):
     """Off a terminal (a batch job's log) each prints a progress line that ends at the whole count."""
     for command in (["movie", "--gif", "--width", "96"], ["render", "--width", "96", "--view", "front"]):
-        p = subprocess.run([sys.executable, "-m", "knitlad.cli", command[0], str(run_folder), *command[1:]],
-                           capture_output=True, text=True, cwd=ROOT)
+        p = knitlad(command[0], str(run_folder), *command[1:])
         assert p.returncode == 0, p.stderr
         last = p.stderr.strip().splitlines()[-1]
         done, total = last.split("]")[1].split()[0].split("/")
@@ -102,9 +103,9 @@ def test_paraview_opens_the_trajectory_with_its_fields(run_folder):
     assert np.allclose(vtk_to_numpy(grid.GetPoints().GetData()), positions)
 
 
+@pytest.mark.end_to_end
 def test_plot_of_a_run_folder_draws_its_diagrams_and_renders(run_folder):
-    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "plot", str(run_folder)], capture_output=True,
-                       text=True, cwd=ROOT)
+    p = knitlad("plot", str(run_folder))
     assert p.returncode == 0, p.stderr
     assert (run_folder / "midline_diagram.png").stat().st_size > 5000
     assert (run_folder / "tension_history.png").stat().st_size > 5000
@@ -114,8 +115,7 @@ def test_plot_of_a_run_folder_draws_its_diagrams_and_renders(run_folder):
 
 
 def test_render_of_a_folder_without_a_run_is_one_line(tmp_path):
-    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(tmp_path)], capture_output=True, text=True,
-                       cwd=ROOT)
+    p = knitlad("render", str(tmp_path))
     assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and "no ladder.h5" in p.stderr
 
 
@@ -163,8 +163,7 @@ def _damaged(run_folder, tmp_path, how: str) -> Path:
 def test_a_damaged_run_file_is_one_line_and_exit_2_for_every_picture(run_folder, tmp_path, how, command):
     """Each of these ended in a traceback (a KeyError, an IndexError, a FileNotFoundError of the movie's gif)."""
     path = _damaged(run_folder, tmp_path, how)
-    p = subprocess.run([sys.executable, "-m", "knitlad.cli", command, str(path.parent)], capture_output=True,
-                       text=True, cwd=ROOT)
+    p = knitlad(command, str(path.parent))
     assert p.returncode == 2, p.stderr
     assert "Traceback" not in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
     assert str(path) in p.stderr
@@ -182,8 +181,7 @@ def test_a_render_that_runs_out_of_room_says_so_and_leaves_no_broken_image(run_f
 
     folder = tmp_path / "run"
     shutil.copytree(run_folder, folder, ignore=shutil.ignore_patterns("render", "*.mp4", "*.gif"))
-    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(folder), "--width", "640"],
-                       capture_output=True, text=True, cwd=ROOT, preexec_fn=_file_size_limit(20_000))
+    p = knitlad("render", str(folder), "--width", "640", preexec_fn=_file_size_limit(20_000))
     assert p.returncode == 1, p.stderr
     assert "render stopped" in p.stderr and "Traceback" not in p.stderr
     for png in (folder / "render").glob("*.png"):
@@ -191,12 +189,12 @@ def test_a_render_that_runs_out_of_room_says_so_and_leaves_no_broken_image(run_f
     assert not list((folder / "render").glob("*.tmp*"))
 
 
+@pytest.mark.process
 def test_a_cut_that_cannot_write_its_files_keeps_its_summary(tmp_path):
     """A file-size limit under ladder.h5's size: it was about 20 tracebacks of h5py and a segmentation fault."""
     out = tmp_path / "out"
-    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "cut", "--stitches", "6x8", "--lx", "0.40", "--preset",
-                        "fast", "--resolution", "16", "--max-time-ms", "0.3", "--out", str(out)],
-                       capture_output=True, text=True, cwd=ROOT, preexec_fn=_file_size_limit(100_000))
+    p = knitlad("cut", "--stitches", "6x8", "--lx", "0.40", "--preset",
+                        "fast", "--resolution", "16", "--max-time-ms", "0.3", "--out", str(out), preexec_fn=_file_size_limit(100_000))
     assert p.returncode == 1, p.stderr
     assert "could not be written" in p.stderr.strip().splitlines()[-1] and "Traceback" not in p.stderr
     assert json.loads((out / "summary.json").read_text())["n_lad"] >= 0
@@ -216,6 +214,7 @@ def test_every_dataset_of_a_run_file_carries_its_unit(run_folder):
     assert not missing, missing
 
 
+@pytest.mark.process
 def test_a_render_without_a_display_prints_no_vtk_noise(run_folder, tmp_path):
     """With no X display VTK printed a coloured 'WARN| bad X server connection' before every render."""
     import os
@@ -224,8 +223,7 @@ def test_a_render_without_a_display_prints_no_vtk_noise(run_folder, tmp_path):
     folder = tmp_path / "run"
     shutil.copytree(run_folder, folder, ignore=shutil.ignore_patterns("render", "*.mp4", "*.gif"))
     env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
-    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(folder), "--width", "160", "--view", "front"],
-                       capture_output=True, text=True, cwd=ROOT, env=env)
+    p = knitlad("render", str(folder), "--width", "160", "--view", "front", env=env)
     noise = [line for line in p.stderr.splitlines() if not line.startswith("render [")]  # its progress line
     assert p.returncode == 0 and not noise, p.stderr
 
@@ -243,8 +241,7 @@ def test_a_scene_of_one_s_own_renders_and_films_from_its_trajectory_file(tmp_pat
     recorder = kl.TrajectoryRecorder()
     kl.Simulation(scene.build()).run(1e-3, observe=recorder, observe_every_s=2.5e-4)
     path = kl.write_trajectory(tmp_path / "mine.h5", recorder)
-    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(path), "--view", "front", "--width", "160"],
-                       capture_output=True, text=True, cwd=ROOT)
+    p = knitlad("render", str(path), "--view", "front", "--width", "160")
     assert p.returncode == 0, p.stderr
     pictures = sorted((tmp_path / "mine_render").glob("render_front_*.png"))  # beside the file, its own folder
     # five evenly spaced instants from the first frame to the last, each frame drawn once
@@ -254,8 +251,7 @@ def test_a_scene_of_one_s_own_renders_and_films_from_its_trajectory_file(tmp_pat
     first, last = (imageio.imread(q)[..., :3].astype(int) for q in (pictures[0], pictures[-1]))
     assert (first < 200).any(axis=2).mean() > 0.002  # the rod is drawn
     assert np.abs(first - last).sum() > 0  # and it moved
-    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "movie", str(path), "--gif", "--width", "96"],
-                       capture_output=True, text=True, cwd=ROOT)
+    p = knitlad("movie", str(path), "--gif", "--width", "96")
     assert p.returncode == 0, p.stderr
     assert len(imageio.mimread(tmp_path / "mine.gif")) == len(recorder.times)
 
@@ -319,8 +315,7 @@ def test_a_damaged_run_file_is_refused_in_one_line_not_drawn_from_stray_memory(r
             del f["topology/edges"]
             f["topology/edges"] = edges + 10 ** 6 if damage == "edges out of range" else edges.ravel()
     for command in ("render", "movie"):
-        p = subprocess.run([sys.executable, "-m", "knitlad.cli", command, str(folder)], capture_output=True, text=True,
-                           cwd=ROOT)
+        p = knitlad(command, str(folder))
         assert p.returncode == 2, (command, p.returncode, p.stderr)
         assert "a damaged run file" in p.stderr.strip().splitlines()[-1] and "Traceback" not in p.stderr
     assert not list((folder / "render").glob("*.png")) if (folder / "render").exists() else True
@@ -331,11 +326,11 @@ def test_a_damaged_run_file_is_refused_in_one_line_not_drawn_from_stray_memory(r
                                         (["--colour", "rainbow"], "--colour: one of course, speed")])
 def test_render_refuses_a_width_no_memory_holds_and_a_nan_instant(run_folder, args, says):
     """`--width 1000000` aborted with std::bad_alloc; `--at-ms nan` drew an image and exited 0."""
-    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(run_folder), *args], capture_output=True,
-                       text=True, cwd=ROOT)
+    p = knitlad("render", str(run_folder), *args)
     assert p.returncode == 2 and says in p.stderr and "Traceback" not in p.stderr, p.stderr
 
 
+@pytest.mark.end_to_end
 def test_two_job_files_of_one_folder_render_into_folders_of_their_own(run_folder, tmp_path):
     """Rendering two job files of one sweep wrote both into jobs/render/, the second's frames over the first's;
     `render` had no --out."""
@@ -345,13 +340,13 @@ def test_two_job_files_of_one_folder_render_into_folders_of_their_own(run_folder
     jobs.mkdir()
     for name in ("a.h5", "b.h5"):
         shutil.copy(run_folder / "ladder.h5", jobs / name)
-        p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(jobs / name), "--view", "front",
-                            "--width", "320"], capture_output=True, text=True, cwd=ROOT)
+        p = knitlad("render", str(jobs / name), "--view", "front",
+                            "--width", "320")
         assert p.returncode == 0, p.stderr
     assert list((jobs / "a_render").glob("*.png")) and list((jobs / "b_render").glob("*.png"))
     assert not (jobs / "render").exists()
-    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "render", str(jobs / "a.h5"), "--view", "front", "--width",
-                        "320", "--out", str(tmp_path / "mine")], capture_output=True, text=True, cwd=ROOT)
+    p = knitlad("render", str(jobs / "a.h5"), "--view", "front", "--width",
+                        "320", "--out", str(tmp_path / "mine"))
     assert p.returncode == 0 and list((tmp_path / "mine").glob("*.png"))
 
 
@@ -367,6 +362,7 @@ def test_a_run_records_when_where_and_with_what_it_ran(run_folder):
     assert log.startswith("command: knitlad cut --stitches 6x8") and "numba: " in log and "summary: {" in log
 
 
+@pytest.mark.end_to_end
 def test_plot_of_a_run_file_without_its_stretch_says_so_and_draws_the_rest(run_folder, tmp_path):
     """`knitlad plot` on a run whose ladder.h5 lacked /stretch ended in a KeyError traceback."""
     import shutil
@@ -377,8 +373,7 @@ def test_plot_of_a_run_file_without_its_stretch_says_so_and_draws_the_rest(run_f
     shutil.copytree(run_folder, folder, ignore=shutil.ignore_patterns("render", "*.mp4", "*.gif", "*.png"))
     with h5py.File(folder / "ladder.h5", "r+") as f:
         del f["stretch"]
-    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "plot", str(folder)], capture_output=True, text=True,
-                       cwd=ROOT)
+    p = knitlad("plot", str(folder))
     assert p.returncode == 0 and "Traceback" not in p.stderr, p.stderr
     assert "no tension_history.png" in p.stderr and "stretch" in p.stderr
     assert (folder / "spatio_temporal.png").exists() and (folder / "energy.png").exists()
@@ -389,8 +384,7 @@ def test_a_gif_on_a_full_disk_is_one_line_not_two_ignored_tracebacks(run_folder,
 
     folder = tmp_path / "run"
     shutil.copytree(run_folder, folder, ignore=shutil.ignore_patterns("render", "*.mp4", "*.gif"))
-    p = subprocess.run([sys.executable, "-m", "knitlad.cli", "movie", str(folder), "--gif", "--width", "320"],
-                       capture_output=True, text=True, cwd=ROOT, preexec_fn=_file_size_limit(20_000))
+    p = knitlad("movie", str(folder), "--gif", "--width", "320", preexec_fn=_file_size_limit(20_000))
     assert p.returncode == 1 and "Exception ignored" not in p.stderr and "Traceback" not in p.stderr, p.stderr
     assert "movie not written" in p.stderr.strip().splitlines()[-1] and not list(folder.glob("*.gif*"))
 

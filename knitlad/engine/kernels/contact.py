@@ -64,7 +64,6 @@ class ContactParams(NamedTuple):
     skin: float  # neighbour-list margin [mm]
     lookahead_steps: float = 0.0  # a fast edge's allowance lasts it this many steps (0: half the skin for all)
     max_allowance: float = 3.0  # the largest allowance of a fast edge, in skins (at least half a skin)
-    friction_every: float = 1.0  # a pair's friction is computed once every this many steps and held between
 
 
 class ListScratch(NamedTuple):
@@ -85,13 +84,12 @@ class ListScratch(NamedTuple):
 
 
 @njit(**NUMBA_OPTS)
-def list_scratch(n_edges, capacity, history_columns=5):
-    """The work arrays of a rebuild of a list of ``capacity`` pairs over ``n_edges`` edges (:class:`ListScratch`),
-    for a history of ``history_columns`` (HISTORY_COLUMNS, or HELD_HISTORY_COLUMNS)."""
+def list_scratch(n_edges, capacity):
+    """The work arrays of a rebuild of a list of ``capacity`` pairs over ``n_edges`` edges (:class:`ListScratch`)."""
     max_cells = MAX_CELLS_PER_EDGE * n_edges + 64
     return ListScratch(
         np.empty((capacity, 2), dtype=np.int64), np.empty(capacity, dtype=np.int64),
-        np.empty((capacity, history_columns)),
+        np.empty((capacity, HISTORY_COLUMNS)),
         np.empty((n_edges, 3)), np.empty(n_edges), np.empty((n_edges, 3), dtype=np.int64),
         np.empty(n_edges, dtype=np.int64), np.empty(n_edges, dtype=np.int64),
         np.empty(max_cells + 1, dtype=np.int64), np.empty(max_cells, dtype=np.int64),
@@ -117,13 +115,9 @@ PAIR_RESULTS = 11
 
 # columns of a pair's history (Contacts.slip): the tangential spring u_t in 0..2, then the union rule's last
 # verdict on the pair, COUNTED (+1), CEDED_TO_NEIGHBOUR (-1: touching, but the contact is a neighbouring edge's)
-# or 0 (apart, or new), and its overlap then (counted or ceded); with a friction held over several steps
-# (ContactParams.friction_every > 1) also the force last computed (HELD_X..Z) and the steps it has acted since
-# (HELD_STEPS, 0: none yet): the default's history stays 5 columns wide (the rebuild copies every column)
+# or 0 (apart, or new), and its overlap then (counted or ceded)
 VERDICT, DEPTH = 3, 4
 HISTORY_COLUMNS = 5
-HELD_X, HELD_Y, HELD_Z, HELD_STEPS = 5, 6, 7, 8
-HELD_HISTORY_COLUMNS = 9
 COUNTED, CEDED_TO_NEIGHBOUR = 1.0, -1.0
 # columns of a touching pair's share on one of its edges (Contacts.shares: one 64-byte row): the pair's force on
 # its first edge, that edge's lever parameter (s, or t on the second edge), its friction couple, and for the
@@ -337,7 +331,7 @@ def build_candidate_pairs(
     cap = pairs.shape[0]
     n_blocks = max(1, min(n_threads, ne))
     if scratch is None:
-        scratch = list_scratch(ne, 0)
+        scratch = list_scratch(ne, np.int64(0))
     mid = scratch.mid
     reach = scratch.reach
     block_lo = np.empty((n_blocks, 3))
@@ -377,7 +371,7 @@ def build_candidate_pairs(
     found = np.zeros(n_blocks, dtype=np.int64)
     _search_blocks(x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_local, yarn_edges, yarn_closed,
                    exclusion, edge_image, skin, cells, dims, mid, reach, start, order, local, found)
-    n = 0
+    n = np.int64(0)
     for blk in range(n_blocks):
         n += found[blk]
     if n > cap or np.any(found > block_cap):
@@ -428,7 +422,7 @@ def fast_edge_pairs(x, edge_a, edge_b, edge_shift, edge_radius, edge_yarn, edge_
     half_skin = 0.5 * skin
     nf = fast.shape[0]
     found = np.empty(64 * nf, dtype=np.int64)
-    n = 0
+    n = np.int64(0)
     for q in range(nf):  # a fast edge and its slow partners
         f = fast[q]
         # as a float first, at most the grid (an infinite reach, a flying end gone to infinity, must not wrap)
@@ -661,39 +655,11 @@ def coulomb_spring(ux, uy, uz, nx, ny, nz, vtx, vty, vtz, sx, sy, sz, dt, k_t, g
     return ftx, fty, ftz, ux, uy, uz, sliding
 
 
-@njit(**INLINE_OPTS)
-def held_or_new_friction(slip, p, nx, ny, nz, vtx, vty, vtz, sx, sy, sz, dt, k_t, gamma_t, limit, every):
-    """Pair p's friction computed once every ``every`` steps (:func:`coulomb_spring`, its slip grown over the
-    time since the last computation) and held in between: turned into the tangent plane of normal n, its
-    length kept, capped at ``limit`` = mu f_n. The friction an implicit step of ``every`` explicit steps would
-    see if it kept the friction explicit. The force and the steps it has acted are kept in the pair's history
-    (HELD_X..Z, HELD_STEPS; 0: none yet). Returns (f_t, u, sliding) as :func:`coulomb_spring`."""
-    held = slip[p, HELD_STEPS]
-    if 0.0 < held < every:
-        fx, fy, fz = slip[p, HELD_X], slip[p, HELD_Y], slip[p, HELD_Z]
-        f_len = math.sqrt(fx * fx + fy * fy + fz * fz)
-        fn = dot(fx, fy, fz, nx, ny, nz)
-        fx -= fn * nx
-        fy -= fn * ny
-        fz -= fn * nz
-        f_new = math.sqrt(fx * fx + fy * fy + fz * fz)
-        scale = min(f_len, limit) / f_new if f_new > 0.0 else 0.0
-        slip[p, HELD_STEPS] = held + 1.0
-        return fx * scale, fy * scale, fz * scale, slip[p, 0], slip[p, 1], slip[p, 2], f_len > limit
-    fx, fy, fz, ux, uy, uz, sliding = coulomb_spring(slip[p, 0], slip[p, 1], slip[p, 2], nx, ny, nz, vtx, vty, vtz,
-                                                     sx, sy, sz, dt * max(held, 1.0), k_t, gamma_t, limit)
-    slip[p, HELD_X] = fx
-    slip[p, HELD_Y] = fy
-    slip[p, HELD_Z] = fz
-    slip[p, HELD_STEPS] = 1.0
-    return fx, fy, fz, ux, uy, uz, sliding
-
-
 @njit(**NUMBA_OPTS)
 def pair_contact_forces(
     lo, hi, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
     edge_prev, edge_next, union, pairs, slip, edge_class, pair_law, damping_n, damping_t, mu, dt, out, mode, gap_ref,
-    edge_moved, blk, edge_rod, bucket_fill, shares, share_edge, ledger, friction_every=None,
+    edge_moved, blk, edge_rod, bucket_fill, shares, share_edge, ledger,
 ):
     """Contact force of each candidate pair p in [lo, hi) on its first edge, into ``out[p]``
     (the narrow phase in ``mode``, :func:`counted_overlaps`).
@@ -732,11 +698,6 @@ def pair_contact_forces(
     the union rule puts in when a touching pair's contact passes to a neighbouring edge or back (the counted
     energy jumps by U(delta) there, with no force doing work): +U(delta) for a pair that takes a contact,
     -U(delta) for one that cedes it, U the mean of its values at the step's two ends.
-
-    ``friction_every`` (None: every step): a touching pair computes its friction once every that many steps
-    and holds it in between (:func:`held_or_new_friction`), a study of the step friction needs
-    (docs/performance.md). The ledger then books the held force's work on the slip, not its spring's energy
-    (it closes only without).
     """
     counted_overlaps(x, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, lo, hi, out,
                      mode, gap_ref, edge_moved)
@@ -769,8 +730,6 @@ def pair_contact_forces(
             slip[p, 0] = 0.0
             slip[p, 1] = 0.0
             slip[p, 2] = 0.0
-            if friction_every is not None:
-                slip[p, HELD_STEPS] = 0.0
             continue
         s = out[p, S_PAIR]
         t = out[p, T_PAIR]
@@ -844,12 +803,8 @@ def pair_contact_forces(
             sx, sy, sz = vtx, vty, vtz
         gamma_t = 2.0 * damping_t * math.sqrt(k_t * m_eff)
         limit = mu * pair_law[ci, cj, FRICTION_FACTOR] * fn
-        if friction_every is None:  # every step (compiled apart: the default keeps its bits)
-            ftx, fty, ftz, ux, uy, uz, slides = coulomb_spring(slip[p, 0], slip[p, 1], slip[p, 2], nx, ny, nz, vtx,
-                                                               vty, vtz, sx, sy, sz, dt, k_t, gamma_t, limit)
-        else:
-            ftx, fty, ftz, ux, uy, uz, slides = held_or_new_friction(slip, p, nx, ny, nz, vtx, vty, vtz, sx, sy, sz,
-                                                                     dt, k_t, gamma_t, limit, friction_every)
+        ftx, fty, ftz, ux, uy, uz, slides = coulomb_spring(slip[p, 0], slip[p, 1], slip[p, 2], nx, ny, nz, vtx, vty,
+                                                           vtz, sx, sy, sz, dt, k_t, gamma_t, limit)
         sliding = 1.0 if slides else 0.0
         dashpot -= (fn - spring) * vn * dt
         friction -= (ftx * sx + fty * sy + ftz * sz) * dt + 0.5 * k_t * (
@@ -891,14 +846,15 @@ def pair_contact_forces(
 def _pair_contact_forces_in_blocks(
     n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius,
     edge_prev, edge_next, union, pairs, slip, edge_class, pair_law, damping_n, damping_t, mu, dt, out, mode, gap_ref,
-    edge_moved, edge_rod, bucket_fill, shares, share_edge, ledger, friction_every,
+    edge_moved, edge_rod, bucket_fill, shares, share_edge, ledger,
 ):
     for blk in prange(n_blocks):
+        block = np.int64(blk)  # prange's index is unsigned: as int64 the serial call's specialisation serves it
         pair_contact_forces(
-            blk * n_pairs // n_blocks, (blk + 1) * n_pairs // n_blocks, x, v, omega, v_damp, omega_damp, predicted,
-            spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, slip, edge_class,
-            pair_law, damping_n, damping_t, mu, dt, out, mode, gap_ref, edge_moved, blk, edge_rod, bucket_fill, shares,
-            share_edge, ledger, friction_every,
+            block * n_pairs // n_blocks, (block + 1) * n_pairs // n_blocks, x, v, omega, v_damp, omega_damp,
+            predicted, spin, mass, edge_a, edge_b, edge_shift, edge_radius, edge_prev, edge_next, union, pairs, slip,
+            edge_class, pair_law, damping_n, damping_t, mu, dt, out, mode, gap_ref, edge_moved, block, edge_rod,
+            bucket_fill, shares, share_edge, ledger,
         )
 
 
@@ -1008,7 +964,7 @@ def contact_sums_by_rod(n_blocks, bucket_start, bucket_fill, shares, share_edge,
     """The contact forces onto the nodes, rod by rod in parallel (:func:`rod_contact_sum`): a rod's edges move
     only its own nodes."""
     for r in prange(rod_stats.shape[0]):
-        rod_contact_sum(r, n_blocks, bucket_start, bucket_fill, shares, share_edge, edge_a, edge_b, spin, F, torque,
+        rod_contact_sum(np.int64(r), n_blocks, bucket_start, bucket_fill, shares, share_edge, edge_a, edge_b, spin, F, torque,
                         rod_stats)
 
 
@@ -1033,19 +989,6 @@ def contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F
     n_pairs = c.n_pairs[0]
     n_blocks = max(1, min(c.threads[0], n_pairs // MIN_PAIRS_PER_THREAD))
     p = c.params
-    if p.friction_every > 1.0:
-        _contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F, torque, v_damp, omega_damp,
-                        predicted, ledger, n_pairs, n_blocks, p.friction_every)
-    else:  # None: the pair kernel compiled without the held friction
-        _contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F, torque, v_damp, omega_damp,
-                        predicted, ledger, n_pairs, n_blocks, None)
-
-
-@njit(**NUMBA_OPTS)
-def _contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, F, torque, v_damp, omega_damp,
-                    predicted, ledger, n_pairs, n_blocks, friction_every):
-    """:func:`contact_forces` for one ``friction_every`` (None, or the steps a pair's friction is held)."""
-    p = c.params
     if c.status[GAPS_KNOWN] == 0 or c.share_layout[0] != n_blocks:  # a new list, or new blocks
         share_buckets(c.pairs, n_pairs, c.edge_rod, n_blocks, c.bucket_start)
         c.share_layout[0] = n_blocks
@@ -1059,20 +1002,21 @@ def _contact_forces(x, v, omega, spin, mass, edge_a, edge_b, edge_shift, c, dt, 
             n_blocks, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
             c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.pair_law, p.damping_n,
             p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, c.edge_rod, c.bucket_fill, c.shares,
-            c.share_edge, ledger, friction_every,
+            c.share_edge, ledger,
         )
         contact_sums_by_rod(n_blocks, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b, spin, F,
                             torque, c.rod_stats)
     else:
+        # int64 zeros and ones, not literals: a literal argument compiles a specialisation of its own (kernels/options.py)
         pair_contact_forces(
-            0, n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
+            np.int64(0), n_pairs, x, v, omega, v_damp, omega_damp, predicted, spin, mass, edge_a, edge_b, edge_shift,
             c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, c.slip, c.edge_class, c.pair_law, p.damping_n,
-            p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, 0, c.edge_rod, c.bucket_fill,
-            c.shares, c.share_edge, ledger, friction_every,
+            p.damping_t, p.mu, dt, c.pair_results, mode, c.gap_ref, c.edge_moved, np.int64(0), c.edge_rod,
+            c.bucket_fill, c.shares, c.share_edge, ledger,
         )
         for r in range(c.rod_stats.shape[0]):
-            rod_contact_sum(r, 1, c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b, spin, F,
-                            torque, c.rod_stats)
+            rod_contact_sum(r, np.int64(1), c.bucket_start, c.bucket_fill, c.shares, c.share_edge, edge_a, edge_b,
+                            spin, F, torque, c.rod_stats)
     c.status[GAPS_KNOWN] = 1
     stats = c.stats
     n_touch = 0
@@ -1100,8 +1044,8 @@ def contact_energy(x, edge_a, edge_b, edge_shift, c, pairs, slip):
     ``pairs`` (m, 2) with their ``slip`` (m, 3) (``c.pairs[:n]``, ``c.slip[:n]``, or a subset)."""
     n_pairs = pairs.shape[0]
     narrow = np.empty((n_pairs, PAIR_RESULTS))
-    counted_overlaps(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, c.union, pairs, 0, n_pairs,
-                     narrow, ALL_PAIRS_PLAIN, c.gap_ref, c.edge_moved)
+    counted_overlaps(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, c.union, pairs, np.int64(0),
+                     n_pairs, narrow, np.int64(ALL_PAIRS_PLAIN), c.gap_ref, c.edge_moved)
     total = 0.0
     for p in range(n_pairs):
         overlap = narrow[p, OVERLAP]
@@ -1113,7 +1057,7 @@ def contact_energy(x, edge_a, edge_b, edge_shift, c, pairs, slip):
 
 
 @njit(**NUMBA_OPTS)
-def refresh_contacts(x, edge_a, edge_b, edge_shift, c, v=None, lookahead=0.0):
+def refresh_contacts(x, edge_a, edge_b, edge_shift, c, v, lookahead):
     """Rebuild the candidate list of ``c`` (a :class:`knitlad.engine.contact.Contacts`) if stale
     or if an edge moved by more than its allowance since the last build. Returns False on overflow: the
     old list is kept, ``c.status[PAIRS_NEEDED]`` holds the pairs needed, and the caller must grow the buffer.
@@ -1178,8 +1122,8 @@ def touching_pairs_among(x, edge_a, edge_b, edge_shift, c, in_a, in_b):
     set ``in_b`` (boolean masks over the edges: a part of a yarn and its images, say)."""
     n_pairs = c.n_pairs[0]
     narrow = np.empty((n_pairs, PAIR_RESULTS))
-    counted_overlaps(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs, 0,
-                     n_pairs, narrow, ALL_PAIRS_PLAIN, c.gap_ref, c.edge_moved)
+    counted_overlaps(x, edge_a, edge_b, edge_shift, c.edge_radius, c.edge_prev, c.edge_next, c.union, c.pairs,
+                     np.int64(0), n_pairs, narrow, np.int64(ALL_PAIRS_PLAIN), c.gap_ref, c.edge_moved)
     n = 0
     for p in range(n_pairs):
         i = c.pairs[p, 0]

@@ -58,15 +58,21 @@ def largest_slope_factor(name: str) -> float:
 
 @njit(**INLINE_OPTS)
 def normal_spring(law, k, delta_ref, delta):
-    """Normal spring force f(delta) of the law (module docstring) at an overlap delta > 0."""
+    """Normal spring force f(delta) of the law (module docstring) at an overlap delta > 0; NaN for a mode
+    with no branch here, which the blow-up guard stops (never another law's force)."""
+    if law == LINEAR:
+        return k * delta
     if law == HERTZ:
         return k * delta * math.sqrt(delta / delta_ref)
-    return k * delta
+    return math.nan
 
 
 @njit(**INLINE_OPTS)
 def normal_spring_energy(law, k, delta_ref, delta):
-    """Stored energy U(delta) = int_0^delta f of the law's normal spring at an overlap delta >= 0."""
+    """Stored energy U(delta) = int_0^delta f of the law's normal spring at an overlap delta >= 0 (NaN for a
+    mode with no branch here)."""
+    if law == LINEAR:
+        return 0.5 * k * delta * delta
     if law == HERTZ:
         return 0.4 * k * delta * delta * math.sqrt(delta / delta_ref)
-    return 0.5 * k * delta * delta
+    return math.nan

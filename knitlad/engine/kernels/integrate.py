@@ -173,8 +173,7 @@ def dissipative_forces_by_yarn(m, w, v_damp, ratio, decay, lead, air_density, ai
 
 
 @njit(**NUMBA_OPTS)
-def compute_forces(m, s, w, c, twist, contact, damping, dt, axial=AXIAL_EXPLICIT, dashpots=DASHPOTS_HALF_STEP,
-                   obstacles=None):
+def compute_forces(m, s, w, c, twist, contact, damping, dt, axial, dashpots, obstacles):
     """Total force on every node (``w.force``) and torque on every edge (``w.torque``).
 
     ``twist``, ``contact``, ``axial``, ``dashpots``: the modes (module docstring; with DASHPOTS_PREDICTED the
@@ -183,7 +182,8 @@ def compute_forces(m, s, w, c, twist, contact, damping, dt, axial=AXIAL_EXPLICIT
     branches, the air; ``no_damping()`` for statics). ``dt``: the step over which contact slip accumulates, the
     branches relax and the ledger counts, and with AXIAL_IMPLICIT the kick that follows (a full step:
     :func:`verlet_steps` fuses the half-kicks).
-    ``obstacles``: an :class:`~knitlad.engine.kernels.obstacles.ObstacleState`, or None (none: compiled away).
+    ``obstacles``: an :class:`~knitlad.engine.kernels.obstacles.ObstacleState` (the simulation passes an empty one
+    when there are none: one compiled step for both), or None.
     Every mechanism adds what it took out over ``dt`` (and the supports and obstacles the work they did) to
     ``w.ledger``. Returns False if the contact buffer overflowed (forces incomplete).
     """
@@ -211,7 +211,7 @@ def compute_forces(m, s, w, c, twist, contact, damping, dt, axial=AXIAL_EXPLICIT
             return False
         contact_forces(s.x, s.v, s.omega, twist, m.mass, m.edge_a, m.edge_b, m.edge_shift, c, dt, w.force, w.torque,
                        v_damp, w.omega_damp if predicted else s.omega, predicted, w.ledger)
-    if obstacles is not None:
+    if obstacles is not None and obstacles.kind.shape[0] > 0:
         w.ledger[0, OBSTACLE_WORK] += dt * obstacle_forces(s.x, v_damp, m.mass, m.radius, m.held, obstacles, dt,
                                                            w.force)
     w.rail_reaction[:] = 0.0
@@ -470,8 +470,7 @@ def _drift(m, s, dt, twist):
 
 
 @njit(**NUMBA_OPTS)
-def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, damping, axial=AXIAL_EXPLICIT, dashpots=DASHPOTS_HALF_STEP,
-                 obstacles=None):
+def verlet_steps(m, s, w, c, dt, n_steps, twist, contact, damping, axial, dashpots, obstacles):
     """Advance ``n_steps`` of velocity Verlet (kick-drift-kick); return the steps completed.
 
     Expects ``w.force``/``w.torque`` to hold the forces of the current state
@@ -525,7 +524,7 @@ def max_free_force(m, w, twist):
 
 
 @njit(**NUMBA_OPTS)
-def fire_relax(m, s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, twist, contact, obstacles=None):
+def fire_relax(m, s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, twist, contact, obstacles):
     """FIRE energy minimisation (Bitzek et al. 2006, with the FIRE 2.0 back-step of
     Guenole et al. 2020) over free node positions and free twist angles.
 
@@ -533,6 +532,8 @@ def fire_relax(m, s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, t
     max |torque| <= torque_tol. Returns (steps taken, max |F|, max |torque|);
     steps = -1 if the contact buffer overflowed (grow it and call again).
     """
+    # the modes as int64, not literals, so that the dynamics' specialisation of compute_forces serves (kernels/options.py)
+    statics_axial, statics_dashpots = np.int64(AXIAL_EXPLICIT), np.int64(DASHPOTS_HALF_STEP)
     alpha0 = 0.1
     alpha = alpha0
     n_delay = 5
@@ -546,7 +547,7 @@ def fire_relax(m, s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, t
         for k in range(3):
             s.v[i, k] = 0.0
     s.omega[:] = 0.0
-    if not compute_forces(m, s, w, c, twist, contact, no_damping(), dt, AXIAL_EXPLICIT, DASHPOTS_HALF_STEP, obstacles):
+    if not compute_forces(m, s, w, c, twist, contact, no_damping(), dt, statics_axial, statics_dashpots, obstacles):
         return -1, 0.0, 0.0
     fmax, tmax = max_free_force(m, w, twist)
     step = 0
@@ -606,7 +607,7 @@ def fire_relax(m, s, w, c, dt_start, dt_max, max_steps, force_tol, torque_tol, t
                 if not m.theta_held[j]:
                     s.omega[j] = (1.0 - alpha) * s.omega[j] + tscale * w.torque[j]
                     s.theta[j] += dt * s.omega[j]
-        if not compute_forces(m, s, w, c, twist, contact, no_damping(), dt, AXIAL_EXPLICIT, DASHPOTS_HALF_STEP,
+        if not compute_forces(m, s, w, c, twist, contact, no_damping(), dt, statics_axial, statics_dashpots,
                               obstacles):
             return -1, 0.0, 0.0
         fmax, tmax = max_free_force(m, w, twist)
