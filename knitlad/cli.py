@@ -997,7 +997,10 @@ def _say_if_compiling() -> None:
     from knitlad.engine.kernels.integrate import verlet_steps
 
     if not is_compiled(verlet_steps):
+        from knitlad.engine.compile_ahead import compile_ahead
+
         typer.echo(f"knitlad: compiling the kernels (the first run only: {COMPILE_TIME}, then cached)", err=True)
+        compile_ahead()
 
 
 MIN_FIT_STITCHES = 5  # a front fitted over fewer stitches is a rough figure
