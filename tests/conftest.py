@@ -77,7 +77,7 @@ def kernels_compiled_on_both_workers():
     from knitlad.engine.compile_ahead import PARTS, compiled_ahead
 
     if not compiled_ahead():
-        PARTS["contact" if worker == "gw0" else "rods"]()
+        PARTS["statics" if worker == "gw0" else "dynamics"]()
 
 
 def one_line_error(p, code: int = 2) -> str:

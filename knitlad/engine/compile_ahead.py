@@ -4,17 +4,19 @@ edited, compiles them (:mod:`knitlad.engine.kernels`), about two minutes on one 
 Numba compiles a kernel the first time it is called with new argument types, and the kernels a kernel calls as
 it types them, on one thread. The step's two largest subtrees are independent: the contact
 (:func:`compile_contact_kernels`: the pair list and the pair forces) and the rods' own forces
-(:func:`compile_rod_kernels`: elasticity, twist, dissipation, the implicit axial springs). :func:`compile_ahead`
-compiles the first here and the second in a helper process at the same time, each on a scene of two crossing
-yarns called with the argument types the step gives them (``kernels/options.py``: one type per argument); the
-step's own compilation then finds both in the cache. A kernel typed differently here is compiled again later:
-slower, never wrong.
+(:func:`compile_rod_kernels`: elasticity, twist, dissipation, the implicit axial springs), and on top of them
+the statics (FIRE) and the dynamics (Verlet). :func:`compile_ahead` compiles the contact and the statics here
+and the rods and the dynamics in a helper process at the same time, each on a scene of two crossing yarns
+called with the argument types the step gives them (``kernels/options.py``: one type per argument); the run's
+own compilation then finds them in the cache. A kernel typed differently here is compiled again later: slower,
+never wrong.
 """
 
 from __future__ import annotations
 
 import subprocess
 import sys
+import time
 
 import numpy as np
 
@@ -55,10 +57,13 @@ def compile_contact_kernels() -> None:
 
 def compile_rod_kernels() -> None:
     """The rods' own subtree of the step: stretching and bending, twist (frame-free and framed), the viscoelastic
-    branches and the air, the implicit axial springs, with their argument types there."""
+    branches and the air, the implicit axial springs, with their argument types there; and the energies (the
+    ledger reads them), which the contact's part would leave to the end."""
     from knitlad.engine.kernels import integrate as k
 
-    rods, _, w = _crossing()
+    rods, c, w = _crossing()
+    k.potential_energy(rods.model, rods.state, w, c, 0, True)
+    k.kinetic_energy(rods.model, rods.state)
     twisted = with_twist(rods, units.NYLON.twisting_stiffness / units.NYLON.bending_stiffness)
     for r in (rods, twisted):
         m, s = r.model, r.state
@@ -70,7 +75,36 @@ def compile_rod_kernels() -> None:
         k.implicit_stretching_by_yarn(m, s, w, 1e-6)
 
 
-PARTS = {"contact": compile_contact_kernels, "rods": compile_rod_kernels}
+def _simulation():
+    """A simulation of the crossing yarns with contact and friction, as the laddering builds one."""
+    from knitlad.engine.simulation import Simulation
+
+    rods, _, _ = _crossing()
+    return Simulation(rods, contact=ContactModel(stiffness=1e3, mu=0.4), implicit_axial=True)
+
+
+def _other_subtree_or_timeout(timeout_s: float = HELPER_TIMEOUT_S) -> None:
+    """Wait until the cache holds both subtrees (the other process's too), at most ``timeout_s``."""
+    end = time.monotonic() + timeout_s
+    while not compiled_ahead() and time.monotonic() < end:
+        time.sleep(0.5)
+
+
+def compile_statics() -> None:
+    """The contact's subtree; once the rods' is in the cache too, the step's forces and FIRE (a stretch) on top."""
+    compile_contact_kernels()
+    _other_subtree_or_timeout()
+    _simulation().relax(max_steps=2)
+
+
+def compile_dynamics() -> None:
+    """The rods' subtree; once the contact's is in the cache too, the step's forces and Verlet (a ladder) on top."""
+    compile_rod_kernels()
+    _other_subtree_or_timeout()
+    _simulation().step(2)
+
+
+PARTS = {"statics": compile_statics, "dynamics": compile_dynamics}
 
 
 def compiled_ahead() -> bool:
@@ -86,10 +120,10 @@ def compile_ahead() -> None:
     both are cached. A helper that fails or hangs is left: the step compiles what it did not."""
     if compiled_ahead():
         return
-    helper = subprocess.Popen([sys.executable, "-m", "knitlad.engine.compile_ahead", "rods"],
+    helper = subprocess.Popen([sys.executable, "-m", "knitlad.engine.compile_ahead", "dynamics"],
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
-        compile_contact_kernels()
+        compile_statics()
         helper.wait(timeout=HELPER_TIMEOUT_S)
     except subprocess.TimeoutExpired:
         helper.kill()
