@@ -987,7 +987,7 @@ def _render_jobs(out_dir, job_ids: list[str]) -> None:
     typer.echo(f"rendered {len(job_ids)} jobs in {out_dir / 'renders'}")
 
 
-COMPILE_TIME = "about two minutes on 2 cores"  # a fresh cache, measured: docs/performance.md
+COMPILE_TIME = "about 1.5 minutes on 2 cores"  # a fresh cache, measured: docs/performance.md
 
 
 def _say_if_compiling() -> None:
