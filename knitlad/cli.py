@@ -8,6 +8,7 @@ before anything runs.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import inspect
 import math
@@ -267,6 +268,51 @@ def _knit_run(model, options: dict, stitches: str | None, default_fx: float | No
     return cfg, out_dir
 
 
+@contextlib.contextmanager
+def _prologue(name: str, model, options: dict, stitches: str | None, default_fx: float | None, out: str | None,
+              holds=None):
+    """Every experiment command's start, said once: the config and --out checked before any compute
+    (:func:`_knit_run`, or the config alone for a model without a knit), the refusal of a folder holding an earlier
+    run (``holds(out_dir, cfg)`` returns the refusal's text or None; by default a ``<name>.h5`` there is refused),
+    the folder's lock for the whole command (a second run into it is refused, whatever command it is), the compile
+    notice and the stage progress. Yields (config, folder, progress). A folder the command made and left empty is
+    removed when it stops early."""
+    from knitlad.io.folders import FolderError, FolderLock, writable_folder
+
+    made = not (Path(out).exists() if out else False)
+    if "n_x" in model.model_fields:
+        cfg, out_dir = _knit_run(model, options, stitches, default_fx, out, name)
+    else:
+        cfg = validated(model, options)
+        out_dir = Path(out) if out else Path("runs") / time.strftime(f"{name}-%Y%m%d-%H%M%S")
+        try:
+            writable_folder(out_dir)
+        except FolderError as e:
+            fail(f"--out {e}")
+    if holds is None:
+        def holds(folder, _cfg):
+            return (f"holds an earlier {name} run ({name}.h5); choose another folder"
+                    if (folder / f"{name}.h5").exists() else None)
+    refusal = holds(out_dir, cfg)
+    if refusal:
+        fail(f"--out {out_dir}: {refusal}")
+    lock = FolderLock(out_dir)  # a second run into this folder would mix its files with this one's
+    try:
+        lock.acquire()
+    except FolderError as e:
+        fail(f"--out {e}")
+    try:
+        _say_if_compiling()
+        yield cfg, out_dir, _StageProgress()
+    except typer.Exit:
+        lock.release()
+        if made and out_dir.is_dir() and not any(out_dir.iterdir()):
+            out_dir.rmdir()
+        raise
+    finally:
+        lock.release()
+
+
 @app.command()
 @config_options(_config.CutConfig, exclude=("n_x", "n_y"))
 def cut(
@@ -282,51 +328,32 @@ def cut(
     Without --fx or --lx, force control to f_x^ini = 13.6 (the paper's Fig. 3c,d).
     """
 
-    from knitlad.io.folders import FolderError, FolderLock
+    def holds(folder: Path, _cfg) -> str | None:
+        earlier = earlier_run_outputs(folder)
+        return None if not earlier or overwrite else (
+            f"holds an earlier run ({', '.join(p.name for p in earlier[:4])}{', ...' if len(earlier) > 4 else ''}); "
+            "--overwrite replaces it")
 
-    made = not (Path(out).exists() if out else False)
-    cfg, out_dir = _knit_run(_config.CutConfig, options, stitches, 13.6, out, "cut")
-    earlier = earlier_run_outputs(out_dir)
-    if earlier and not overwrite:
-        fail(f"--out {out_dir}: holds an earlier run ({', '.join(p.name for p in earlier[:4])}"
-             f"{', ...' if len(earlier) > 4 else ''}); --overwrite replaces it")
-    lock = FolderLock(out_dir)  # a second run into this folder would mix its files with this one's
-    try:
-        lock.acquire()
-    except FolderError as e:
-        fail(f"--out {e}")
-
-    def nothing_written() -> None:
-        lock.release()
-        if made and out_dir.is_dir() and not any(out_dir.iterdir()):
-            out_dir.rmdir()
-
-    _say_if_compiling()
-    progress = _StageProgress()
-    try:
+    with _prologue("cut", _config.CutConfig, options, stitches, 13.6, out, holds) as (cfg, out_dir, progress):
+        earlier = earlier_run_outputs(out_dir)
         finished = _experiment_or_exit(lambda: _experiment("ladder", cfg, progress=progress), progress)
-    except typer.Exit:
-        nothing_written()
-        raise
-    progress.close(finished=True)
-    result, summary = finished.result, finished.summary
-    try:
-        # written beside the earlier run first, then put in its place: on a full disk the earlier run stays whole
-        h5, png = _replace_run_outputs(out_dir, finished, earlier)
-    except OSError as e:  # a full disk or a file-size limit: keep the summary, say it in one line
-        kept = _keep_summary(out_dir, summary) if not earlier else None
-        typer.echo(_json(summary))
-        typer.echo(f"knitlad: run finished but its files could not be written ({e}); "
-                   + ("the earlier run in --out is left as it was; " if earlier else "")
-                   + f"the summary is {'in ' + str(kept) if kept else 'printed above'}", err=True)
-        raise typer.Exit(1)
-    except KeyboardInterrupt as e:  # Ctrl-C or SIGTERM while writing: nothing half-written is left
-        how, code = ("terminated", 143) if isinstance(e, Terminated) else ("interrupted", 130)
-        typer.echo(f"knitlad: {how} while writing the run; " + ("the earlier run in --out is left as it was"
-                                                              if earlier else "nothing written"), err=True)
-        raise typer.Exit(code)
-    finally:
-        lock.release()
+        progress.close(finished=True)
+        result, summary = finished.result, finished.summary
+        try:
+            # written beside the earlier run first, then put in its place: on a full disk the earlier run stays whole
+            h5, png = _replace_run_outputs(out_dir, finished, earlier)
+        except OSError as e:  # a full disk or a file-size limit: keep the summary, say it in one line
+            kept = _keep_summary(out_dir, summary) if not earlier else None
+            typer.echo(_json(summary))
+            typer.echo(f"knitlad: run finished but its files could not be written ({e}); "
+                       + ("the earlier run in --out is left as it was; " if earlier else "")
+                       + f"the summary is {'in ' + str(kept) if kept else 'printed above'}", err=True)
+            raise typer.Exit(1)
+        except KeyboardInterrupt as e:  # Ctrl-C or SIGTERM while writing: nothing half-written is left
+            how, code = ("terminated", 143) if isinstance(e, Terminated) else ("interrupted", 130)
+            typer.echo(f"knitlad: {how} while writing the run; " + ("the earlier run in --out is left as it was"
+                                                                  if earlier else "nothing written"), err=True)
+            raise typer.Exit(code)
     _report_cut(cfg, result, summary, json_out, h5, png, out_dir)
 
 
@@ -380,15 +407,21 @@ def cycle(
     Without --fx or --lx, Delta x_min holds the knit at f_x = 0.68 (the experiments'). Writes cycle.csv
     (the force-displacement readings), cycle.png (Fig. 4a), cycle.h5 (readings, and the ladder of the cut).
     """
+    restart: list = []
 
+    def holds(folder: Path, config) -> None:  # an earlier run is refused, or resumed with --resume (one line if not)
+        restart.append(_cycle_restart(folder, config, resume))
+
+    with _prologue("cycle", _config.CycleConfig, options, stitches, 0.68, out, holds) as (cfg, out_dir, progress):
+        _cycle(cfg, out_dir, progress, restart[0])
+
+
+def _cycle(cfg, out_dir: Path, progress, restart) -> None:
+    """`knitlad cycle` once its folder is checked and locked: protocol B, its files, its lines."""
     from knitlad.io.hdf5 import write_arrays
     from knitlad.studies.registry import write_cycle_table
 
-    cfg, out_dir = _knit_run(_config.CycleConfig, options, stitches, 0.68, out, "cycle")
     n_x, n_y = cfg.n_x, cfg.n_y
-    restart = _cycle_restart(out_dir, cfg, resume)
-    _say_if_compiling()
-    progress = _StageProgress()
     unwritten: list[str] = []
 
     def keep_readings(readings) -> None:  # after each leg: a run stopped early keeps its curve, a full disk says so
@@ -484,13 +517,15 @@ def tensile(
     Without --fx or --lx, the knit starts at f_x = 0.68 (the experiments' holding tension). Writes
     tensile.csv (the readings), tensile.png (the force-displacement loops) and tensile.h5.
     """
-    cfg, out_dir = _knit_run(_config.TensileConfig, options, stitches, 0.68, out, "tensile")
-    _say_if_compiling()
-    progress = _StageProgress()
-    finished = _experiment_or_exit(lambda: _experiment("tensile", cfg, progress=progress), progress)
-    progress.close(finished=True)
-    result, summary = finished.result, finished.summary
-    _files_or_exit(lambda: _write_experiment(finished, out_dir / "tensile.h5"), summary)
+    def holds(folder: Path, _cfg) -> str | None:
+        earlier = [p for p in ("tensile.h5", "tensile.csv") if (folder / p).exists()]
+        return f"holds an earlier tensile run ({', '.join(earlier)}); choose another folder" if earlier else None
+
+    with _prologue("tensile", _config.TensileConfig, options, stitches, 0.68, out, holds) as (cfg, out_dir, progress):
+        finished = _experiment_or_exit(lambda: _experiment("tensile", cfg, progress=progress), progress)
+        progress.close(finished=True)
+        result, summary = finished.result, finished.summary
+        _files_or_exit(lambda: _write_experiment(finished, out_dir / "tensile.h5"), summary)
     if json_out:
         typer.echo(_json(summary))
         return
@@ -520,16 +555,15 @@ def snag(
     Without --fx or --lx, force control to f_x^ini = 4. Writes snag.csv and snag.png (the pull-out curve) and,
     after a break, the ladder as `cut` does (ladder.h5, ladder.xdmf, spatio_temporal.png).
     """
-    cfg, out_dir = _knit_run(_config.SnagConfig, options, stitches, 4.0, out, "snag")
-    earlier = [p for p in ("snag.h5", "snag.csv") if (out_dir / p).exists()]
-    if earlier:
-        fail(f"--out {out_dir}: holds an earlier snag run ({', '.join(earlier)}); choose another folder")
-    _say_if_compiling()
-    progress = _StageProgress()
-    finished = _experiment_or_exit(lambda: _experiment("snag", cfg, progress=progress), progress)
-    progress.close(finished=True)
-    result, summary = finished.result, finished.summary
-    _files_or_exit(lambda: _write_experiment(finished, out_dir / "snag.h5"), summary)
+    def holds(folder: Path, _cfg) -> str | None:
+        earlier = [p for p in ("snag.h5", "snag.csv") if (folder / p).exists()]
+        return f"holds an earlier snag run ({', '.join(earlier)}); choose another folder" if earlier else None
+
+    with _prologue("snag", _config.SnagConfig, options, stitches, 4.0, out, holds) as (cfg, out_dir, progress):
+        finished = _experiment_or_exit(lambda: _experiment("snag", cfg, progress=progress), progress)
+        progress.close(finished=True)
+        result, summary = finished.result, finished.summary
+        _files_or_exit(lambda: _write_experiment(finished, out_dir / "snag.h5"), summary)
     if json_out:
         typer.echo(_json(summary))
         return
@@ -571,15 +605,11 @@ def resistance(
     and resistance_report.png (one page: the design, the snag, damage and velocity against tension, the
     threshold, the ladder where it stopped).
     """
-    cfg, out_dir = _knit_run(_config.ResistanceConfig, options, stitches, 4.0, out, "resistance")
-    if (out_dir / "resistance.h5").exists():
-        fail(f"--out {out_dir}: holds an earlier resistance test (resistance.h5); choose another folder")
-    _say_if_compiling()
-    progress = _StageProgress()
-    finished = _experiment_or_exit(lambda: _experiment("resistance", cfg, progress=progress), progress)
-    progress.close(finished=True)
-    result, summary = finished.result, finished.summary
-    _files_or_exit(lambda: _write_experiment(finished, out_dir / "resistance.h5"), summary)
+    with _prologue("resistance", _config.ResistanceConfig, options, stitches, 4.0, out) as (cfg, out_dir, progress):
+        finished = _experiment_or_exit(lambda: _experiment("resistance", cfg, progress=progress), progress)
+        progress.close(finished=True)
+        result, summary = finished.result, finished.summary
+        _files_or_exit(lambda: _write_experiment(finished, out_dir / "resistance.h5"), summary)
     if json_out:
         typer.echo(_json(summary))
         return
@@ -1317,7 +1347,6 @@ def experiment_command(name: str):
     """`knitlad <name>` for a registry entry without a command of its own: its config's fields as options
     (a knit's size as --stitches), the run through the entry, ``<name>.h5`` and its companions in --out, the
     summary as ``key = value`` lines or JSON. A new experiment needs no edit here."""
-    from knitlad.io.folders import FolderError, writable_folder
     from knitlad.studies.registry import EXPERIMENTS
 
     entry = EXPERIMENTS[name]
@@ -1332,22 +1361,10 @@ def experiment_command(name: str):
                                       rich_help_panel=OUTPUT_PANEL),
         options: dict = None,
     ) -> None:
-        if knit:
-            cfg, out_dir = _knit_run(entry.config, options, stitches, None, out, name)
-        else:
-            cfg = validated(entry.config, options)
-            out_dir = Path(out) if out else Path("runs") / time.strftime(f"{name}-%Y%m%d-%H%M%S")
-            try:
-                writable_folder(out_dir)
-            except FolderError as e:
-                fail(f"--out {e}")
-        if (out_dir / f"{name}.h5").exists():
-            fail(f"--out {out_dir}: holds an earlier {name} run ({name}.h5); choose another folder")
-        _say_if_compiling()
-        progress = _StageProgress()
-        finished = _experiment_or_exit(lambda: _experiment(name, cfg, progress=progress), progress)
-        progress.close(finished=True)
-        paths = _files_or_exit(lambda: _write_experiment(finished, out_dir / f"{name}.h5"), finished.summary)
+        with _prologue(name, entry.config, options, stitches, None, out) as (cfg, out_dir, progress):
+            finished = _experiment_or_exit(lambda: _experiment(name, cfg, progress=progress), progress)
+            progress.close(finished=True)
+            paths = _files_or_exit(lambda: _write_experiment(finished, out_dir / f"{name}.h5"), finished.summary)
         if json_out:
             typer.echo(_json(finished.summary))
             return

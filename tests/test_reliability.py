@@ -708,3 +708,28 @@ def test_a_cycle_stopped_by_ctrl_c_resumes_from_its_last_leg_to_the_same_curve(t
     assert not (out / "cycle.checkpoint.h5").exists() and not (out / "stretched").exists()
     assert "nothing to continue" in one_line_error(knitlad(*args, "--out", str(out), "--resume"))
     assert "no stopped run" in one_line_error(knitlad(*args, "--out", str(tmp_path / "new"), "--resume"))
+
+
+@pytest.mark.parametrize("command", [["cycle", "--lx-max", "0.38"], ["tensile", "--lx-max", "0.38"], ["snag"],
+                                     ["resistance"], ["cut"]])
+def test_every_experiment_command_takes_the_folder_lock_before_any_compute(tmp_path, command):
+    """Round 4: two `cycle` runs into one folder both exited 0 (only `cut` took the lock). A folder another run holds
+    is refused in one line, exit 2, by every command (one prologue: cli._prologue), the lock left to its owner."""
+    out = tmp_path / "busy"
+    out.mkdir()
+    with FolderLock(out):
+        line = one_line_error(knitlad(*command, "--stitches", "6x8", "--preset", "fast", "--out", str(out)))
+        assert "in use by another knitlad run" in line
+        assert (out / LOCK_NAME).exists()
+
+
+@pytest.mark.parametrize("command, files", [(["tensile", "--lx-max", "0.38"], ["tensile.csv"]),
+                                            (["cycle", "--lx-max", "0.38"], ["cycle.csv"]),
+                                            (["snag"], ["snag.h5"]), (["resistance"], ["resistance.h5"])])
+def test_a_folder_holding_an_earlier_run_is_refused_by_every_command(tmp_path, command, files):
+    """Round 4: `tensile` run twice into one folder replaced the first run's files without a word."""
+    for name in files:
+        (tmp_path / name).write_text("an earlier run\n")
+    line = one_line_error(knitlad(*command, "--stitches", "6x8", "--preset", "fast", "--out", str(tmp_path)))
+    assert "holds an earlier" in line
+    assert all((tmp_path / name).read_text() == "an earlier run\n" for name in files)

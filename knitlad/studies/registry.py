@@ -6,8 +6,11 @@ in memory) and a progress callback ``progress(stage, fraction)`` (or None), runs
 a :class:`Finished`: the result, its summary (a dict of scalars), the writer of its run file, and the writer
 of the tables and pictures the command line puts beside that file. A sweep's job writes the run file alone
 (``<job>.h5``, with the job's record: id, status, config); `knitlad <experiment>` writes it and its companions.
-To add an experiment: a pydantic config in :mod:`knitlad.experiments.config`, a runner here, one entry,
-and a command in :mod:`knitlad.cli` that calls the entry.
+To add an experiment: its module in :mod:`knitlad.experiments`, a pydantic config in
+:mod:`knitlad.experiments.config`, a runner here and one entry in ``EXPERIMENTS``: the entry makes
+``knitlad <name>`` (:func:`knitlad.cli.experiment_command`) and ``scene: <name>`` in sweeps; a command with lines
+of its own is written in :mod:`knitlad.cli` and still runs the entry. An entry whose results name a column its
+summary does not keep is refused at import, naming it.
 """
 
 from __future__ import annotations
@@ -43,6 +46,12 @@ class Experiment:
     description: str
     shared_work: Callable | None = None  # config -> key of work that jobs with the same key share
     results: dict[str, tuple[str, str]] = dataclasses.field(default_factory=dict)  # key -> (unit, meaning)
+
+    def __post_init__(self) -> None:
+        stray = [key for key in self.results if key not in self.summary_keys]
+        if stray:
+            raise ValueError(f"experiment {self.description.split(':')[0]}: results {', '.join(stray)} are not among "
+                             "its summary_keys (the columns its summary keeps)")
 
 
 def no_companions(path: Path) -> tuple[Path, ...]:

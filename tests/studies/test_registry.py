@@ -57,3 +57,12 @@ def test_a_point_of_the_diagram_is_the_stitchs_zero_tension_width():
                              sagitta_radius=s.sagitta_radius)
     assert finished.summary["lx_over_l0_at_fx0"] == direct and 0.25 < direct < 0.40
     assert finished.result.settings.lx == direct
+
+
+def test_an_entry_whose_results_name_a_column_its_summary_does_not_keep_is_refused_at_once():
+    """`knitlad columns` crashed with a KeyError on such an entry; now it cannot be made."""
+    from knitlad.studies.registry import Experiment
+
+    with pytest.raises(ValueError, match="results fx_typo are not among its summary_keys"):
+        Experiment(CutConfig, lambda *a: None, ("fx_ini",), "`knitlad x`: a test", None,
+                   {"fx_ini": ("f0", "the tension"), "fx_typo": ("f0", "a result no summary keeps")})
