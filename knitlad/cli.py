@@ -582,8 +582,8 @@ def snag(
         f"{summary['peak_force_N']:.4f} N\n"
         f"  energy: the pin put in {summary['pin_work_J']:.3e} J (friction took {summary['friction_before_break_J']:.3e}"
         f" J of it); the ladder released {summary['ladder_released_J']:.3e} J\n"
-        f"  ladder: n_lad/n_y = {summary['n_lad_over_ny']:.3f}, v_lad/c_b = {summary['v_lad_over_cb']:.3f} up, "
-        f"{summary['v_down_over_cb']:.3f} down, "
+        f"  ladder: n_lad/n_y = {summary['n_lad_over_ny']:.3f}, v_lad/c_b = {_speed_words(summary, 'v_lad_over_cb')} up, "
+        f"{_speed_words(summary, 'v_down_over_cb')} down, "
         f"f_x^fin = {summary['fx_fin']:.3f}{' (reached an edge course)' if summary['reached_edge'] else ''}\n"
         f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/snag.h5 (the curve and the ladder: knitlad render "
         f"{out_dir}/snag.h5), snag.xdmf, snag.csv, snag.png, spatio_temporal.png")
@@ -623,8 +623,8 @@ def resistance(
     for row in result.table():
         lines.append(f"  cut at f_x^ini {row[1]:.2f}: n_lad/n_y {row[2]:.2f} ({row[3]:.2f} released), "
                      f"v_lad/c_b {row[4]:.3f}, f_x^fin crossed {row[5]:.2f}" + (", reached an edge" if row[6] else ""))
-    lines.append(f"  threshold: between {lo:.2f} and {hi:.2f}" + ("" if summary["monotonic"] else
-                                                                   " (the series is not monotonic)"))
+    lines.append("  threshold (onset): " + _bracket_words(lo, hi) + ("" if summary["monotonic"] else
+                                                                       " (the series is not monotonic)"))
     thr = result.arrest_threshold()
     if thr["runs"]:
         lines.append(f"  f_x^thr as the paper reads it (mean f_x^fin after the arrest): {thr['fx_thr']:.2f}"
@@ -633,6 +633,23 @@ def resistance(
     lines.append(f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/resistance.h5, resistance.csv, "
                  "resistance_report.png")
     typer.echo("\n".join(lines))
+
+
+def _speed_words(summary: dict, key: str) -> str:
+    """A velocity of the summary, or why there is none (a front too short to fit), never "nan"."""
+    value = summary.get(key, math.nan)
+    return f"{value:.3f}" if not math.isnan(value) else "none (its front ran too few stitches to fit)"
+
+
+def _bracket_words(lo: float, hi: float) -> str:
+    """The onset bracket in words: between two tensions, or one side open, never "nan"."""
+    if math.isnan(lo) and math.isnan(hi):
+        return "not bracketed (no cut ran)"
+    if math.isnan(lo):
+        return f"below {hi:.2f} (every cut laddered)"
+    if math.isnan(hi):
+        return f"above {lo:.2f} (no cut laddered)"
+    return f"between {lo:.2f} and {hi:.2f}"
 
 
 def _files_or_exit(write, summary: dict):

@@ -733,3 +733,27 @@ def test_a_folder_holding_an_earlier_run_is_refused_by_every_command(tmp_path, c
     line = one_line_error(knitlad(*command, "--stitches", "6x8", "--preset", "fast", "--out", str(tmp_path)))
     assert "holds an earlier" in line
     assert all((tmp_path / name).read_text() == "an earlier run\n" for name in files)
+
+
+@pytest.mark.parametrize("args, says", [
+    (["snag", "--weak-point-force", "100", "--breaking-force", "1"], "weak_point_force"),
+    (["snag", "--snag-row", "7", "--snag-column", "3"], "snag_row"),
+    (["snag", "--snag-row", "3", "--snag-column", "0"], "snag_column"),
+    (["cut", "--max-time-ms", "0.000001"], "max_time_ms"),
+])
+def test_settings_that_would_run_for_nothing_are_refused_before_anything_runs(tmp_path, args, says):
+    """Round 4: a weak point stronger than the yarn, a snag on the knit's edge (146 s, "no break within 10 mm")
+    and a run shorter than one observation (exit 0) were accepted without a word."""
+    line = one_line_error(knitlad(*args, "--stitches", "8", "--preset", "fast", "--out", str(tmp_path / "o")))
+    assert says in line and not (tmp_path / "o").exists()
+
+
+def test_a_threshold_or_a_velocity_without_a_value_is_said_in_words_not_nan():
+    """Round 4: "threshold: between nan and 2.00" and "v_lad/c_b = nan up"."""
+    from knitlad.cli import _bracket_words, _speed_words
+
+    nan = float("nan")
+    assert _bracket_words(nan, 2.0) == "below 2.00 (every cut laddered)"
+    assert _bracket_words(4.0, nan) == "above 4.00 (no cut laddered)"
+    assert _bracket_words(2.0, 4.0) == "between 2.00 and 4.00"
+    assert "nan" not in _speed_words({"v_lad_over_cb": nan}, "v_lad_over_cb")

@@ -170,6 +170,10 @@ class ContactModel:
         if not (self.tangential_stiffness_ratio > 0 and math.isfinite(self.tangential_stiffness_ratio)):
             raise ValueError(f"tangential_stiffness_ratio must be a finite number > 0, got "
                              f"{self.tangential_stiffness_ratio!r}")
+        for name in ("contacts_per_node", "capacity_per_edge"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, np.integer)) and not isinstance(value, bool) and value >= 1):
+                raise ValueError(f"{name} must be a whole number >= 1, got {value!r}")
         if self.counting not in COUNTING:
             raise ValueError(f"counting must be one of {', '.join(COUNTING)}, got {self.counting!r}")
         object.__setattr__(self, "counting", Counting(self.counting))

@@ -2,8 +2,22 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+import sys
 import warnings
+
+
+def _called_by_replace(depth: int = 16) -> bool:
+    """Whether ``dataclasses.replace`` is among the callers (through the stacked renaming wrappers)."""
+    frame = sys._getframe(2)
+    for _ in range(depth):
+        if frame is None:
+            return False
+        if frame.f_code is dataclasses.replace.__code__:
+            return True
+        frame = frame.f_back
+    return False
 
 
 def renamed_field(old: str, new: str, since: str):
@@ -18,7 +32,8 @@ def renamed_field(old: str, new: str, since: str):
             if old in kwargs:
                 warnings.warn(f"{cls.__name__}({old}=...) is deprecated since {since}: use {new}=",
                               DeprecationWarning, stacklevel=2)
-                if new in kwargs:
+                # dataclasses.replace(obj, old=...) passes every field under its new name too: the change wins
+                if new in kwargs and not _called_by_replace():
                     raise TypeError(f"{cls.__name__}: give {new}, not both {new} and {old}")
                 kwargs[new] = kwargs.pop(old)
             init(self, *args, **kwargs)
@@ -42,6 +57,27 @@ def renamed_fields(renames: dict[str, str], since: str):
         for old, new in renames.items():
             cls = renamed_field(old, new, since)(cls)
         return cls
+
+    return decorate
+
+
+def renamed_arguments(renames: dict[str, str], since: str):
+    """Function decorator: the keyword arguments ``old`` of ``renames`` still work as ``new`` (renamed in version
+    ``since``), with a DeprecationWarning; both at once is a TypeError."""
+
+    def decorate(function):
+        @functools.wraps(function)
+        def wrapper(*args, **kwargs):
+            for old, new in renames.items():
+                if old in kwargs:
+                    warnings.warn(f"{function.__name__}({old}=...) is deprecated since {since}: use {new}=",
+                                  DeprecationWarning, stacklevel=2)
+                    if new in kwargs:
+                        raise TypeError(f"{function.__name__}: give {new}, not both {new} and {old}")
+                    kwargs[new] = kwargs.pop(old)
+            return function(*args, **kwargs)
+
+        return wrapper
 
     return decorate
 

@@ -99,8 +99,11 @@ class QuasiStatics:
 
         Returns ``converged``, ``time_s`` (simulated) and ``max_force_N`` (the residual at the end).
         """
-        if not (force_tol_N > 0 and max_time_s > 0 and damping_per_s > 0):
-            raise ValueError("force_tol_N, max_time_s and damping_per_s must be positive")
+        for name, value in (("force_tol_N", force_tol_N), ("max_time_s", max_time_s), ("damping_per_s", damping_per_s)):
+            if not value > 0:
+                raise ValueError(f"{name} must be positive, got {value!r}")
+        if not math.isfinite(damping_per_s):
+            raise ValueError(f"damping_per_s must be finite, got {damping_per_s!r}: an infinite drag holds every node")
         step_count("max_time_s", max_time_s / self.dt_s)  # infinity, or a settle that would not end
         every = check_every_s if check_every_s is not None else 1.0 / damping_per_s
         if not (every > 0 and math.isfinite(every)):

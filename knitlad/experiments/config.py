@@ -325,6 +325,9 @@ class CutConfig(_WithPreset):
         check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
         check_band(self)
         check_clips(self)
+        if self.max_time_ms * 1e3 < self.observe_every_us:
+            raise ValueError(f"max_time_ms: {self.max_time_ms:g} ms is shorter than one observation "
+                             f"(observe_every_us {self.observe_every_us:g}): the ladder would not be read once")
         if self.frame_every_us is not None and self.frame_every_us < self.observe_every_us:
             raise ValueError(f"frame_every_us: {self.frame_every_us:g} is shorter than observe_every_us "
                              f"({self.observe_every_us:g}): frames are taken at observations")
@@ -499,6 +502,15 @@ class SnagConfig(CutConfig):
             raise ValueError(f"snag_row: {self.snag_row} is outside the knit's {self.n_y} courses")
         if self.snag_column is not None and self.snag_column >= self.n_x:
             raise ValueError(f"snag_column: {self.snag_column} is outside the knit's {self.n_x} columns")
+        # a loop on the knit's border has its tail or a held course beside it: no ladder can run from it
+        for name, value, size in (("snag_row", self.snag_row, self.n_y), ("snag_column", self.snag_column, self.n_x)):
+            if value is not None and value in (0, size - 1):
+                raise ValueError(f"{name}: {value} is on the knit's edge; a snag ladders from a loop inside it "
+                                 f"(1 to {size - 2})")
+        strength = self.breaking_force if self.breaking_force is not None else material_for(self.d_over_l0).breaking_force
+        if self.weak_point_force is not None and self.weak_point_force > strength:
+            raise ValueError(f"weak_point_force: {self.weak_point_force:g} N is stronger than the yarn it weakens "
+                             f"({strength:g} N): a weak point breaks first")
         return self
 
     def snag_settings(self):

@@ -23,7 +23,7 @@ import numpy as np
 
 from knitlad.engine import units
 from knitlad.engine.contact import ContactModel
-from knitlad.engine.deprecation import renamed_fields
+from knitlad.engine.deprecation import renamed_arguments, renamed_fields
 from knitlad.engine.simulation import Simulation, small_scene_threads
 from knitlad.engine.state import with_twist
 from knitlad.engine.units import Material
@@ -66,6 +66,8 @@ MIN_BUILD_LX = 0.15  # narrowest l_x/l0 tried when a thick yarn does not fit at 
 RELAX_TOL_F0 = 1e-3  # FIRE's force tolerance while stretching, in f0
 
 
+@renamed_arguments({"ly_over_l0": "ly", "nodes_per_stitch": "resolution", "sagitta_radius_d": "sagitta_radius"},
+                   since="0.14.0")
 def build_width(ly: float, material: Material, resolution: int = 36, sagitta_radius: float = 0.0) -> float:
     """l_x/l0 at which to build the knit for this l_y: BUILD_LX, or narrower where the
     periodised stitch's f_x = 0 curve lies left of it (l_y/l0 > 0.25), less 0.01.
@@ -542,6 +544,8 @@ def check_stitch_held(box: KnitBox, cell: StitchRun) -> None:
             "soft for this tension, raise contact_force_f0") from None
 
 
+@renamed_arguments({"ly_over_l0": "ly", "nodes_per_stitch": "resolution", "sagitta_radius_d": "sagitta_radius"},
+                   since="0.14.0")
 @functools.lru_cache(maxsize=16)
 def unloaded_width(ly: float, resolution: int, material: Material, sagitta_radius: float = 0.0,
                    contact_law: str = "linear") -> float:

@@ -32,7 +32,7 @@ import numpy as np
 
 from knitlad.engine import units
 from knitlad.engine.contact import KNIT_CONTACT_FORCE_F0, KNIT_OVERLAP, ContactModel
-from knitlad.engine.deprecation import renamed_fields
+from knitlad.engine.deprecation import renamed_arguments, renamed_fields
 from knitlad.engine.kernels.contact import contact_energy
 from knitlad.engine.kernels.elastic import bending_energy, edge_vectors, framed_bending_twisting_energy, stretching_energy
 from knitlad.engine.kernels.frames import material_frames, transport_reference_frames, update_reference_twist
@@ -164,6 +164,10 @@ class StitchRun:
         return self.result
 
 
+RENAMED_CELL_ARGUMENTS = {"lx_over_l0": "lx", "ly_over_l0": "ly", "nodes_per_stitch": "resolution"}
+
+
+@renamed_arguments(RENAMED_CELL_ARGUMENTS, since="0.14.0")
 def stitch_tensions(lx: float, ly: float, resolution: int | None = None,
                     material: Material = NYLON, sagitta_radius: float | None = None,
                     contact_law: str = "linear", pattern: str = "jersey") -> StitchResult:
@@ -179,6 +183,7 @@ def stitch_tensions(lx: float, ly: float, resolution: int | None = None,
                                     pattern=pattern)).run()
 
 
+@renamed_arguments(RENAMED_CELL_ARGUMENTS, since="0.14.0")
 def zero_tension_lx(ly: float, lo: float = 0.22, hi: float = 0.40, tol: float = 1e-3, **kwargs) -> float:
     """l_x/l0 at which the relaxed stitch carries f_x = 0 for this l_y (regula falsi, then bisection)."""
     f_lo = stitch_tensions(lo, ly, **kwargs).fx

@@ -285,8 +285,17 @@ def load_sweep(path: str | Path, max_jobs: int = MAX_JOBS) -> tuple[SweepConfig,
     return cfg, expand(cfg, max_jobs)
 
 
+# the settings' names before 0.14.0 (a sweep config of then names them): their names now
+RENAMED_SETTINGS = {"lx_over_l0": "lx", "ly_over_l0": "ly", "fx_target": "fx", "nodes_per_stitch": "resolution",
+                    "sagitta_radius_d": "sagitta_radius", "bar_speed_m_s": "bar_speed", "speed_m_s": "snag_speed",
+                    "breaking_force_N": "breaking_force", "weak_point_N": "weak_point_force"}
+
+
 def _did_you_mean(key: str, fields) -> str:
-    """'; did you mean x?' for the field nearest ``key`` in spelling, or nothing."""
+    """'; it is now x' for a setting renamed in 0.14.0, else '; did you mean x?' for the field nearest ``key`` in
+    spelling, or nothing."""
+    if RENAMED_SETTINGS.get(key) in fields:
+        return f"; it was renamed {RENAMED_SETTINGS[key]} in 0.14.0"
     close = difflib.get_close_matches(key, sorted(fields), n=1, cutoff=0.6)
     return f"; did you mean {close[0]}?" if close else ""
 

@@ -119,3 +119,20 @@ def test_a_removed_setting_still_works_at_its_old_default_with_a_warning_and_ref
         kl.ContactModel(stiffness=100.0, friction_every=3)
     with pytest.raises(ValueError, match="friction_every"):
         kl.CutConfig(fx=3.0, friction_every=3)
+
+
+def test_a_contact_count_below_one_and_an_infinite_settling_drag_are_refused_naming_them():
+    """Round 4: contacts_per_node=-1 gave "math domain error"; settle(damping_per_s=inf) "check_every_s must be
+    positive, got None"."""
+    for name in ("contacts_per_node", "capacity_per_edge"):
+        for bad in (-1, 0, 1.5):
+            with pytest.raises(ValueError, match=name):
+                kl.ContactModel(stiffness=100.0, **{name: bad})
+    scene = kl.Scene()
+    yarn = scene.add_yarn(np.column_stack([np.linspace(0.0, 1e-3, 5), np.zeros(5), np.zeros(5)]))
+    scene.hold(yarn, [0])
+    sim = kl.Simulation(scene.build())
+    with pytest.raises(ValueError, match="damping_per_s must be finite"):
+        sim.settle(1e-9, 1e-3, damping_per_s=math.inf)
+    with pytest.raises(ValueError, match="force_tol_N must be positive"):
+        sim.settle(-1.0, 1e-3, damping_per_s=1e3)

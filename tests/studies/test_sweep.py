@@ -495,3 +495,11 @@ def test_an_ensemble_member_that_stretched_to_another_members_knit_is_said_and_c
     rows.append({"ensemble_point": "q", "ensemble_member": 0, "status": "ok", **knit, "fx_nominal": 8.0})
     marked = with_collapsed_members(rows)
     assert [r["same_knit_as"] for r in marked] == [-1, 0, -1, -1]
+
+
+def test_a_setting_renamed_in_0_14_is_named_by_its_new_name_not_a_lookalike(tmp_path):
+    """Round 4: `lx_over_l0` in a sweep got "did you mean d_over_l0?", `nodes_per_stitch` "did you mean
+    stop_after_stitches?"."""
+    cfg = write_config(tmp_path / "old.yaml", {"fixed": {**TINY, "lx_over_l0": 0.38}, "sweep": {"axes": {"mu": [0.1]}}})
+    with pytest.raises(SweepError, match="fixed.lx_over_l0: not a field of scene 'ladder'; it was renamed lx"):
+        load_sweep(cfg)
