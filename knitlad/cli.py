@@ -491,12 +491,17 @@ def _cycle_restart(out_dir: Path, cfg, resume: bool) -> dict | None:
         fail(f"--resume: the run in {out_dir} has finished (cycle.h5); nothing to continue")
     if not checkpoint.exists():
         fail(f"--resume: no stopped run in {out_dir} (no {CYCLE_CHECKPOINT}: none was made, or no leg had ended)")
+    from knitlad.experiments.cycling import check_cycle_checkpoint
+
     try:
         arrays, attrs = read_arrays(checkpoint)
+        theirs = json.loads(attrs.get("config_json", "{}"))
+        check_cycle_checkpoint(arrays, cfg.cycles)
     except OSError as e:
         fail(f"--resume: {checkpoint} cannot be read ({e}); start the run again in another folder")
+    except (ValueError, TypeError) as e:  # JSONDecodeError is a ValueError
+        fail(f"--resume: {checkpoint} is damaged ({str(e).splitlines()[0]}); start the run again in another folder")
     if attrs.get("config_json") != cfg.model_dump_json():
-        theirs = json.loads(attrs.get("config_json", "{}"))
         changed = sorted(k for k, v in cfg.model_dump(mode="json").items() if theirs.get(k) != v)
         fail(f"--resume: the stopped run had other settings ({', '.join(changed) or 'unreadable'}); give the same "
              "ones, or use another folder")
@@ -945,17 +950,32 @@ def plot(
     A sweep's summary is checked against the job files first; what is missing or wrong is
     said on stderr, the figures are drawn from what the files hold, and the exit code is 1.
     """
-    from pathlib import Path
+    try:
+        _plot(folder, diagrams, fmt)
+    except OSError as e:  # a read-only or full disk: one line, as every command says it
+        typer.echo(f"knitlad: error: the figures could not be written in {folder} ({e})", err=True)
+        raise typer.Exit(1)
 
+
+def _plot(folder: str, diagrams: bool, fmt: str) -> None:
+    """`knitlad plot` (its docstring), the figures' writing failures left to it."""
     import h5py
 
     from knitlad.viz.plots import (FORMATS, column_midline_diagram, energy_ledger_plot, job_figure_names,
                                    spatio_temporal_from_file, summary_plots, tensile_curve_plot,
                                    tension_history_plot)
 
+    from knitlad.io.folders import FolderError, writable_folder
+
     if fmt not in FORMATS:
         fail(f"--format: one of {', '.join(FORMATS)}, got {fmt!r}")
-    if (Path(folder) / "ladder.h5").is_file():
+    run = (Path(folder) / "ladder.h5").is_file()
+    if run or (Path(folder) / "summary.csv").is_file():  # where the figures go must take them, before any is drawn
+        try:
+            writable_folder(Path(folder) / ("render" if run else "plots"))
+        except FolderError as e:
+            fail(f"{folder}: the figures cannot be written there ({e})")
+    if run:
         from knitlad.viz.render import render_run
 
         h5 = _run_file(folder)

@@ -757,3 +757,78 @@ def test_a_threshold_or_a_velocity_without_a_value_is_said_in_words_not_nan():
     assert _bracket_words(4.0, nan) == "above 4.00 (no cut laddered)"
     assert _bracket_words(2.0, 4.0) == "between 2.00 and 4.00"
     assert "nan" not in _speed_words({"v_lad_over_cb": nan}, "v_lad_over_cb")
+
+
+@pytest.mark.process
+def test_plot_into_a_folder_that_takes_no_figure_is_one_line_and_exit_1(tmp_path):
+    """Round 4: `knitlad plot` on a read-only folder ended in tracebacks (OSError); here no file may grow."""
+    import resource
+
+    run = tmp_path / "run"
+    assert knitlad("cut", "--stitches", "4x6", "--lx", "0.36", "--preset", "fast", "--resolution", "12",
+                   "--max-time-ms", "0.1", "--out", str(run)).returncode == 0
+    for png in run.glob("*.png"):
+        png.unlink()
+
+    def no_growth():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (0, 0))
+
+    line = one_line_error(knitlad_process("plot", str(run), preexec_fn=no_growth), code=1)
+    assert "the figures could not be written" in line
+
+
+def test_a_tensile_top_below_its_start_is_refused_as_the_cycles_is(tmp_path):
+    """Round 4: `tensile --fx 20 --lx-max 0.25` ran (top f_x -0.467); `--lx 0.36 --lx-max 0.30` likewise."""
+    line = one_line_error(knitlad("tensile", "--stitches", "6x8", "--preset", "fast", "--lx", "0.36", "--lx-max",
+                                  "0.30", "--out", str(tmp_path / "a")))
+    assert "lx_max: 0.3 is not above the start lx" in line
+    p = knitlad("tensile", "--stitches", "6x8", "--preset", "fast", "--fx", "20", "--lx-max", "0.25", "--out",
+                str(tmp_path / "b"))
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
+    line = p.stderr.strip().splitlines()[-1]  # after the stretch's progress lines: force control finds the start
+    assert "the bars would move inwards" in line and not (tmp_path / "b" / "tensile.csv").exists()
+
+
+@pytest.mark.end_to_end
+def test_a_resume_trusts_no_part_of_an_edited_checkpoint(tmp_path, monkeypatch):
+    """Round 4: an edited but valid checkpoint gave tracebacks (config_json not JSON, cycle/done 99, a dataset
+    deleted) or wrong names (NaN in state/x: "by_m or rails_by_m ..."; clock -1: "drag must be >= 0"), and NaN
+    readings ran on into cycle.csv. Each is now one line naming what is wrong, exit 2, nothing run."""
+    import knitlad.io.hdf5 as hdf5
+
+    args = ["cycle", "--stitches", "6x8", "--preset", "fast", "--resolution", "16", "--lx-max", "0.36", "--cycles", "2",
+            "--readings-per-leg", "2", "--hold-ms", "0.5", "--no-cut", "--fx-thr", "0.5"]
+    write = hdf5.write_arrays
+
+    def stopped_after_the_first(path, arrays, attrs=None):
+        write(path, arrays, attrs)
+        raise KeyboardInterrupt  # Ctrl-C once the first leg's checkpoint is kept
+
+    monkeypatch.setattr(hdf5, "write_arrays", stopped_after_the_first)
+    out = tmp_path / "stopped"
+    assert knitlad(*args, "--out", str(out)).returncode == 130
+    monkeypatch.setattr(hdf5, "write_arrays", write)
+    kept = (out / "cycle.checkpoint.h5").read_bytes()
+
+    def edited(change) -> str:
+        (out / "cycle.checkpoint.h5").write_bytes(kept)
+        with h5py.File(out / "cycle.checkpoint.h5", "r+") as f:
+            change(f)
+        return one_line_error(knitlad(*args, "--out", str(out), "--resume"))
+
+    def replace(name, value):
+        def change(f):
+            del f[name]
+            f[name] = value
+        return change
+
+    readings = np.array(h5py.File(out / "cycle.checkpoint.h5", "r")["cycle/readings"])
+    x = np.array(h5py.File(out / "cycle.checkpoint.h5", "r")["state/x"])
+    clock = np.array(h5py.File(out / "cycle.checkpoint.h5", "r")["clock"])
+    assert "cycle/readings holds NaN" in edited(replace("cycle/readings", np.full_like(readings, np.nan)))
+    assert "cycle/done is [99, 1]" in edited(replace("cycle/done", np.array([99, 1])))
+    assert "has no cycle/box_lx" in edited(lambda f: f.__delitem__("cycle/box_lx"))
+    assert "state/x holds NaN" in edited(replace("state/x", np.where(x == x, np.nan, x)))
+    assert "clock holds a negative" in edited(replace("clock", np.concatenate([[-1.0], clock[1:]])))
+    assert "is damaged" in edited(lambda f: f.attrs.__setitem__("config_json", "{not json"))
+    assert not (out / "cycle.h5").exists()

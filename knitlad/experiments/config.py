@@ -466,8 +466,10 @@ class TensileConfig(CutConfig):
     def moves(self) -> "TensileConfig":
         if self.lx_max is None and self.ly_max is None:
             raise ValueError("lx_max: give lx_max, ly_max or both (the box must move)")
-        if self.lx is not None and self.lx_max is not None and self.lx_max == self.lx:
-            raise ValueError(f"lx_max: {self.lx_max:g} is the start lx (the box must move)")
+        if self.lx is not None and self.lx_max is not None and self.lx_max <= self.lx:
+            raise ValueError(f"lx_max: {self.lx_max:g} is not above the start lx = {self.lx:g} (a tensile test pulls)")
+        if self.ly_max is not None and self.ly_max <= self.ly:
+            raise ValueError(f"ly_max: {self.ly_max:g} is not above the start ly = {self.ly:g} (a tensile test pulls)")
         if self.bars == "sliding" and self.ly_max is not None:
             raise ValueError("ly_max: sliding bars are moved along x only; pull along y with held bars")
         return self

@@ -235,6 +235,27 @@ def shortening_to(unloading: np.ndarray, fx_thr: float, n_x: int) -> float:
 LOADED, UNLOADED = 1, 2  # a checkpoint's phase: after the hold at Delta x_max, after the return to Delta x_min
 
 
+def check_cycle_checkpoint(arrays: dict[str, np.ndarray], cycles: int) -> None:
+    """Refuse (ValueError, naming the array) a checkpoint of protocol B that a resume could not trust whole: the
+    cycle's own arrays (the leg done, within the run's cycles; the readings, (k, 5) and finite; the box), the
+    simulation's clock (finite, not negative) and its state (finite). Shapes against the simulation are checked
+    by :meth:`~knitlad.engine.simulation.Simulation.restore`."""
+    for name in ("cycle/done", "cycle/readings", "cycle/box_lx", "clock", "state/x", "state/v"):
+        if name not in arrays:
+            raise ValueError(f"it has no {name}")
+    done = np.asarray(arrays["cycle/done"])
+    if done.shape != (2,) or not (1 <= int(done[0]) <= cycles and int(done[1]) in (LOADED, UNLOADED)):
+        raise ValueError(f"cycle/done is {done.tolist()}, not a leg of a run of {cycles} cycles")
+    readings = np.asarray(arrays["cycle/readings"], dtype=float)
+    if readings.ndim != 2 or readings.shape[1] != 5:
+        raise ValueError(f"cycle/readings has shape {readings.shape}, not (k, 5)")
+    for name in ("cycle/readings", "cycle/box_lx", "clock") + tuple(k for k in arrays if k.startswith("state/")):
+        if not np.all(np.isfinite(np.asarray(arrays[name], dtype=float))):
+            raise ValueError(f"{name} holds NaN or infinity")
+    if np.any(np.asarray(arrays["clock"], dtype=float)[:3] < 0):
+        raise ValueError("clock holds a negative time, step count or drag")
+
+
 def cycle_checkpoint(loaded: LoadedKnit, cycle: int, phase: int, hold_converged: bool) -> dict[str, np.ndarray]:
     """Where protocol B stands after a leg: the simulation's :meth:`~knitlad.engine.simulation.Simulation.checkpoint`
     and the cycle's own ("cycle/*": the cycle and phase done, the readings, the box, whether the hold settled)."""

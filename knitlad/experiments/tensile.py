@@ -30,7 +30,7 @@ from knitlad.engine.deprecation import renamed_fields
 from knitlad.engine.units import Material
 from knitlad.experiments.cycling import LoadedKnit
 from knitlad.experiments.laddering import DynamicsSettings
-from knitlad.fabric.preparation import StretchedKnit
+from knitlad.fabric.preparation import InfeasibleRun, StretchedKnit
 
 LOADING, HOLD, UNLOADING = 1, 0, -1  # the leg column of the readings
 COLUMNS = ("leg", "t_s", "box_lx_over_l0", "box_ly_over_l0", "lx_over_l0", "ly_over_l0", "fx", "fy")
@@ -106,6 +106,10 @@ def run_tensile(knit: StretchedKnit, s: TensileSettings, dynamics: DynamicsSetti
     """Pull the stretched ``knit`` to the top of ``s``'s path under ``dynamics``, hold it until static (or
     ``hold_s``), and bring it back if ``s.unload``; read after every ramp."""
     t0 = time.perf_counter()
+    if s.lx_max is not None and s.lx_max <= knit.box_lx:  # force control put the start beyond the top
+        raise InfeasibleRun(f"lx_max: {s.lx_max:g} is not above the box's l_x/l0 at the start, {knit.box_lx:.4f} "
+                            f"(where f_x = {knit.fx_ini:.3f}): the bars would move inwards; a larger lx_max or a "
+                            "lower fx")
     loaded = LoadedKnit(knit, s, dynamics)
     rows = [read(loaded, LOADING)]
     start = (loaded.lx, loaded.ly)
