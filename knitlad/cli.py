@@ -1229,13 +1229,17 @@ def _experiment(name: str, cfg, folder: Path | None = None, progress=None, **hoo
 
 def _write_experiment(finished, path: Path) -> tuple[Path, ...]:
     """The run file at ``path`` and the tables and pictures beside it; OSError if any cannot be written, with
-    nothing half-written left (temporary files removed, HDF5's complaints while closing a failed file kept
-    off the terminal)."""
+    nothing of this run left (its files written so far and temporary files removed, HDF5's complaints while
+    closing a failed file kept off the terminal): a run is written whole or not at all."""
     previous = sys.unraisablehook
     sys.unraisablehook = lambda info: None  # h5py's __dealloc__ of a file whose writes failed
+    there = set(path.parent.iterdir()) if path.parent.is_dir() else set()
     try:
         return (finished.write(path, {}), *finished.beside(path))
-    except RuntimeError as e:  # h5py reports some failed writes as RuntimeError
+    except (OSError, RuntimeError) as e:  # h5py reports some failed writes as RuntimeError
+        for p in path.parent.iterdir():  # the files this run made (a file kept before, as cycle.csv, stays)
+            if p.is_file() and p not in there:
+                p.unlink(missing_ok=True)
         raise OSError(str(e).splitlines()[0]) from None
     finally:
         sys.unraisablehook = previous

@@ -832,3 +832,18 @@ def test_a_resume_trusts_no_part_of_an_edited_checkpoint(tmp_path, monkeypatch):
     assert "clock holds a negative" in edited(replace("clock", np.concatenate([[-1.0], clock[1:]])))
     assert "is damaged" in edited(lambda f: f.attrs.__setitem__("config_json", "{not json"))
     assert not (out / "cycle.h5").exists()
+
+
+@pytest.mark.process
+def test_a_tensile_test_that_cannot_write_its_files_leaves_none_of_them(tmp_path):
+    """Round 4: on a 64 kB disk `tensile` said "files could not be written" yet left tensile.csv and tensile.h5."""
+    import resource
+
+    def small_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (20_000, 20_000))
+
+    out = tmp_path / "out"
+    p = knitlad_process("tensile", "--stitches", "6x8", "--preset", "fast", "--lx", "0.36", "--lx-max", "0.37",
+                        "--readings-per-leg", "2", "--hold-ms", "0.2", "--out", str(out), preexec_fn=small_files)
+    assert p.returncode == 1 and "could not be written" in p.stderr.strip().splitlines()[-1], p.stderr
+    assert not out.exists() or not [f.name for f in out.iterdir() if f.name.startswith("tensile")]

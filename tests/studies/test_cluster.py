@@ -12,7 +12,7 @@ import yaml
 ROOT = Path(__file__).resolve().parents[2]
 KNITLAD = [sys.executable, "-m", "knitlad.cli"]
 SWEEP = {"scene": "ladder", "fixed": {"n_x": 4, "n_y": 6, "preset": "fast", "resolution": 12, "lx": 0.40,
-                                      "max_time_ms": 0.01}, "sweep": {"axes": {"mu": [0.4]}}}
+                                      "max_time_ms": 0.05}, "sweep": {"axes": {"mu": [0.4]}}}
 
 
 def knitlad(*args, env=None):
