@@ -1438,6 +1438,9 @@ def main(argv: list[str] | None = None) -> None:
     except ImportError:  # pragma: no cover - older typer, on click itself
         from click import exceptions as cx
 
+    import warnings
+
+    formatwarning, warnings.formatwarning = warnings.formatwarning, _one_line_warning
     try:
         result = app(args=argv, standalone_mode=False)
     except cx.UsageError as e:
@@ -1452,7 +1455,14 @@ def main(argv: list[str] | None = None) -> None:
     except typer.Abort:  # Ctrl-C outside a run
         typer.echo("knitlad: interrupted", err=True)
         sys.exit(130)
+    finally:
+        warnings.formatwarning = formatwarning
     sys.exit(result if isinstance(result, int) else 0)
+
+
+def _one_line_warning(message, category, filename, lineno, line=None) -> str:
+    """A warning on the terminal is one line that says what happened, not the source line that raised it."""
+    return f"knitlad: warning: {str(message).splitlines()[0]}\n"
 
 
 if __name__ == "__main__":  # python -m knitlad.cli

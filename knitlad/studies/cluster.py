@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, ValidationInfo, field_validator
 
 from knitlad.experiments.config import one_line
 from knitlad.io.atomic import read_config_text
@@ -52,6 +52,17 @@ class ClusterConfig(BaseModel):
         """A walltime is text, "HH:MM:SS" (the batch systems' form): a bare number was taken silently."""
         if "walltime" in options and not isinstance(options["walltime"], str):
             raise ValueError(f"walltime: a duration as text, \"HH:MM:SS\", got {options['walltime']!r}")
+        return options
+
+    @field_validator("options")
+    @classmethod
+    def a_local_workers_python_exists(cls, options: dict, info: ValidationInfo) -> dict:
+        """A local cluster's workers run ``python`` on this machine: a path that is not an executable failed only
+        once the workers started, with their tracebacks."""
+        python = options.get("python")
+        if info.data.get("kind") == "local" and python is not None:
+            if not str(python).strip() or shutil.which(str(python).split()[0]) is None:
+                raise ValueError(f"python: {python!r} is not an executable on this machine")
         return options
 
     def _classes(self):

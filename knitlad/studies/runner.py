@@ -547,6 +547,75 @@ def connect(scheduler: str):
 LOCAL_WORKER_START_S = 120.0
 
 
+def _client_of_batch_cluster(cluster, kind: str):
+    """A client of a batch cluster just started; a local cluster's first worker waited for, since its workers start
+    here at once or never. A worker that cannot start is a :class:`SweepError` of one line, the cluster closed
+    without the tracebacks distributed and dask-jobqueue print for a worker that never had a job id."""
+    from distributed import Client
+
+    try:
+        client = Client(cluster)
+    except Exception as e:  # noqa: BLE001 - the worker's own error, whatever its type
+        _close_failed_cluster(cluster)
+        raise SweepError(f"--cluster: its worker did not start ({_one_line(e)}; check the options, e.g. python "
+                         "and memory)") from None
+    if kind == "local":
+        reason = _first_local_worker(client, cluster)
+        if reason:
+            client.close()
+            _close_failed_cluster(cluster)
+            raise SweepError(f"--cluster: {reason} (check the options, e.g. python, memory, worker_extra_args)")
+    return client
+
+
+def _first_local_worker(client, cluster) -> str:
+    """Wait for a local cluster's first worker: '' once one has registered, else why not (every worker process
+    has exited, or none registered within LOCAL_WORKER_START_S)."""
+    deadline = time.monotonic() + LOCAL_WORKER_START_S
+    while time.monotonic() < deadline:
+        try:
+            client.wait_for_workers(1, timeout=1.0)
+            return ""
+        except Exception:  # noqa: BLE001 - distributed's TimeoutError, by version
+            pass
+        exits = [job.process.proc.poll() for job in cluster.workers.values()
+                 if getattr(getattr(job, "process", None), "proc", None) is not None]
+        if exits and len(exits) == len(cluster.workers) and all(code is not None for code in exits):
+            return f"every local worker exited at its start (exit code {exits[0]})"
+    return f"no local worker started within {LOCAL_WORKER_START_S:g} s"
+
+
+@contextmanager
+def _quiet_dask():
+    """distributed, tornado and dask-jobqueue log every failed worker start with its traceback: not the user's to
+    read, since the failure is reported in one line."""
+    import logging
+
+    before = logging.root.manager.disable
+    logging.disable(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        logging.disable(before)
+
+
+def _close_failed_cluster(cluster) -> None:
+    """Close a cluster whose workers failed: dask-jobqueue cannot cancel a job that never got an id (it raises, and
+    again at exit)."""
+    from distributed.core import Status
+
+    try:
+        for name, job in list(getattr(cluster, "workers", {}).items()):
+            if getattr(job, "job_id", "") is None:  # never submitted: nothing to cancel
+                cluster.workers.pop(name, None)
+                cluster.worker_spec.pop(name, None)
+        cluster.close()
+    except Exception:  # noqa: BLE001 - the cluster is being given up either way
+        pass
+    finally:
+        cluster.status = Status.closed  # distributed's exit hook would try once more
+
+
 def _run_dask(todo: list[Job], jobs_dir: Path, workers: int | None, scheduler: str | None, runner: Runner, finish,
               token: str) -> None:
     """The same jobs on a Dask cluster at ``scheduler``, a batch cluster it describes (a
@@ -559,16 +628,9 @@ def _run_dask(todo: list[Job], jobs_dir: Path, workers: int | None, scheduler: s
         compile_kernels()  # the workers then load Numba's on-disk cache
     cluster = None
     if isinstance(scheduler, ClusterConfig):  # a batch cluster started for this sweep (knitlad.studies.cluster)
-        cluster = scheduler.start()
-        client = Client(cluster)
-        if scheduler.kind == "local":  # its workers start here at once, or never: say so rather than wait
-            try:
-                client.wait_for_workers(1, timeout=LOCAL_WORKER_START_S)
-            except Exception:  # noqa: BLE001 - distributed's TimeoutError, by version
-                client.close()
-                cluster.close()
-                raise SweepError(f"--cluster: no local worker started within {LOCAL_WORKER_START_S:g} s (its log is "
-                                 "the cluster's; check the options, e.g. python and memory)") from None
+        with _quiet_dask():  # a worker that fails to start is said once, in the SweepError
+            cluster = scheduler.start()
+            client = _client_of_batch_cluster(cluster, scheduler.kind)
     elif scheduler:
         client = connect(scheduler)
     else:

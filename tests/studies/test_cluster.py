@@ -78,3 +78,23 @@ def test_the_dashboard_of_a_cluster_listens_on_loopback_unless_asked():
     assert ClusterConfig(kind="local", jobs=1)._options()["scheduler_options"]["dashboard_address"].startswith("127.0.0.1")
     asked = ClusterConfig(kind="local", jobs=1, options={"scheduler_options": {"dashboard_address": ":8787"}})
     assert asked._options()["scheduler_options"]["dashboard_address"] == ":8787"
+
+
+def test_a_local_clusters_python_that_is_not_on_this_machine_is_refused_before_anything_starts(tmp_path):
+    sweep, cluster = files(tmp_path, {"kind": "local", "jobs": 1, "options": {"python": "/nonexistent/python"}})
+    p = knitlad("sweep", sweep, "--cluster", cluster, "--out", str(tmp_path / "o"))
+    assert "options: python: '/nonexistent/python' is not an executable" in one_line(p)
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.cluster
+def test_a_local_worker_that_cannot_start_is_one_line_at_once(tmp_path):
+    """A local worker that failed at its start gave five tracebacks of distributed and dask-jobqueue (ending in
+    "int() argument must be ... not 'NoneType'") and exit 1, or a two-minute wait."""
+    sweep, cluster = files(tmp_path, {"kind": "local", "jobs": 1,
+                                      "options": {"worker_extra_args": ["--nthreads", "banana"]}})
+    t0 = time.perf_counter()
+    p = knitlad("sweep", sweep, "--cluster", cluster, "--out", str(tmp_path / "o"))
+    assert "every local worker exited at its start" in one_line(p)
+    assert "ERROR" not in p.stderr and "NoneType" not in p.stderr, p.stderr
+    assert time.perf_counter() - t0 < 60
