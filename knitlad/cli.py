@@ -90,12 +90,20 @@ def demo(
 
 
 @app.command()
-def scales() -> None:
-    """Print the paper's material and scales (f0, c_b, ...) in SI units."""
-    from knitlad.engine.units import NYLON, Scales
+def scales(yarn: typing.Optional[str] = typer.Option(None, "--yarn", help=(
+               "a yarn file (configs/yarns/; knitlad.experiments.yarn); default: the paper's Nylon")),
+           stitch_length_mm: typing.Optional[float] = typer.Option(None, "--stitch-length-mm", help=(
+               "the knit's stitch length l0 [mm]; default: 9.74 mm for the paper's Nylon"))) -> None:
+    """Print the material and the paper's scales (f0, c_b, ...) in SI units: the paper's Nylon, or your yarn at your
+    stitch length."""
+    from knitlad.engine.units import Scales
+    from knitlad.experiments.config import StitchConfig
 
-    for key, value in Scales(NYLON).as_attributes().items():
+    options = {k: v for k, v in {"yarn": yarn, "stitch_length_mm": stitch_length_mm}.items() if v is not None}
+    cfg = validated(StitchConfig, options)
+    for key, value in Scales(cfg.material()).as_attributes().items():
         typer.echo(f"{key:20s} {value:.6g}")
+    typer.echo(f"{'d_over_l0':20s} {cfg.d_over_l0:.6g}")
 
 
 @app.command()
@@ -164,6 +172,10 @@ def _option_type(annotation):
         return str
     if args and typing.get_origin(annotation) in (typing.Union, types.UnionType):
         return _option_type(args[0])
+    from pydantic import BaseModel
+
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return str  # a yarn: its file's path
     return annotation
 
 
@@ -236,7 +248,10 @@ def validated(model, options: dict, names: dict | None = None):
             return (names or {}).get(field) or (cli_option(model, field) if field in model.model_fields else field)
 
         text = one_line(e, where=option)
-        fail(text.removeprefix("config: "))
+        if text.startswith("config: "):  # a rule across fields names the field it is about first, if any
+            named, _, rest = text.removeprefix("config: ").partition(": ")
+            text = f"{option(named)}: {rest}" if named in model.model_fields and rest else text.removeprefix("config: ")
+        fail(text)
 
 
 STITCHES_HELP = "Fabric size: N (N x N) or NXxNY; default: the experiment's config's n_x x n_y (cut 42, others 16)."
@@ -376,15 +391,18 @@ def _report_cut(cfg, result, summary: dict, json_out: bool, h5: Path, png: Path,
     if json_out:
         typer.echo(_json(summary))
         return
+    speed = f"(v_lad = {summary['v_lad_m_s']:.3g} m/s)  " if math.isfinite(result.v_lad_over_cb) else ""
     typer.echo(
         f"{n_x} x {n_y} {cfg.pattern}, mu = {cfg.mu}, {cfg.resolution} nodes/stitch ({result.nodes} nodes)\n"
-        f"  f_x^ini     = {result.fx_ini:.3f}\n"
+        f"  f_x^ini     = {result.fx_ini:.3f}  (F_x = {summary['force_ini_N']:.4g} N, "
+        f"{summary['force_ini_N_per_cm']:.4g} N/cm of width)\n"
         f"  f_x^fin     = {result.fx_fin:.3f}{_fin_caveat(result)}\n    per course: {result.fx_fin_crossed:.3f} crossed by the ladder, {result.fx_fin_intact:.3f} not\n"
         f"  n_lad/n_y   = {result.n_lad_over_ny:.3f}  ({result.n_lad} cells undone at the stop; {_ever_line(result)})\n"
         f"    of them {_damage_line(result.damage_record())}\n"
         f"  loops       = {_loop_line(result)}\n"
-        f"  v_lad/c_b   = {result.v_lad_over_cb:.3f}  {_velocity_caveat(result)}\n"
-        f"  l_x/l0, l_y/l0 = {result.lx_over_l0:.3f}, {result.ly_over_l0:.3f}\n"
+        f"  v_lad/c_b   = {result.v_lad_over_cb:.3f}  {speed}{_velocity_caveat(result)}\n"
+        f"  l_x/l0, l_y/l0 = {result.lx_over_l0:.3f}, {result.ly_over_l0:.3f}  (l_x, l_y = {summary['lx_mm']:.3g}, "
+        f"{summary['ly_mm']:.3g} mm at l0 = {summary['l0_mm']:.4g} mm)\n"
         f"  stop: {result.stop_reason}\n"
         f"  wall time   = {summary['wall_s']:.1f} s (stretch {result.wall_s.get('stretch', 0):.1f} s, propagate {result.wall_s.get('propagate', 0):.1f} s)\n"
         f"  wrote {h5}, {h5.with_suffix('.xdmf').name} (ParaView) and {png.name}; pictures: knitlad render {out_dir}"

@@ -43,10 +43,10 @@ def run(*args, cwd=None):
         (["cut", "--band", "rib"], "band_row"),
         (["cut", "--band", "rib", "--band-row", "8", "--stretch-start", "tiled"], "stretch_start"),
         (["loop", "--preset", "exact"], "--preset"),
-        (["cycle", "--lx", "0.38", "--lx-max", "0.36"], "lx_max"),
+        (["cycle", "--lx", "0.38", "--lx-max", "0.36"], "--lx-max"),
         (["cycle"], "--lx-max"),
         (["cycle", "--lx-max", "0.38", "--bar-speed", "0"], "--bar-speed"),
-        (["cut", "--clip-friction", "0.3"], "clip_friction"),
+        (["cut", "--clip-friction", "0.3"], "--clip-friction"),
         (["cut", "--clip-friction", "-1", "--bars", "sliding"], "--clip-friction"),
     ],
 )

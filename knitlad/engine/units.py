@@ -63,6 +63,9 @@ class Material:
     poisson_ratio   nu       [-]   (sets the twist modulus G J = B / (1 + nu))
     stitch_length   l0       [m]   (yarn length per stitch; sets the paper's scales)
     breaking_force  F_b      [N]   (the tension at which the yarn breaks: knitlad.engine.fracture)
+    bending_rigidity   B     [N m^2] (None: E pi d^4/64, a solid round monofilament's; a multifilament's
+                                    measured B is far below it, knitlad.experiments.yarn)
+    torsional_rigidity G J   [N m^2] (None: B/(1 + nu))
 
     The Nylon's breaking force is its tenacity times its linear density: drawn nylon 6 and 6,6 textile
     filaments hold 40 to 60 cN/tex (Morton & Hearle, *Physical Properties of Textile Fibres*, 4th ed.,
@@ -78,12 +81,18 @@ class Material:
     poisson_ratio: float = 0.4
     stitch_length: float = 9.74e-3
     breaking_force: float = 7.9
+    bending_rigidity: float | None = None
+    torsional_rigidity: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("diameter", "line_density", "young_modulus", "stitch_length", "breaking_force"):
             value = getattr(self, name)
             if not (value > 0 and math.isfinite(value)):
                 raise ValueError(f"Material.{name} must be a positive finite number, got {value!r}")
+        for name in ("bending_rigidity", "torsional_rigidity"):
+            value = getattr(self, name)
+            if value is not None and not (value > 0 and math.isfinite(value)):
+                raise ValueError(f"Material.{name} must be None or a positive finite number, got {value!r}")
         if not (-1.0 < self.poisson_ratio <= 0.5):
             raise ValueError(f"Material.poisson_ratio must lie in (-1, 0.5], got {self.poisson_ratio!r}")
 
@@ -100,12 +109,16 @@ class Material:
 
     @property
     def bending_stiffness(self) -> float:
-        """B = E pi d^4 / 64 [N m^2] (paper: 3.55e-8 N m^2 for the Nylon)."""
+        """B = E pi d^4 / 64 [N m^2] (paper: 3.55e-8 N m^2 for the Nylon), or the measured bending_rigidity."""
+        if self.bending_rigidity is not None:
+            return self.bending_rigidity
         return self.young_modulus * math.pi * self.diameter**4 / 64.0
 
     @property
     def twisting_stiffness(self) -> float:
-        """G J = E/(2(1+nu)) * pi d^4/32 = B/(1+nu) [N m^2]."""
+        """G J = E/(2(1+nu)) * pi d^4/32 = B/(1+nu) [N m^2], or the measured torsional_rigidity."""
+        if self.torsional_rigidity is not None:
+            return self.torsional_rigidity
         return self.bending_stiffness / (1.0 + self.poisson_ratio)
 
     @property
@@ -191,6 +204,8 @@ class Scales:
             "rho_L_kg_per_m": m.line_density,
             "E_Pa": m.young_modulus,
             "B_N_m2": m.bending_stiffness,
+            "GJ_N_m2": m.twisting_stiffness,
+            "breaking_force_N": m.breaking_force,
             "l0_m": m.stitch_length,
             "kappa0_per_m": m.kappa0,
             "f0_N": m.f0,

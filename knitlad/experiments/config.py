@@ -19,6 +19,7 @@ from knitlad.engine.kernels.contact_law import LAWS, law_mode
 from knitlad.fabric.observers import AUTO_FRAMES
 from knitlad.fabric.patterns import PATTERNS
 from knitlad.fabric.presets import LADDER_PRESETS, LOOP_PRESETS, PRESET_HELP, STITCH_PRESETS
+from knitlad.experiments.yarn import Yarn
 
 Preset = Literal["fast", "default", "accurate"]
 
@@ -52,6 +53,8 @@ class _WithPreset(BaseModel):
         ``mu=-1`` would pass). A new ``preset`` brings its own settings in place of the old preset's (a
         setting that differs from the old preset's value was given, and stays)."""
         data = self.model_dump()
+        for name in derived_from(changes, data, getattr(self, "yarn", None)):
+            data.pop(name, None)  # made again from the changed yarn or knit
         if "preset" in changes and changes["preset"] != self.preset:
             old = self.PRESETS.get(self.preset, {})
             data = {k: v for k, v in data.items() if not (k in old and v == old[k] and k not in changes)}
@@ -91,6 +94,8 @@ class _WithPreset(BaseModel):
                 if field is None:
                     continue
                 kinds = (field.annotation, *get_args(field.annotation))
+                if any(isinstance(k, type) and issubclass(k, BaseModel) for k in kinds):
+                    continue  # a yarn: a file's path or its mapping (the_yarn_and_its_knit)
                 if isinstance(value, bool) and bool not in kinds:
                     raise ValueError(f"{name}: a number is needed, got {value!r}")
                 if isinstance(value, str) and str not in kinds and not any(get_origin(k) is Literal for k in kinds):
@@ -128,7 +133,127 @@ def _courses(default: int):
     return Field(default, ge=4, le=200, description="courses [-]")
 
 
-class CutConfig(_WithPreset):
+def _yarn():
+    return Field(None, description=(
+        "the yarn: a YAML file of its properties (configs/yarns/; knitlad.experiments.yarn) or, in a config, "
+        "their mapping; none: the paper's Nylon [-]"))
+
+
+def _stitch_length_mm():
+    return Field(None, gt=0, le=200, description=(
+        "the knit's stitch length l0, yarn per stitch, with the yarn's diameter setting d_over_l0 [mm]; none: "
+        "9.74 mm for the paper's Nylon, the yarn's diameter over d_over_l0 for another yarn"))
+
+
+KNIT_SOURCES = ("yarn", "stitch_length_mm", "wales_per_cm", "courses_per_cm")
+MAX_D_OVER_L0 = 0.1  # d_over_l0's bound: a jersey tighter than this jams before it is knitted
+NYLON_DIAMETER_MM = 0.14
+NYLON_STITCH_LENGTH_MM = 9.74
+
+
+def the_yarn_and_its_knit(data: dict, fields) -> dict:
+    """A config's yarn and stitch length made into what the model reads: the yarn read from its file, d_over_l0 =
+    d/l0, mu and loss_factor from the yarn where the config gives none, and the stretch l_x, l_y from wales and
+    courses per cm (l_x = 10 mm / wales per cm). A value given twice must agree; every refusal names its field."""
+    from knitlad.experiments.yarn import YarnError, reasons, yarn_of
+
+    if not any(data.get(name) is not None for name in KNIT_SOURCES):
+        return data
+    data = dict(data)
+    try:
+        yarn = yarn_of(data.get("yarn"))
+        if isinstance(yarn, dict):
+            yarn = Yarn.model_validate(yarn)
+    except YarnError as e:
+        raise ValueError(f"yarn: {e}") from None
+    except ValidationError as e:
+        raise ValueError(f"yarn: {reasons(e)}") from None
+    if yarn is not None:
+        data["yarn"] = yarn
+    d_mm = yarn.diameter_mm if yarn is not None else NYLON_DIAMETER_MM
+    given_ratio = data.get("d_over_l0")
+    if data.get("stitch_length_mm") is not None:
+        l0_mm = float(data["stitch_length_mm"])
+        ratio = d_mm / l0_mm
+        if ratio > MAX_D_OVER_L0:
+            raise ValueError(f"stitch_length_mm: a yarn of {d_mm:g} mm at {l0_mm:g} mm per stitch is d/l0 = "
+                             f"{ratio:.3g}; a jersey cannot be knitted tighter than d/l0 = {MAX_D_OVER_L0:g} "
+                             f"(a stitch length of at least {d_mm / MAX_D_OVER_L0:.3g} mm)")
+        if given_ratio is not None and not math.isclose(given_ratio, ratio, rel_tol=1e-9):
+            raise ValueError(f"d_over_l0: {given_ratio:.6g}, but the yarn's {d_mm:g} mm at stitch_length_mm "
+                             f"{l0_mm:g} is {ratio:.6g}: give one of them")
+        data["d_over_l0"] = ratio
+    elif yarn is not None:
+        if given_ratio is None:
+            raise ValueError("stitch_length_mm: a yarn needs its knit's stitch length (or d_over_l0)")
+        data["stitch_length_mm"] = d_mm / given_ratio
+    else:  # wales or courses per cm of the paper's yarn
+        data["stitch_length_mm"] = NYLON_STITCH_LENGTH_MM if given_ratio is None else NYLON_DIAMETER_MM / given_ratio
+    l0_mm = float(data["stitch_length_mm"])
+    if yarn is not None:
+        for name, value in (("mu", yarn.friction), ("loss_factor", yarn.loss_factor)):
+            if value is not None and data.get(name) is None and name in fields:
+                data[name] = value
+    for count, stretch, others in (("wales_per_cm", "lx", ("fx",)), ("courses_per_cm", "ly", ())):
+        if data.get(count) is None:
+            continue
+        ratio = 10.0 / (float(data[count]) * l0_mm)  # (10 mm / count) / l0
+        if data.get(stretch) is not None and not math.isclose(data[stretch], ratio, rel_tol=1e-9):
+            raise ValueError(f"{count}: {data[count]:g} per cm at a stitch length of {l0_mm:g} mm is {stretch} = "
+                             f"{ratio:.4g}, but {stretch} is {data[stretch]:g}: give one of them")
+        for other in others:
+            if data.get(other) is not None:
+                raise ValueError(f"{count}: sets {stretch} (position control); give it or {other}, not both")
+        data[stretch] = ratio
+    return data
+
+
+def derived_from(changes: dict, data: dict, old_yarn) -> tuple[str, ...]:
+    """The fields of a config's dump (``data``) that :func:`the_yarn_and_its_knit` made from the sources a
+    ``replace(**changes)`` changes: dropped, to be made again (unless the change gives them itself)."""
+    drop = []
+    knit = any(name in changes for name in ("yarn", "stitch_length_mm", "d_over_l0"))
+    if knit and "d_over_l0" not in changes and data.get("stitch_length_mm") is not None:
+        drop.append("d_over_l0")
+    if "d_over_l0" in changes and "stitch_length_mm" not in changes:
+        drop.append("stitch_length_mm")
+    if "yarn" in changes and old_yarn is not None:
+        for name, value in (("mu", old_yarn.friction), ("loss_factor", old_yarn.loss_factor)):
+            if value is not None and data.get(name) == value:
+                drop.append(name)
+    for count, stretch in (("wales_per_cm", "lx"), ("courses_per_cm", "ly")):
+        if data.get(count) is not None and (knit or count in changes):
+            drop.append(stretch)
+    return tuple(name for name in drop if name not in changes)
+
+
+def material_of(cfg):
+    """The rod's material of a config: its yarn at its stitch length, or the paper's Nylon (material_for)."""
+    from knitlad.engine.units import NYLON
+
+    if cfg.yarn is not None:
+        return cfg.yarn.material(cfg.stitch_length_mm * 1e-3)
+    if cfg.stitch_length_mm is not None:
+        return dataclasses.replace(NYLON, stitch_length=cfg.stitch_length_mm * 1e-3)
+    return material_for(cfg.d_over_l0)
+
+
+class _YarnAndKnit:
+    """A config's yarn and stitch length (its fields ``yarn``, ``stitch_length_mm``; knitlad.experiments.yarn): made
+    into d_over_l0 and, where the config has them, mu, loss_factor, lx and ly (:func:`the_yarn_and_its_knit`); the
+    rod's material from them."""
+
+    @model_validator(mode="before")
+    @classmethod
+    def yarn_and_knit(cls, data):
+        return the_yarn_and_its_knit(data, cls.model_fields) if isinstance(data, dict) else data
+
+    def material(self):
+        """The rod's material: the yarn at the stitch length, or the paper's Nylon."""
+        return material_of(self)
+
+
+class CutConfig(_WithPreset, _YarnAndKnit):
     """One laddering run (``knitlad cut``, sweep scene ``ladder``): the one declaration of each of its settings.
 
     The first group are the options of ``knitlad cut``; the second the model's choices,
@@ -144,13 +269,15 @@ class CutConfig(_WithPreset):
         "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
         "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches", "contact_law",
         "band_row", "band_courses", "band_friction_factor", "pattern", "band", "band_curvature", "bars",
-        "clip_friction", "knit_seed")
+        "clip_friction", "knit_seed", *KNIT_SOURCES)
     # fields added here after the experiments built on this config (cycle, tensile, snag, resistance) had run
     # sweeps: at their default they stay out of those scenes' job ids too (their ADDED_LATER lists their own)
-    ADDED_LATER_FOR_ALL: ClassVar[tuple[str, ...]] = ("band_curvature", "bars", "clip_friction", "knit_seed")
+    ADDED_LATER_FOR_ALL: ClassVar[tuple[str, ...]] = ("band_curvature", "bars", "clip_friction", "knit_seed",
+                                                      *KNIT_SOURCES)
     COMPOSED: ClassVar[dict[str, str]] = {
         "preset": "the resolution and the settings beside it (PRESETS)",
-        "d_over_l0": "material (material_for)",
+        "d_over_l0": "material (material_of)",
+        **{name: "material (material_of), d_over_l0, mu, loss_factor, lx, ly" for name in KNIT_SOURCES},
         **{band: "pattern_band, memory_band or friction_band" for band in (
             "band", "band_row", "band_courses", "band_friction_factor", "band_curvature")},
     }
@@ -208,6 +335,12 @@ class CutConfig(_WithPreset):
     contact_force_f0: float = Field(KNIT_CONTACT_FORCE_F0, gt=0, description=(
         "contact stiffness: a contact carrying this force overlaps by overlap_fraction d [f0]"))
     overlap_fraction: float = Field(KNIT_OVERLAP, gt=0, lt=1, description="overlap at contact_force_f0, over d [-]")
+    yarn: Yarn | None = _yarn()
+    stitch_length_mm: float | None = _stitch_length_mm()
+    wales_per_cm: float | None = Field(None, gt=0, le=100, description=(
+        "the stretched knit's wales per cm: l_x = 10 mm / wales_per_cm, position control instead of lx [1/cm]"))
+    courses_per_cm: float | None = Field(None, gt=0, le=100, description=(
+        "the stretched knit's courses per cm: l_y = 10 mm / courses_per_cm, instead of ly [1/cm]"))
     sagitta_radius: float | None = Field(None, ge=0, le=1000, description=(
         "the contact's sagitta correction: each segment's contact radius is r - l^2/(12 R), R this many yarn "
         "diameters (the stitch's contacts' radius of curvature), l the segment; 0: capsules of the yarn's "
@@ -314,23 +447,11 @@ class CutConfig(_WithPreset):
             raise ValueError("give either fx (force control) or lx (position control), not both")
         if self.fx is None and self.lx is None:
             raise ValueError("give fx (force control) or lx (position control)")
-        if self.natural_curvature > 0 and (self.stretch_start, self.edge) != ("tiled", "clamped"):
-            raise ValueError("natural_curvature: set in the periodised stitch and tiled over the knit, it needs "
-                             "stretch_start tiled and edge clamped")
-        if self.pattern != "jersey" and self.stretch_start != "affine":
-            raise ValueError(f"stretch_start: the periodised stitch is jersey's; a {self.pattern} knit is stretched "
-                             "affinely (stretch_start affine)")
-        if self.memory_peak_ratio is not None and self.natural_curvature == 0 and self.memory_band is None:
-            raise ValueError("memory_peak_ratio: shapes the memory of natural_curvature > 0; the yarn has none")
+        check_stretch(self)
         check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
         check_band(self)
         check_clips(self)
-        if self.max_time_ms * 1e3 < self.observe_every_us:
-            raise ValueError(f"max_time_ms: {self.max_time_ms:g} ms is shorter than one observation "
-                             f"(observe_every_us {self.observe_every_us:g}): the ladder would not be read once")
-        if self.frame_every_us is not None and self.frame_every_us < self.observe_every_us:
-            raise ValueError(f"frame_every_us: {self.frame_every_us:g} is shorter than observe_every_us "
-                             f"({self.observe_every_us:g}): frames are taken at observations")
+        check_observations(self)
         return self
 
     @property
@@ -348,7 +469,7 @@ class CutConfig(_WithPreset):
         from knitlad.fabric.preparation import StretchSettings
 
         return self.settings_of(
-            StretchSettings, material=material_for(self.d_over_l0),
+            StretchSettings, material=self.material(),
             pattern_band=(self.band, self.band_row, self.band_courses) if self.knitted_band else None,
             memory_band=self.memory_band)
 
@@ -509,7 +630,7 @@ class SnagConfig(CutConfig):
             if value is not None and value in (0, size - 1):
                 raise ValueError(f"{name}: {value} is on the knit's edge; a snag ladders from a loop inside it "
                                  f"(1 to {size - 2})")
-        strength = self.breaking_force if self.breaking_force is not None else material_for(self.d_over_l0).breaking_force
+        strength = self.breaking_force if self.breaking_force is not None else self.material().breaking_force
         if self.weak_point_force is not None and self.weak_point_force > strength:
             raise ValueError(f"weak_point_force: {self.weak_point_force:g} N is stronger than the yarn it weakens "
                              f"({strength:g} N): a weak point breaks first")
@@ -588,11 +709,13 @@ class LoopConfig(_WithPreset):
             "sinkers_held": self.geometry == "periodic-sinkers", **model_choices})
 
 
-class _StitchCell(_WithPreset):
+class _StitchCell(_WithPreset, _YarnAndKnit):
     """The periodised stitch's cell but its width: its height, resolution, contact, yarn and pattern."""
 
     PRESETS: ClassVar[dict[str, dict]] = STITCH_PRESETS
-    COMPOSED: ClassVar[dict[str, str]] = {**_WithPreset.COMPOSED, "d_over_l0": "material (material_for)"}
+    COMPOSED: ClassVar[dict[str, str]] = {**_WithPreset.COMPOSED, "d_over_l0": "material (material_of)",
+                                          "yarn": "material (material_of), d_over_l0",
+                                          "stitch_length_mm": "material (material_of), d_over_l0"}
 
     ly: float = Field(0.25, gt=0.15, lt=0.4, description="cell height l_y/l0 [-]")
     resolution: int | None = Field(None, ge=12, le=280, description="nodes per stitch [-]; default: the preset's")
@@ -601,6 +724,8 @@ class _StitchCell(_WithPreset):
     d_over_l0: float = Field(1 / 70, gt=0, le=0.1, description=(
         "yarn diameter over stitch length d/l0 [-]; 1/70, the paper's rounded value and the default, means its "
         "Nylon itself: d = 0.14 mm with l0 = 9.74 mm, d/l0 = 0.01437 (knitlad.experiments.config.material_for)"))
+    yarn: Yarn | None = _yarn()
+    stitch_length_mm: float | None = _stitch_length_mm()
     contact_law: ContactLawName = _contact_law()
     pattern: PatternName = Field("jersey", description=(
         "the knit's pattern: the cell holds one repeat (jersey 1 x 1, rib 2 x 1, garter 1 x 2 stitches) and the "
@@ -623,13 +748,13 @@ class _StitchCell(_WithPreset):
             warnings.warn("cell_settings(lx_over_l0=...) is deprecated since 0.14.0: use lx=", DeprecationWarning,
                           stacklevel=2)
             lx = model_choices.pop("lx_over_l0")
-        return self.settings_of(StitchSettings, lx=lx, material=material_for(self.d_over_l0), **model_choices)
+        return self.settings_of(StitchSettings, lx=lx, material=self.material(), **model_choices)
 
 
 class StitchConfig(_StitchCell):
     """One periodised stitch (``knitlad stitch``): tensions at imposed (l_x, l_y)."""
 
-    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law", "pattern")
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law", "pattern", "yarn", "stitch_length_mm")
 
     lx: float = Field(0.35, gt=0.2, lt=0.6, description="cell width l_x/l0 [-]")
 
@@ -650,6 +775,28 @@ class DiagramConfig(_StitchCell):
 # the longest segment, over the correction's radius of curvature R, at which the sagitta correction
 # is taken: it is l^2/(12 R) to leading order in l/R, measured from 24 nodes per stitch up (l = 0.27 R)
 SAGITTA_MAX_SEGMENT = 0.3
+
+
+def check_stretch(cfg: CutConfig) -> None:
+    """Refuse a stretch the knit cannot be given: a memory or a pattern needs its own way of stretching."""
+    if cfg.natural_curvature > 0 and (cfg.stretch_start, cfg.edge) != ("tiled", "clamped"):
+        raise ValueError("natural_curvature: set in the periodised stitch and tiled over the knit, it needs "
+                         "stretch_start tiled and edge clamped")
+    if cfg.pattern != "jersey" and cfg.stretch_start != "affine":
+        raise ValueError(f"stretch_start: the periodised stitch is jersey's; a {cfg.pattern} knit is stretched "
+                         "affinely (stretch_start affine)")
+    if cfg.memory_peak_ratio is not None and cfg.natural_curvature == 0 and cfg.memory_band is None:
+        raise ValueError("memory_peak_ratio: shapes the memory of natural_curvature > 0; the yarn has none")
+
+
+def check_observations(cfg: CutConfig) -> None:
+    """Refuse a run that would not be read: shorter than one observation, or frames between observations."""
+    if cfg.max_time_ms * 1e3 < cfg.observe_every_us:
+        raise ValueError(f"max_time_ms: {cfg.max_time_ms:g} ms is shorter than one observation "
+                         f"(observe_every_us {cfg.observe_every_us:g}): the ladder would not be read once")
+    if cfg.frame_every_us is not None and cfg.frame_every_us < cfg.observe_every_us:
+        raise ValueError(f"frame_every_us: {cfg.frame_every_us:g} is shorter than observe_every_us "
+                         f"({cfg.observe_every_us:g}): frames are taken at observations")
 
 
 def check_clips(cfg: CutConfig) -> None:

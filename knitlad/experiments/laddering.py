@@ -516,8 +516,21 @@ class LadderResult:
         out.update({f"wall_{k}_s": v for k, v in self.wall_s.items()})
         out.update(self.loop_record())
         out.update(self.damage_record())
+        out.update(self.si_record())
         out["nan_reasons"] = "; ".join(f"{k}: {why}" for k, why in self.nan_reasons().items())
         return out
+
+    def si_record(self) -> dict:
+        """The results in a textile engineer's units beside the paper's: the knit's pull F_x = f_x n_y f0 [N] and per
+        cm of its width n_x l_x [N/cm], the ladder's speed v_lad = (v_lad/c_b) c_b [m/s], the stitch length and the
+        stitch's width and height [mm] (the yarn's f0 and c_b: knitlad scales)."""
+        m, s = self.settings.stretch.material, self.settings.stretch
+        width_cm = s.n_x * self.lx_over_l0 * m.stitch_length * 100.0
+        force = {name: getattr(self, f"fx_{name}") * s.n_y * m.f0 for name in ("ini", "fin")}
+        return {"force_ini_N": force["ini"], "force_fin_N": force["fin"],
+                "force_ini_N_per_cm": force["ini"] / width_cm, "force_fin_N_per_cm": force["fin"] / width_cm,
+                "v_lad_m_s": self.v_lad_over_cb * m.c_b, "l0_mm": m.stitch_length * 1e3,
+                "lx_mm": self.lx_over_l0 * m.stitch_length * 1e3, "ly_mm": self.ly_over_l0 * m.stitch_length * 1e3}
 
     def loops(self) -> dict:
         """The freed loops of the paper's Fig. 2d and the ladders that ran from them, read from where the cut thread

@@ -232,6 +232,8 @@ def laddering_velocity(times: np.ndarray, front: np.ndarray, l_y: float, first: 
     # first arrival at each stitch level: a monotone front, robust to flicker
     levels = np.arange(first, last + 1)
     arrival = np.array([times[np.argmax(front >= k)] for k in levels])
+    if len(levels) < 2 or np.ptp(arrival) == 0:  # every stitch reached within one observation: no slope to read
+        return float("nan")
     slope = np.polyfit(arrival, levels, 1)[0]
     return float(slope * l_y)
 

@@ -108,7 +108,9 @@ def run_job(job: Job, jobs_dir: str, threads: int | None = 1, token: str | None 
 
 def summary_row(job: Job, attrs: dict | None) -> dict:
     """One table row: the job's inputs, then its status and results."""
-    row = {"job_id": job.id, "scene": job.scene, **job.params}
+    # a yarn's mapping as one JSON cell, not a Python repr
+    row = {"job_id": job.id, "scene": job.scene,
+           **{k: json.dumps(v) if isinstance(v, dict) else v for k, v in job.params.items()}}
     if job.fx_nominal is not None:  # a member of an ensemble: its point's target, and which knit
         row.update(fx_nominal=job.fx_nominal, ensemble_member=job.ensemble_member, ensemble_point=job.point)
     if attrs is None:
