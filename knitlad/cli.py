@@ -527,7 +527,7 @@ def _cycle_restart(out_dir: Path, cfg, resume: bool) -> dict | None:
 
 
 @app.command()
-@config_options(_config.TensileConfig, exclude=("n_x", "n_y"))
+@config_options(_config.TensileConfig, exclude=("n_x", "n_y", *_config.TensileConfig.UNUSED))
 def tensile(
     stitches: str = typer.Option(None, "--stitches", help=STITCHES_HELP, rich_help_panel=EXPERIMENT_PANEL),
     out: str = typer.Option(None, "--out", help="Output folder; default runs/tensile-<time>.", rich_help_panel=OUTPUT_PANEL),
@@ -538,10 +538,13 @@ def tensile(
     and/or --ly-max, held, and brought back; f_x and f_y read after every ramp.
 
     Without --fx or --lx, the knit starts at f_x = 0.68 (the experiments' holding tension). Writes
-    tensile.csv (the readings), tensile.png (the force-displacement loops) and tensile.h5.
+    tensile.csv (the readings in the paper's units), tensile_tester.csv (force in N and N per 5 cm against the
+    extension in mm and %), tensile_results.csv (per cycle: peak force, initial modulus, hysteresis in mJ),
+    tensile.png, tensile_tester.png and tensile.h5.
     """
     def holds(folder: Path, _cfg) -> str | None:
-        earlier = [p for p in ("tensile.h5", "tensile.csv") if (folder / p).exists()]
+        earlier = [p for p in ("tensile.h5", "tensile.csv", "tensile_tester.csv", "tensile_results.csv")
+                   if (folder / p).exists()]
         return f"holds an earlier tensile run ({', '.join(earlier)}); choose another folder" if earlier else None
 
     with _prologue("tensile", _config.TensileConfig, options, stitches, 0.68, out, holds) as (cfg, out_dir, progress):
@@ -561,7 +564,13 @@ def tensile(
         f"{'' if summary['hold_converged'] else ' (the hold did not settle within --hold-ms)'}\n"
         f"  end:   f_x = {summary['fx_end']:.3f}, f_y = {summary['fy_end']:.3f}; friction took "
         f"{summary['dissipated_per_stitch']:.4f} f0 l0 per stitch; coupling {summary['coupling']:.3f}\n"
-        f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/tensile.csv, tensile.h5, tensile.png")
+        f"  as a tester reads it (gauge {summary['gauge_length_mm']:.1f} mm, width {summary['width_mm']:.1f} mm): peak "
+        f"{summary['peak_force_N']:.3g} N = {summary['peak_force_N_per_5cm']:.3g} N/5cm at "
+        f"{summary['extension_at_peak_mm']:.2f} mm ({summary['extension_at_peak_pct']:.1f} %), initial modulus "
+        f"{summary['initial_modulus_N_per_5cm']:.3g} N/5cm, hysteresis {summary['hysteresis_energy_mJ']:.3g} mJ"
+        f"{'' if summary['cycles'] == 1 else ' (first cycle; every cycle: tensile_results.csv)'}\n"
+        f"  wall time {result.wall_s:.1f} s; wrote {out_dir}/tensile.csv, tensile_tester.csv, tensile_results.csv, "
+        f"tensile.h5, tensile.png, tensile_tester.png")
 
 
 @app.command()

@@ -783,7 +783,7 @@ def test_a_tensile_top_below_its_start_is_refused_as_the_cycles_is(tmp_path):
     """Round 4: `tensile --fx 20 --lx-max 0.25` ran (top f_x -0.467); `--lx 0.36 --lx-max 0.30` likewise."""
     line = one_line_error(knitlad("tensile", "--stitches", "6x8", "--preset", "fast", "--lx", "0.36", "--lx-max",
                                   "0.30", "--out", str(tmp_path / "a")))
-    assert "lx_max: 0.3 is not above the start lx" in line
+    assert "--lx-max: 0.3 is not above the start lx" in line
     p = knitlad("tensile", "--stitches", "6x8", "--preset", "fast", "--fx", "20", "--lx-max", "0.25", "--out",
                 str(tmp_path / "b"))
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr

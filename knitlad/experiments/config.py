@@ -531,7 +531,10 @@ class CycleConfig(CutConfig):
     (``lx_max``) and back; a copy is cut at Delta x_max of the last cycle, the uncut twin unloads.
     The laddering's settings are those of ``knitlad cut``."""
 
-    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law",)
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law", "cycles")
+    # the laddering's run length and recording, which a pull does not use: not its options, refused if set
+    UNUSED: ClassVar[tuple[str, ...]] = ("max_time_ms", "arrest_ms", "observe_every_us", "frame_every_us",
+                                         "stop_after_stitches", "stop_at_edge")
     n_x: int = _stitches_per_course(16)  # a loading (a pull) costs many cuts' steps: 16 x 16 unless asked
     n_y: int = _courses(16)
     fx: float | None = Field(None, gt=0, le=40, description=(
@@ -570,7 +573,10 @@ class TensileConfig(CutConfig):
     knit stretched at mu = 0 (``fx`` or ``lx``, and ``ly``), then with friction on its box pulled to
     (``lx_max``, ``ly_max``), held, and brought back; f_x and f_y read after every ramp."""
 
-    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law",)
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law", "cycles")
+    # the laddering's run length and recording, which a pull does not use: not its options, refused if set
+    UNUSED: ClassVar[tuple[str, ...]] = ("max_time_ms", "arrest_ms", "observe_every_us", "frame_every_us",
+                                         "stop_after_stitches", "stop_at_edge")
     n_x: int = _stitches_per_course(16)  # a loading (a pull) costs many cuts' steps: 16 x 16 unless asked
     n_y: int = _courses(16)
     mu: float = Field(0.4, ge=0, le=2, description="yarn-yarn friction coefficient while pulled [-]")
@@ -582,9 +588,14 @@ class TensileConfig(CutConfig):
     readings_per_leg: int = _readings_per_leg(10)
     hold_ms: float = _hold_ms()
     hold_tol_f0: float = _hold_tol_f0()
+    cycles: int = Field(1, ge=1, le=10, description=(
+        "loadings, each held and brought back (a tester's cycles; the second and later from the unloaded knit) [-]"))
 
     @model_validator(mode="after")
     def moves(self) -> "TensileConfig":
+        for name in self.UNUSED:
+            if getattr(self, name) != type(self).model_fields[name].default:
+                raise ValueError(f"{name}: the tensile test does not use it (it sets a ladder's run)")
         if self.lx_max is None and self.ly_max is None:
             raise ValueError("lx_max: give lx_max, ly_max or both (the box must move)")
         if self.lx is not None and self.lx_max is not None and self.lx_max <= self.lx:
@@ -593,6 +604,8 @@ class TensileConfig(CutConfig):
             raise ValueError(f"ly_max: {self.ly_max:g} is not above the start ly = {self.ly:g} (a tensile test pulls)")
         if self.bars == "sliding" and self.ly_max is not None:
             raise ValueError("ly_max: sliding bars are moved along x only; pull along y with held bars")
+        if self.cycles > 1 and not self.unload:
+            raise ValueError("cycles: a second cycle starts from the unloaded knit; give unload")
         return self
 
     def tensile_settings(self):
@@ -606,7 +619,10 @@ class SnagConfig(CutConfig):
     ``ly``), then with friction on a pin behind one loop's head pulls it out of the fabric until the yarn
     breaks; the ladder follows from the break as from the paper's cut."""
 
-    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law",)
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law", "cycles")
+    # the laddering's run length and recording, which a pull does not use: not its options, refused if set
+    UNUSED: ClassVar[tuple[str, ...]] = ("max_time_ms", "arrest_ms", "observe_every_us", "frame_every_us",
+                                         "stop_after_stitches", "stop_at_edge")
     n_x: int = _stitches_per_course(16)  # a loading (a pull) costs many cuts' steps: 16 x 16 unless asked
     n_y: int = _courses(16)
     snag_speed: float = Field(1.0, gt=0, le=30, description="the pin's pull speed, out of the fabric's plane [m/s]")

@@ -162,7 +162,9 @@ def write_cycle_table(path: Path, readings) -> Path:
 def run_tensile_job(cfg: TensileConfig, output, folder: Path | None = None, progress=None) -> Finished:
     """The tensile test (`knitlad tensile`): its file holds the readings (:func:`knitlad.io.hdf5.write_tensile_result`);
     beside it their table and the force-displacement loops."""
-    from knitlad.experiments.tensile import COLUMNS, run_tensile
+    import pandas as pd
+
+    from knitlad.experiments.tensile import COLUMNS, LEG_NAMES, RESULTS_COLUMNS, TESTER_COLUMNS, run_tensile
     from knitlad.io.hdf5 import write_tensile_result
 
     result = run_tensile(prepared_knit(cfg, folder, progress)[0], cfg.tensile_settings(), cfg.dynamics_settings(),
@@ -173,10 +175,17 @@ def run_tensile_job(cfg: TensileConfig, output, folder: Path | None = None, prog
 
     def beside(path: Path) -> tuple[Path, ...]:
         from knitlad.io.summary import write_table
-        from knitlad.viz.plots import tensile_curve_plot
+        from knitlad.viz.plots import tensile_curve_plot, tester_curve_plot
 
+        tester = pd.DataFrame(result.tester_readings(), columns=list(TESTER_COLUMNS))
+        tester["cycle"] = tester["cycle"].astype(int)
+        tester["leg"] = tester["leg"].map(LEG_NAMES)
         return (write_table(path.with_suffix(".csv"), result.readings, COLUMNS),
-                tensile_curve_plot(result.readings, path.with_suffix(".png")))
+                tensile_curve_plot(result.readings, path.with_suffix(".png")),
+                write_table(path.with_name(path.stem + "_tester.csv"), tester, TESTER_COLUMNS),
+                write_table(path.with_name(path.stem + "_results.csv"), pd.DataFrame(result.tester_results()),
+                            RESULTS_COLUMNS),
+                tester_curve_plot(tester, result.along_x, path.with_name(path.stem + "_tester.png")))
 
     return Finished(result, result.summary(), write, beside)
 
@@ -448,6 +457,16 @@ TENSILE_RESULTS = {
     "dissipated_per_stitch": ("f0 l0", "the work friction took per stitch over the closed path, the integral of "
                                        "f_x dl_x + f_y dl_y (NaN without the unloading)"),
     "hold_converged": ("-", "the hold at the top settled within hold_ms"),
+    "gauge_length_mm": ("mm", "the tester's gauge: the held ends' distance at the start along the pull"),
+    "width_mm": ("mm", "the strip's width across the pull (n_y l_y pulling along x)"),
+    "peak_force_N": ("N", "the first cycle's largest pull, F_x = f_x n_y f0 (F_y = f_y n_x f0 along y)"),
+    "peak_force_N_per_5cm": ("N/5cm", "the same per 5 cm of width"),
+    "extension_at_peak_mm": ("mm", "the gauge's extension there"),
+    "extension_at_peak_pct": ("%", "the same over the gauge length"),
+    "initial_modulus_N_per_5cm": ("N/5cm", "the first loading's secant d(F per 5 cm)/d(strain) over its first ramp"),
+    "hysteresis_energy_mJ": ("mJ", "the first cycle's hysteresis: the bars' work over its closed path, what "
+                                   "friction took (NaN without the unloading)"),
+    "cycles": ("1", "the loadings run"),
 }
 
 SNAG_RESULTS = {
@@ -517,7 +536,9 @@ EXPERIMENTS: dict[str, Experiment] = {
         "job_wall_s"), "`knitlad cycle`: protocol B, the damage prediction's loading", stretch_of, CYCLE_RESULTS),
     "tensile": Experiment(TensileConfig, run_tensile_job, (
         "fx_start", "fy_start", "fx_top", "fy_top", "lx_top_over_l0", "ly_top_over_l0", "fx_end", "fy_end", "coupling",
-        "dissipated_per_stitch", "hold_converged", "wall_s", "job_wall_s"),
+        "dissipated_per_stitch", "hold_converged", "gauge_length_mm", "width_mm", "peak_force_N", "peak_force_N_per_5cm",
+        "extension_at_peak_mm", "extension_at_peak_pct", "initial_modulus_N_per_5cm", "hysteresis_energy_mJ", "cycles",
+        "wall_s", "job_wall_s"),
         "`knitlad tensile`: the fabric's tensile test", stretch_of, TENSILE_RESULTS),
     "snag": Experiment(SnagConfig, run_snag_job, (
         "snag_row", "snag_column", "broke", "peak_force_N", "pull_at_break_mm", "break_tension_N", "break_row",

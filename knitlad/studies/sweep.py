@@ -333,7 +333,7 @@ def expand(cfg: SweepConfig, max_jobs: int = MAX_JOBS) -> list[Job]:
     else:
         index_sets = list(itertools.product(*(range(len(axes[k])) for k in names)))
     extras = {}
-    if "frame_every_us" in fields:
+    if "frame_every_us" in fields and "frame_every_us" not in getattr(model, "UNUSED", ()):
         extras["frame_every_us"] = cfg.output.frame_every_us
     jobs, seen = [], set()
     for idx in index_sets:

@@ -440,6 +440,23 @@ def tensile_curve_plot(readings, path: str | Path) -> Path:
                      r"tension per thread [$f_0$]", "tensile test (dashed: unloading)", path)
 
 
+def tester_curve_plot(tester, along_x: bool, path: str | Path) -> Path:
+    """The tensile test as a tester draws it: the pull per 5 cm of width against the extension in % of the gauge
+    length, one colour per cycle, loading solid, unloading dashed (the loop's area is the hysteresis)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    for k, (cycle, g) in enumerate(tester.groupby("cycle")):
+        colour = f"C{k % 10}"
+        up = g[g["leg"] != "unloading"]
+        down = g[g["leg"] != "loading"]
+        ax.plot(up["extension_pct"], up["force_N_per_5cm"], lw=1.2, color=colour, label=f"cycle {cycle}")
+        ax.plot(down["extension_pct"], down["force_N_per_5cm"], lw=1.2, ls="--", color=colour)
+    ax.xaxis.set_major_locator(plt.MaxNLocator(5))
+    direction = "course (x)" if along_x else "wale (y)"
+    return _labelled(fig, ax, "extension [% of the gauge length]", "force [N per 5 cm of width]",
+                     f"tensile test along the {direction}, dashed: unloading", path)
+
+
 def snag_curve_plot(pull_m, force_N, path: str | Path, broke: bool = False) -> Path:
     """The snag's pull-out curve (knitlad.experiments.snag): the force the yarn holds the pin back with against
     the pin's travel; a cross where the yarn broke."""

@@ -104,3 +104,57 @@ def test_a_moving_box_carries_the_continuous_edges_clips_with_its_sides():
     assert CycleConfig(fx=0.68, lx_max=0.38, edge="continuous").edge == "continuous"
 
 
+
+
+def synthetic(loading: np.ndarray, unloading: np.ndarray, lx=(0.36, 0.38), n_x=6, n_y=8, cycles=1):
+    """A TensileResult of readings made by hand: f_x along the box's l_x, up on ``loading``, back on ``unloading``."""
+    import knitlad as kl
+    from knitlad.experiments.tensile import HOLD, LOADING, UNLOADING, TensileResult, TensileSettings
+
+    up = np.linspace(*lx, len(loading))
+    rows = []
+    for c in range(cycles):
+        rows += [(LOADING, 0.0, x, 0.25, x, 0.25, f, 0.0) for x, f in zip(up, loading)]
+        rows += [(HOLD, 0.0, up[-1], 0.25, up[-1], 0.25, loading[-1], 0.0)]
+        rows += [(UNLOADING, 0.0, x, 0.25, x, 0.25, f, 0.0) for x, f in zip(up[::-1][1:], unloading[::-1][1:])]
+    settings = TensileSettings(lx[1], None, True, 0.25, 0.0, len(loading) - 1, 1e-3, 1e-3, cycles=cycles)
+    return TensileResult(settings, kl.NYLON, n_x, n_y, np.array(rows, dtype=float))
+
+
+def test_a_testers_figures_are_the_papers_readings_in_newtons_and_millimetres():
+    """A linear knit, f_x = 2 + 100 (l_x/l0 - 0.36) up and down the same line: the gauge is n_x l_x, the strip
+    n_y l_y wide, F = f_x n_y f0, the strain (l_x - l_x0)/l_x0, the modulus the line's slope in those units, and no
+    hysteresis."""
+    import knitlad as kl
+
+    lx = np.linspace(0.36, 0.38, 5)
+    f = 2 + 100 * (lx - 0.36)
+    r = synthetic(f, f)
+    (row,) = r.tester_results()
+    l0_mm, f0 = kl.NYLON.stitch_length * 1e3, kl.NYLON.f0
+    assert row["gauge_length_mm"] == pytest.approx(6 * 0.36 * l0_mm)
+    assert row["width_mm"] == pytest.approx(8 * 0.25 * l0_mm)
+    assert row["peak_force_N"] == pytest.approx(f[-1] * 8 * f0)
+    assert row["extension_at_peak_pct"] == pytest.approx(100 * 0.02 / 0.36)
+    per_5cm = 50 / row["width_mm"]
+    assert row["initial_modulus_N_per_5cm"] == pytest.approx(100 * 0.36 * 8 * f0 * per_5cm)
+    assert row["hysteresis_energy_mJ"] == pytest.approx(0, abs=1e-12)
+
+
+def test_the_hysteresis_is_the_loops_area_in_millijoules_every_cycle():
+    """Loading at 3 f0 per thread, unloading at 2, over a stroke of 0.02 l0 per stitch in four ramps: the readings
+    are all a tester has, so the loop is their trapezoids, and the first unloading ramp leaves the top (3) for the
+    line (2): 3 x 0.02 - (2.5 x 0.005 + 2 x 0.015) = 0.0175 f0 l0 per thread and stitch, times n_y f0 and n_x l0
+    for the bars' work, every cycle alike."""
+    import knitlad as kl
+
+    up, down = np.full(5, 3.0), np.full(5, 2.0)
+    rows = synthetic(up, down, cycles=3).tester_results()
+    area = 8 * kl.NYLON.f0 * 0.0175 * 6 * kl.NYLON.stitch_length * 1e3  # mJ
+    assert [row["cycle"] for row in rows] == [1, 2, 3]
+    assert [row["hysteresis_energy_mJ"] for row in rows] == pytest.approx([area] * 3, rel=1e-9)
+
+
+def test_more_cycles_than_one_need_the_unloading():
+    with pytest.raises(ValueError, match="cycles"):
+        config(cycles=2, unload=False)
