@@ -652,11 +652,18 @@ def resistance(
              f"  snag at f_x^ini {summary['snag_fx_ini']:.2f}: peak pull-out force {summary['snag_peak_force_N']:.3f} N, "
              + (f"broke after {summary['snag_pull_at_break_mm']:.2f} mm, n_lad/n_y {summary['snag_n_lad_over_ny']:.2f}"
                 if summary["snag_broke"] else "no break")]
-    for row in result.table():
-        lines.append(f"  cut at f_x^ini {row[1]:.2f}: n_lad/n_y {row[2]:.2f} ({row[3]:.2f} released), "
-                     f"v_lad/c_b {row[4]:.3f}, f_x^fin crossed {row[5]:.2f}" + (", reached an edge" if row[6] else ""))
-    lines.append("  threshold (onset): " + _bracket_words(lo, hi) + ("" if summary["monotonic"] else
-                                                                       " (the series is not monotonic)"))
+    for row, c, verdict in zip(result.table(), result.cuts, result.verdicts()):
+        released = c.damage_record()["n_lad_released"]
+        speed = f"v_lad/c_b {row[4]:.3f}" if math.isfinite(row[4]) else "no front long enough to fit a speed"
+        lines.append(f"  cut at f_x^ini {row[1]:.2f}: {verdict}: {c.n_lad} cells undone ({row[2]:.2f} n_y; "
+                     f"{released} released into loaded courses), {speed}, f_x^fin crossed {row[5]:.2f}")
+    lines.append(f"  rule: {result.rule()}")
+    held = summary["holds_up_to"]
+    lines.append("  the design " + (f"holds up to f_x^ini {held:.2f}" if math.isfinite(held) else
+                                    "gives way at the lowest tension tried")
+                 + ("" if summary["monotonic"] else " (the series is not monotonic)"))
+    if cfg.band_row is None:
+        lines.append("  threshold (onset): " + _bracket_words(lo, hi))
     thr = result.arrest_threshold()
     if thr["runs"]:
         lines.append(f"  f_x^thr as the paper reads it (mean f_x^fin after the arrest): {thr['fx_thr']:.2f}"

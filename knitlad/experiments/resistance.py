@@ -30,6 +30,8 @@ from knitlad.experiments.snag import SnagResult, snag
 from knitlad.fabric.preparation import StretchedKnit
 
 LADDERING_ONSET_CELLS = 4.2  # a cut ladders when it undoes this many cells or more (0.1 n_y on 42 x 42)
+ONSET_WHOLE_CELLS = math.ceil(LADDERING_ONSET_CELLS)  # cells are whole: 5 or more
+HELD, GAVE_WAY, AT_LEAST = "held", "gave way", "gave way (reached an edge: a lower bound)"
 
 
 @dataclass
@@ -61,6 +63,45 @@ class ResistanceResult:
         return arrest_threshold([c.fx_ini for c in self.cuts], [c.fx_fin for c in self.cuts], self.laddered(),
                                 [c.stop_reason.startswith("no cell changed") for c in self.cuts])
 
+    def verdicts(self) -> list[str]:
+        """Each cut's answer to "does it hold?", by :meth:`rule`: held, gave way, or gave way as far as an edge
+        course (its damage a lower bound: a larger knit would have laddered further)."""
+        out = []
+        for c in self.cuts:
+            if not self.gave_way(c):
+                out.append(HELD)
+            else:
+                out.append(AT_LEAST if c.reached_edge else GAVE_WAY)
+        return out
+
+    def gave_way(self, c: LadderResult) -> bool:
+        """The design gave way under cut ``c``: with a run-stop band, a cell undone beyond the band from the cut
+        (the ladder crossed it); without one, the cut laddered (:data:`LADDERING_ONSET_CELLS`)."""
+        band_row = self.design.get("band_row", -1)
+        if band_row is None or band_row < 0 or c.final_laddered is None:
+            return c.n_lad >= LADDERING_ONSET_CELLS
+        undone_courses = np.flatnonzero(np.asarray(c.final_laddered).any(axis=1))
+        end = band_row + self.design.get("band_courses", 1)
+        beyond = undone_courses >= end if band_row > c.cut_row else undone_courses < band_row
+        return bool(beyond.any())
+
+    def holds_up_to(self) -> float:
+        """The highest f_x^ini whose cut held with every lower one holding too (NaN: the lowest gave way)."""
+        held = math.nan
+        for c, verdict in zip(self.cuts, self.verdicts()):
+            if verdict != HELD:
+                break
+            held = c.fx_ini
+        return held
+
+    def rule(self) -> str:
+        """The rule of :meth:`verdicts`, in words."""
+        if self.design.get("band_row", -1) is not None and self.design.get("band_row", -1) >= 0:
+            return ("a cut gives way when its ladder crosses the band: a cell undone beyond it, seen from the cut, "
+                    "at the stop")
+        return (f"a cut gives way when it undoes {ONSET_WHOLE_CELLS} cells or more at the stop (more than 0.1 n_y of "
+                "the paper's 42 x 42 knit)")
+
     def pictured(self) -> LadderResult | None:
         """The ladder the report shows: the highest tension's cut that laddered, else the snag's."""
         ran = [c for c, lad in zip(self.cuts, self.laddered()) if lad]
@@ -88,6 +129,8 @@ class ResistanceResult:
                **{name: self.arrest_threshold()[k] for name, k in (
                    ("fx_thr_arrest", "fx_thr"), ("fx_thr_arrest_sd", "fx_thr_sd"), ("fx_thr_arrest_runs", "runs"))},
                "monotonic": all(not a or b for a, b in zip(lad, lad[1:])),
+               "verdicts": "; ".join(f"{t:g}: {v}" for t, v in zip(self.tensions, self.verdicts())),
+               "holds_up_to": self.holds_up_to(),
                "tensions": len(self.cuts)}
         if self.cuts:
             first, last = self.cuts[0], self.cuts[-1]
@@ -103,7 +146,8 @@ def run_resistance(cfg, stretch_for: Callable, progress=None) -> ResistanceResul
     same tension share one. ``progress(stage, fraction)``: the stages are named snag and cut f_x."""
     t0 = time.perf_counter()
     design = {"pattern": cfg.pattern, "band": cfg.band if cfg.band_row is not None else "none",
-              "band_row": -1 if cfg.band_row is None else cfg.band_row, "d_over_l0": cfg.d_over_l0, "mu": cfg.mu,
+              "band_row": -1 if cfg.band_row is None else cfg.band_row, "band_courses": cfg.band_courses,
+              "d_over_l0": cfg.d_over_l0, "mu": cfg.mu,
               "n_x": cfg.n_x, "n_y": cfg.n_y, "preset": cfg.preset, "resolution": cfg.resolution}
     knit: StretchedKnit = stretch_for(cfg)
     snagged = snag(knit, cfg.dynamics_settings(), cfg.snag_settings(),

@@ -495,6 +495,9 @@ RESISTANCE_RESULTS = {
     "design_band": ("-", "the run-stop band: friction, rib or garter (none: no band)"),
     "design_d_over_l0": ("1", "the yarn's diameter over the stitch length"),
     "design_mu": ("1", "the yarn-yarn friction coefficient"),
+    "verdicts": ("-", "each tension's answer, held or gave way (with a band: its ladder crossed it; without: it "
+                      "undid 5 cells or more; an edge reached: a lower bound)"),
+    "holds_up_to": ("f0", "the highest f_x^ini that held with every lower one holding (NaN: the lowest gave way)"),
     "snag_peak_force_N": ("N", "the snag's largest pull-out force"),
     "snag_broke": ("-", "the yarn broke before the pin's max_pull_mm"),
     "snag_pull_at_break_mm": ("mm", "the pin's travel when the yarn broke (NaN: no break)"),
@@ -546,7 +549,8 @@ EXPERIMENTS: dict[str, Experiment] = {
         "v_lad_over_cb", "v_down_over_cb", "fx_fin", "reached_edge", "wall_s", "job_wall_s"),
         "`knitlad snag`: a pin pulls a loop out until the yarn breaks; the ladder follows", stretch_of, SNAG_RESULTS),
     "resistance": Experiment(ResistanceConfig, run_resistance_job, (
-        "design_pattern", "design_band", "design_d_over_l0", "design_mu", "snag_peak_force_N", "snag_broke",
+        "design_pattern", "design_band", "design_d_over_l0", "design_mu", "verdicts", "holds_up_to",
+        "snag_peak_force_N", "snag_broke",
         "snag_pull_at_break_mm", "snag_n_lad_over_ny", "snag_v_down_over_cb", "fx_thr_below", "fx_thr_above", "fx_thr_arrest",
         "fx_thr_arrest_sd", "fx_thr_arrest_runs", "monotonic",
         "n_lad_over_ny_lowest", "n_lad_over_ny_highest", "v_lad_over_cb_highest", "fx_fin_crossed_highest",

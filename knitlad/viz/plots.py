@@ -505,7 +505,6 @@ def resistance_report(result, path: str | Path, picture: str | Path | None = Non
     """One page of a ladder-resistance test (:class:`knitlad.experiments.resistance.ResistanceResult`): the
     design and what its numbers are worth, the snag's pull-out curve, the damage and the velocity against
     f_x^ini with the threshold bracket, and ``picture`` (a render of the ladder where it stopped), if given."""
-    from knitlad.experiments.resistance import LADDERING_ONSET_CELLS
     from knitlad.fabric.presets import PRESET_ERRORS
 
     plt = _pyplot()
@@ -532,7 +531,8 @@ def resistance_report(result, path: str | Path, picture: str | Path | None = Non
             f"snag at f_x^ini {row['snag_fx_ini']:.2f}:",
             f"  peak pull-out force {row['snag_peak_force_N']:.3f} N, {snag_line}",
             f"threshold f_x^thr: {threshold}" + ("" if row["monotonic"] else " (not monotonic)"),
-            f"  (a cut ladders when it undoes {LADDERING_ONSET_CELLS} cells)",
+            *textwrap.wrap(f"rule: {result.rule()}", 44),
+            *(f"  f_x^ini {c.fx_ini:.2f}: {v}" for c, v in zip(result.cuts, result.verdicts())),
             "one knit per tension: one run scatters",
             "  by about 20 % at low tension"]
     ax = fig.add_subplot(grid[0, 0])
@@ -556,9 +556,13 @@ def resistance_report(result, path: str | Path, picture: str | Path | None = Non
     for f in (lo, hi):
         if np.isfinite(f):
             ax.axvline(f, color="C3", lw=0.8, ls=":")
-    ax2 = ax.twinx()
-    ax2.plot(table[:, 1], table[:, 4], "^-", color="C2")
-    ax2.set_ylabel(symbol("v_lad_over_cb") + " (triangles)", color="C2")
+    if np.isfinite(table[:, 4]).any():  # an axis of velocities only where a front ran far enough to fit one
+        ax2 = ax.twinx()
+        ax2.plot(table[:, 1], table[:, 4], "^-", color="C2")
+        ax2.set_ylabel(symbol("v_lad_over_cb") + " (triangles)", color="C2")
+    else:
+        ax.text(0.98, 0.02, "no front ran far enough to fit a velocity", ha="right", va="bottom", fontsize=6.5,
+                transform=ax.transAxes)
     ax.set_xlabel(symbol("fx_ini"))
     ax.set_ylabel("damage")
     ax.legend(fontsize=6.5, loc="upper left")

@@ -10,12 +10,13 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import h5py
+import numpy as np
 import pandas as pd
 import pytest
 import yaml
 
 from knitlad.experiments.config import ResistanceConfig
-from knitlad.experiments.resistance import LADDERING_ONSET_CELLS, ResistanceResult
+from knitlad.experiments.resistance import AT_LEAST, GAVE_WAY, HELD, LADDERING_ONSET_CELLS, ResistanceResult
 
 ROOT = Path(__file__).resolve().parents[2]
 KNITLAD = [sys.executable, "-m", "knitlad.cli"]
@@ -23,10 +24,17 @@ SMALL = ["--stitches", "6x8", "--preset", "fast", "--tensions", "1", "--tensions
          "--max-pull-mm", "4", "--max-time-ms", "2"]
 
 
-def a_cut(fx: float, cells: int):
+def a_cut(fx: float, cells: int, courses: tuple[int, int] | None = None, reached_edge: bool = False):
+    """A cut of ``cells`` undone cells; ``courses``: the lowest and highest course it undid (in column 3 of a
+    16 x 16 knit cut at course 8), for the band's verdict."""
+    final = None
+    if courses is not None:
+        final = np.zeros((16, 16), dtype=bool)
+        final[courses[0]: courses[1] + 1, 3] = True
     return SimpleNamespace(fx_ini=fx, n_lad=cells, n_lad_over_ny=cells / 8, v_lad_over_cb=0.2, fx_fin_crossed=1.0,
-                           fx_fin=1.0 + 0.05 * fx, stop_reason="no cell changed for 1.0 ms", reached_edge=False,
-                           damage_record=lambda: {"n_lad_released_over_ny": cells / 16})
+                           fx_fin=1.0 + 0.05 * fx, stop_reason="no cell changed for 1.0 ms", reached_edge=reached_edge,
+                           damage_record=lambda: {"n_lad_released_over_ny": cells / 16}, final_laddered=final,
+                           cut_row=8)
 
 
 def a_result(cells: list[int]) -> ResistanceResult:
@@ -48,6 +56,26 @@ def test_the_threshold_lies_between_the_highest_tension_that_holds_and_the_lowes
     assert result.table().shape == (4, 7) and result.table()[2, 3] == pytest.approx(5 / 16)
     # the paper's f_x^thr: the mean f_x^fin of the cuts that laddered (at 6 and 8: 1.3 and 1.4)
     assert row["fx_thr_arrest"] == pytest.approx(1.35) and row["fx_thr_arrest_runs"] == 2
+
+
+def test_without_a_band_a_design_holds_while_its_cut_undoes_fewer_than_five_whole_cells():
+    result = a_result([2, 4, 5, 12])
+    result.cuts[3].reached_edge = True
+    assert result.verdicts() == [HELD, HELD, GAVE_WAY, AT_LEAST]
+    assert result.holds_up_to() == 4.0 and "5 cells or more" in result.rule()
+    assert result.summary()["verdicts"] == "2: held; 4: held; 6: gave way; 8: " + AT_LEAST
+
+
+@pytest.mark.parametrize("band_row, courses, verdict", [
+    (11, (8, 10), HELD), (11, (8, 13), GAVE_WAY), (11, (8, 12), HELD),  # above the cut: courses 11-12
+    (3, (5, 8), HELD), (3, (2, 8), GAVE_WAY)])  # below it: courses 3-4
+def test_a_band_holds_while_no_cell_beyond_it_is_undone(band_row, courses, verdict):
+    """A ladder that stops inside the band held; one with a cell past it, seen from the cut, gave way, however
+    many cells it undid."""
+    snag = SimpleNamespace(summary=lambda: {}, ladder=None)
+    result = ResistanceResult({"pattern": "jersey", "band_row": band_row, "band_courses": 2}, snag, (4.0,),
+                              [a_cut(4.0, 20, courses)])
+    assert result.verdicts() == [verdict] and "crosses the band" in result.rule()
 
 
 def test_a_series_that_all_ladders_or_none_leaves_one_side_of_the_bracket_open_and_a_dip_is_said():
