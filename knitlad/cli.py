@@ -271,7 +271,7 @@ def _knit_run(model, options: dict, stitches: str | None, default_fx: float | No
         n_x, n_y = _config.parse_stitches(stitches)
     except ValueError as e:
         fail(f"--stitches: {e}")
-    if default_fx is not None and options.get("fx") is None and options.get("lx") is None:
+    if default_fx is not None and all(options.get(k) is None for k in ("fx", "lx", "wales_per_cm")):
         options["fx"] = default_fx
     cfg = validated(model, {**options, "n_x": n_x, "n_y": n_y}, {"n_x": "--stitches", "n_y": "--stitches"})
     out_dir = Path(out) if out else Path("runs") / time.strftime(f"{name}-%Y%m%d-%H%M%S")

@@ -112,3 +112,19 @@ def test_examples_are_short_and_use_only_the_public_api(name):
     text = (EXAMPLES / f"{name}.py").read_text()
     assert len(text.splitlines()) <= 40
     assert "from knitlad." not in text and "import knitlad." not in text
+
+
+def test_the_hosiery_yarn_sets_its_own_scales_and_its_ladder_reports_them():
+    """A 20 den nylon monofilament (2.22 tex at 1.14 g/cm^3: d = 49.8 um) at 2.5 mm per stitch: f0 = B kappa0^2
+    with B = E pi d^4/64 and kappa0 = 2 pi/l0 (the paper's definitions), 1/4.1 of the paper's Nylon's; the worn
+    stretch l_x = 10 mm/10.5 and l_y = 10 mm/16; the ladder's pull in N is f_x n_y f0 of this yarn."""
+    hosiery = example("hosiery")
+    cfg = hosiery.worn_stocking(6, max_time_ms=0.5)
+    m = cfg.material()
+    b = 1.88e9 * np.pi * 0.0498e-3**4 / 64
+    assert m.line_density == pytest.approx(2.22e-6, rel=0.01)
+    assert m.f0 == pytest.approx(b * (2 * np.pi / 2.5e-3) ** 2, rel=1e-12)
+    assert (cfg.lx, cfg.ly) == pytest.approx((10 / 10.5 / 2.5, 10 / 16 / 2.5))
+    s = hosiery.ladder(6, max_time_ms=0.5)
+    assert s["force_ini_N"] == pytest.approx(s["fx_ini"] * 6 * m.f0, rel=1e-9)
+    assert s["lx_mm"] == pytest.approx(2.5 * s["lx_over_l0"])

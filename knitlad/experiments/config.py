@@ -531,7 +531,7 @@ class CycleConfig(CutConfig):
     (``lx_max``) and back; a copy is cut at Delta x_max of the last cycle, the uncut twin unloads.
     The laddering's settings are those of ``knitlad cut``."""
 
-    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law", "cycles")
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law",)
     # the laddering's run length and recording, which a pull does not use: not its options, refused if set
     UNUSED: ClassVar[tuple[str, ...]] = ("max_time_ms", "arrest_ms", "observe_every_us", "frame_every_us",
                                          "stop_after_stitches", "stop_at_edge")
@@ -619,7 +619,7 @@ class SnagConfig(CutConfig):
     ``ly``), then with friction on a pin behind one loop's head pulls it out of the fabric until the yarn
     breaks; the ladder follows from the break as from the paper's cut."""
 
-    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law", "cycles")
+    ADDED_LATER: ClassVar[tuple[str, ...]] = ("contact_law",)
     # the laddering's run length and recording, which a pull does not use: not its options, refused if set
     UNUSED: ClassVar[tuple[str, ...]] = ("max_time_ms", "arrest_ms", "observe_every_us", "frame_every_us",
                                          "stop_after_stitches", "stop_at_edge")

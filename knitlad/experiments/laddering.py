@@ -493,8 +493,11 @@ class LadderResult:
             "up_from_4_5_ms": "no ladder ran up from loops (4)/(5)",
             "fx_fin": "no tension was read after the cut",
         }
+        # the results in SI are the paper's times a scale: NaN for the same reason
+        reasons.update(v_lad_m_s=reasons["v_lad_over_cb"], force_fin_N=reasons["fx_fin"],
+                       force_fin_N_per_cm=reasons["fx_fin"])
         summary_nan = {k for k in reasons if isinstance(getattr(self, k, None), float) and math.isnan(getattr(self, k))}
-        record = self.loop_record()
+        record = {**self.loop_record(), **self.si_record()}
         summary_nan |= {k for k in reasons if k in record and isinstance(record[k], float) and math.isnan(record[k])}
         return {k: reasons[k] for k in reasons if k in summary_nan}
 
