@@ -1,6 +1,6 @@
 """The observables as the paper reads them, from a laddering sweep with an ensemble axis.
 
-    python scripts/paper/observables.py runs/observables16 [--csv docs/reference/observables16_summary.csv]
+    python scripts/paper/observables.py runs/observables16 [runs/observables16_onset ...] [--csv OUT.csv]
 
 Per nominal f_x^ini (the ensemble's members are different knits: their own knit_seed, targets 0.5 % apart):
 n_lad at the stop (the paper's photograph after the arrest) beside every cell undone at some time and the cells
@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import shutil
 from pathlib import Path
 
 import numpy as np
@@ -52,17 +51,26 @@ def onset_bracket(frame: pd.DataFrame) -> tuple[float, float]:
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("run", help="a sweep's folder (its summary.csv) or a summary CSV")
-    p.add_argument("--csv", help="copy the summary here (docs/reference/...)")
+    p.add_argument("runs", nargs="+", help="sweep folders (their summary.csv) or summary CSVs")
+    p.add_argument("--csv", help="write the finished runs' rows here (docs/reference/...)")
     args = p.parse_args()
-    path = Path(args.run)
-    summary = path / "summary.csv" if path.is_dir() else path
-    frame = pd.read_csv(summary)
+    tables = []
+    for run in args.runs:
+        path = Path(run)
+        tables.append(pd.read_csv(path / "summary.csv" if path.is_dir() else path))
+    frame = pd.concat(tables, ignore_index=True).drop_duplicates("job_id")
+    done = frame[frame.status != "pending"]
     frame = frame[frame.status == "ok"].copy()
-    frame["fx_point"] = frame.fx_nominal.where(frame.fx_nominal.notna(), frame.fx).round(2)
+    # a member's point is its nominal target; a job run on its own, its fx to 0.1 (an ensemble's member lies within
+    # 0.5 % of its target)
+    nominal = frame.fx_nominal if "fx_nominal" in frame else pd.Series(np.nan, index=frame.index)
+    frame["fx_point"] = nominal.where(nominal.notna(), frame.fx).round(1)
     frame["arrested"] = arrested(frame)
     if args.csv:
-        shutil.copyfile(summary, args.csv)
+        done.to_csv(args.csv, index=False)
+    failed = done[done.status == "failed"]
+    for _, row in failed.iterrows():
+        print(f"failed: f_x {row.fx:g} (knit_seed {row.get('knit_seed', '-')}): {row.error}")
 
     print("| f_x^ini (target) | knits | f_x^ini | n_lad at the stop | undone at some time | hooked again | stopped by "
           "| f_x^fin | v_lad/c_b, mid-line | first arrival | loop sequence |")
