@@ -58,7 +58,9 @@ def main() -> None:
     for run in args.runs:
         path = Path(run)
         tables.append(pd.read_csv(path / "summary.csv" if path.is_dir() else path))
-    frame = pd.concat(tables, ignore_index=True).drop_duplicates("job_id")
+    frame = pd.concat(tables, ignore_index=True)
+    # a job pending in one sweep may be done in another (the same id): its result wins
+    frame = frame.sort_values("status", key=lambda s: s.eq("pending"), kind="stable").drop_duplicates("job_id")
     done = frame[frame.status != "pending"]
     frame = frame[frame.status == "ok"].copy()
     # a member's point is its nominal target; a job run on its own, its fx to 0.1 (an ensemble's member lies within
