@@ -86,6 +86,7 @@ def main() -> None:
 
     laddered = frame.n_lad >= LADDERING_ONSET_CELLS
     thr = arrest_threshold(frame.fx_ini, frame.fx_fin, laddered, frame.arrested)
+    stopped = arrest_threshold(frame.fx_ini, frame.fx_fin, laddered, np.ones(len(frame), dtype=bool))
     lower, upper = onset_bracket(frame)
     print()
     print(f"f_x^thr as the paper defines it (mean f_x^fin of the {thr['runs']} runs that laddered, "
@@ -93,6 +94,9 @@ def main() -> None:
           f"(scatter; standard error {thr['fx_thr_se']:.2g})")
     print(f"slope of f_x^fin against f_x^ini over those runs (Fig. 3f: flat): {thr['slope']:.3g} +- "
           f"{thr['slope_se']:.2g} (standard error)")
+    print(f"f_x^fin at the stop of every run that laddered, arrested or not ({stopped['runs']} runs): "
+          f"{stopped['fx_thr']:.3g} +- {stopped['fx_thr_sd']:.2g}; its slope against f_x^ini {stopped['slope']:.3g} +- "
+          f"{stopped['slope_se']:.2g}")
     print(f"onset bracket (4.2-cell rule on the final count, every member): {lower:g} to {upper:g}")
     ever = frame.n_lad_ever >= LADDERING_ONSET_CELLS
     print(f"runs the latched count calls laddered but the final count does not: {int((ever & ~laddered).sum())} "
