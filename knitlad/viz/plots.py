@@ -530,7 +530,8 @@ def resistance_report(result, path: str | Path, picture: str | Path | None = Non
             "",
             f"snag at f_x^ini {row['snag_fx_ini']:.2f}:",
             f"  peak pull-out force {row['snag_peak_force_N']:.3f} N, {snag_line}",
-            f"threshold f_x^thr: {threshold}" + ("" if row["monotonic"] else " (not monotonic)"),
+            *([f"threshold f_x^thr: {threshold}" + ("" if row["monotonic"] else " (not monotonic)")]
+              if design["band"] == "none" else []),  # with a band the question is whether it holds
             *textwrap.wrap(f"rule: {result.rule()}", 44),
             *(f"  f_x^ini {c.fx_ini:.2f}: {v}" for c, v in zip(result.cuts, result.verdicts())),
             "one knit per tension: one run scatters",
