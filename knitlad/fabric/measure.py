@@ -54,12 +54,15 @@ def course_tensions(reactions_N: np.ndarray, left_end: np.ndarray, right_end: np
 
 
 def periodicities(course_positions: list[np.ndarray], column_x: np.ndarray, l_x_guess: float,
-                  margin: float = 0.25) -> tuple[float, float]:
+                  margin: float = 0.25, repeat: int = 1) -> tuple[float, float]:
     """(l_x, l_y) [same unit as the positions] measured on the central courses and columns.
 
     l_y: mean spacing of the courses' mean heights. l_x: slope of the head
     apex x (highest node within l_x/4 of each column's nominal centre) against
-    the column index, so an offset of the nominal centres does not bias it.
+    the column index, so an offset of the nominal centres does not bias it. In a pattern whose repeat is
+    ``repeat`` columns wide (rib: 2) only the columns of one stitch of the repeat are fitted: a purl head's apex
+    sits off its column's centre by another amount than a knit head's, which over an even number of columns tilts
+    the slope.
     """
     n = len(course_positions)
     lo, hi = int(margin * n), max(int((1 - margin) * n), int(margin * n) + 2)
@@ -68,10 +71,12 @@ def periodicities(course_positions: list[np.ndarray], column_x: np.ndarray, l_x_
     l_y = float(np.mean(np.diff(means)))
     n_cols = column_x.shape[0]
     c_lo, c_hi = int(margin * n_cols), max(int((1 - margin) * n_cols), int(margin * n_cols) + 2)
+    if repeat > 1 and len(range(c_lo, c_hi, repeat)) < 2:  # too few central columns of one stitch: all of them
+        c_lo, c_hi = 0, n_cols
     slopes = []
     for c in central:
         cols, xs = [], []
-        for i in range(c_lo, c_hi):
+        for i in range(c_lo, c_hi, repeat):
             near = np.flatnonzero(np.abs(c[:, 0] - column_x[i]) < 0.25 * l_x_guess)
             if near.size:
                 cols.append(i)

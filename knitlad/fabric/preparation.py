@@ -38,6 +38,7 @@ from knitlad.fabric.measure import (
     transverse_tension,
 )
 from knitlad.fabric.observers import Interpenetration, OverlapGuard
+from knitlad.fabric.patterns import knit_pattern
 from knitlad.fabric.scenes.knit import (
     BUILD_LX,
     CourseTooWide,
@@ -191,7 +192,8 @@ class KnitGauge:
         """(l_x, l_y)/l0 measured on the free courses at positions ``x`` in the box ``box_lx``
         (:func:`knitlad.fabric.measure.periodicities`)."""
         l0 = self.material.stitch_length / units.LENGTH
-        lx_m, ly_m = periodicities(self.rows(x)[:-1], self.column_centres(box_lx), box_lx * l0)
+        repeat = knit_pattern(self.knit.geometry.pattern).period[0]
+        lx_m, ly_m = periodicities(self.rows(x)[:-1], self.column_centres(box_lx), box_lx * l0, repeat=repeat)
         return lx_m / l0, ly_m / l0
 
     def overlap_over_ly(self, x: np.ndarray, box_lx: float, box_ly: float) -> np.ndarray:

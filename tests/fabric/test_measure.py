@@ -106,6 +106,20 @@ def test_periodicities_of_the_built_knit(knit):
     assert mlx == pytest.approx(lx, rel=1e-3) and mly == pytest.approx(ly, rel=1e-3)
 
 
+def test_a_ribs_width_is_fitted_over_columns_of_one_stitch():
+    """Heads at i l_x, those of odd columns (a rib's purl) 0.2 l_x off to the right: over the central columns 2 to
+    5 of eight, an even count, the slope of all of them is tilted by the offsets (1.04 l_x); over the columns of one
+    stitch of the repeat it is l_x."""
+    lx, n = 1.0, 8
+    column_x = np.arange(n) * lx
+    course = np.array([[i * lx + (0.2 * lx if i % 2 else 0.0), 1.0, 0.0] for i in range(n)])
+    rows = [course + [0, k, 0] for k in range(4)]
+    tilted, _ = periodicities(rows, column_x, lx)
+    ribbed, _ = periodicities(rows, column_x, lx, repeat=2)
+    assert tilted == pytest.approx(1.04 * lx, rel=1e-9)
+    assert ribbed == pytest.approx(lx, rel=1e-12)
+
+
 def test_cut_edge_splits_a_yarn_and_frees_its_ends(knit):
     s = knit.rods.model
     y = knit.courses[2]
