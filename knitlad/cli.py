@@ -283,6 +283,16 @@ def _knit_run(model, options: dict, stitches: str | None, default_fx: float | No
     return cfg, out_dir
 
 
+def _earlier_run(name: str, *files: str):
+    """The refusal (for :func:`_prologue`'s ``holds``) of a folder holding any of ``files`` of an earlier ``name``
+    run."""
+    def holds(folder: Path, _cfg) -> str | None:
+        earlier = [p for p in files if (folder / p).exists()]
+        return f"holds an earlier {name} run ({', '.join(earlier)}); choose another folder" if earlier else None
+
+    return holds
+
+
 @contextlib.contextmanager
 def _prologue(name: str, model, options: dict, stitches: str | None, default_fx: float | None, out: str | None,
               holds=None):
@@ -304,11 +314,7 @@ def _prologue(name: str, model, options: dict, stitches: str | None, default_fx:
             writable_folder(out_dir)
         except FolderError as e:
             fail(f"--out {e}")
-    if holds is None:
-        def holds(folder, _cfg):
-            return (f"holds an earlier {name} run ({name}.h5); choose another folder"
-                    if (folder / f"{name}.h5").exists() else None)
-    refusal = holds(out_dir, cfg)
+    refusal = (holds or _earlier_run(name, f"{name}.h5"))(out_dir, cfg)
     if refusal:
         fail(f"--out {out_dir}: {refusal}")
     lock = FolderLock(out_dir)  # a second run into this folder would mix its files with this one's
@@ -542,11 +548,7 @@ def tensile(
     extension in mm and %), tensile_results.csv (per cycle: peak force, initial modulus, hysteresis in mJ),
     tensile.png, tensile_tester.png and tensile.h5.
     """
-    def holds(folder: Path, _cfg) -> str | None:
-        earlier = [p for p in ("tensile.h5", "tensile.csv", "tensile_tester.csv", "tensile_results.csv")
-                   if (folder / p).exists()]
-        return f"holds an earlier tensile run ({', '.join(earlier)}); choose another folder" if earlier else None
-
+    holds = _earlier_run("tensile", "tensile.h5", "tensile.csv", "tensile_tester.csv", "tensile_results.csv")
     with _prologue("tensile", _config.TensileConfig, options, stitches, 0.68, out, holds) as (cfg, out_dir, progress):
         finished = _experiment_or_exit(lambda: _experiment("tensile", cfg, progress=progress), progress)
         progress.close(finished=True)
@@ -587,10 +589,7 @@ def snag(
     Without --fx or --lx, force control to f_x^ini = 4. Writes snag.csv and snag.png (the pull-out curve) and,
     after a break, the ladder as `cut` does (ladder.h5, ladder.xdmf, spatio_temporal.png).
     """
-    def holds(folder: Path, _cfg) -> str | None:
-        earlier = [p for p in ("snag.h5", "snag.csv") if (folder / p).exists()]
-        return f"holds an earlier snag run ({', '.join(earlier)}); choose another folder" if earlier else None
-
+    holds = _earlier_run("snag", "snag.h5", "snag.csv")
     with _prologue("snag", _config.SnagConfig, options, stitches, 4.0, out, holds) as (cfg, out_dir, progress):
         finished = _experiment_or_exit(lambda: _experiment("snag", cfg, progress=progress), progress)
         progress.close(finished=True)

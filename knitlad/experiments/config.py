@@ -187,9 +187,8 @@ def the_yarn_and_its_knit(data: dict, fields) -> dict:
         if given_ratio is None:
             raise ValueError("stitch_length_mm: a yarn needs its knit's stitch length (or d_over_l0)")
         data["stitch_length_mm"] = d_mm / given_ratio
-    else:  # wales or courses per cm of the paper's yarn
-        data["stitch_length_mm"] = NYLON_STITCH_LENGTH_MM if given_ratio is None else NYLON_DIAMETER_MM / given_ratio
-    l0_mm = float(data["stitch_length_mm"])
+    # wales or courses per cm of the paper's yarn alone: its stitch length, d_over_l0 setting its diameter
+    l0_mm = float(data.get("stitch_length_mm") or NYLON_STITCH_LENGTH_MM)
     if yarn is not None:
         for name, value in (("mu", yarn.friction), ("loss_factor", yarn.loss_factor)):
             if value is not None and data.get(name) is None and name in fields:
