@@ -202,7 +202,7 @@ def test_the_ledger_of_a_loaded_knit_closes_within_a_per_cent_of_the_work_done()
     assert abs(ledger.residual) < 0.01 * ledger.support_work
 
 
-@pytest.mark.parametrize("law", ["linear", "hertz"])
+@pytest.mark.parametrize("law", ["linear", pytest.param("hertz", marks=pytest.mark.slow)])
 def test_every_ladder_reports_its_ledger_closing_within_a_per_cent(law):
     """A 6 x 8 ladder (fast preset, material damping and air on): the energy the cut released went into
     friction, the dashpots, the material and the air, and the balance closes to 1 % of it, with either

@@ -51,6 +51,7 @@ def test_friction_08_runs_without_deep_overlap():
     assert 0.0 < res.peak_overlap_over_d < OVERLAP_BOUND
 
 
+@pytest.mark.slow
 def test_a_jammed_thick_yarn_knit_is_built_narrower_and_runs():
     """d/l0 = 1/20: no jersey centreline holds l0 per stitch at l_x = 0.30 l0, so the knit
     is built at the widest l_x (0.01 l0 steps) where it does, then run as any other."""
