@@ -24,9 +24,9 @@ def test_a_renamed_keyword_argument_warns_and_works_and_both_names_at_once_are_r
 
 
 def test_the_cells_functions_take_their_old_keyword_names_of_0_14():
-    """stitch_tensions, zero_tension_lx, build_width and unloaded_width (CHANGELOG 0.14.0)."""
+    """stitch_tensions and build_width (CHANGELOG 0.14.0; the zero-tension searches: the test below)."""
     from knitlad.fabric.preparation import build_width
-    from knitlad.fabric.stitch_model import stitch_tensions, zero_tension_lx
+    from knitlad.fabric.stitch_model import stitch_tensions
 
     with pytest.warns(DeprecationWarning, match="nodes_per_stitch"):
         old = stitch_tensions(0.38, 0.25, nodes_per_stitch=12, sagitta_radius=0.0)

@@ -377,7 +377,7 @@ def test_a_closing_edge_moved_by_a_new_period_finds_the_yarn_it_now_crosses():
     scene = kl.Scene(kl.NYLON)
     scene.add_yarn(np.column_stack([s, 0 * s, 0 * s]), closed=True, period=(10 * d, 0.0, 0.0))
     y = np.linspace(-3 * d, 3 * d, 7)
-    crossing = scene.add_yarn(np.column_stack([0 * y + 12 * d, y, 0 * y + 0.9 * d]))
+    scene.add_yarn(np.column_stack([0 * y + 12 * d, y, 0 * y + 0.9 * d]))  # a yarn crossing the ring's period
     sim = kl.Simulation(scene.build(), contact=kl.ContactModel(stiffness=1e3))
     sim.hold(np.arange(sim.model.n_nodes))  # the period alone moves the closing edge
     sim.step()

@@ -1,7 +1,6 @@
 """knitlad/studies/cluster.py: a batch cluster's file, refused in one line when it cannot work; a dry run starts
 nothing."""
 
-import subprocess
 import sys
 import time
 from pathlib import Path
