@@ -103,17 +103,22 @@ class TensileResult:
         starts = np.r_[False, (leg[1:] == LOADING) & (leg[:-1] == UNLOADING)]
         return 1 + np.cumsum(starts)
 
+    def _gauge(self) -> tuple[int, int, float, float]:
+        """(the readings' column of the box along the pull, the stitch spacings over the gauge, the gauge length and
+        the strip's width at the start [mm]): n_x stitches between the held ends along x, n_y + 1 course spacings
+        between the bars along y; the width across, n_y l_y (n_x l_x)."""
+        r, l0_mm = self.readings, self.material.stitch_length * 1e3
+        box, count, across, across_count = (2, self.n_x, 3, self.n_y) if self.along_x else (3, self.n_y + 1, 2, self.n_x)
+        return box, count, r[0, box] * count * l0_mm, r[0, across] * across_count * l0_mm
+
     def tester_readings(self) -> np.ndarray:
         """The readings in a tester's terms, (k, len(TESTER_COLUMNS)) but the leg's name: the extension of the
         gauge length (the held ends' distance at the start) [mm, %] and the pull F [N, N per 5 cm of the strip's
         width], F_x = f_x n_y f0 pulling along x (F_y = f_y n_x f0 along y), the transverse force beside it."""
         m, r = self.material, self.readings
-        l0_mm = m.stitch_length * 1e3
-        # the gauge: n_x stitches between the held ends along x, n_y + 1 course spacings between the bars along y
-        box, count, across, across_count = (2, self.n_x, 3, self.n_y) if self.along_x else (3, self.n_y + 1, 2, self.n_x)
-        gauge_mm = r[0, box] * count * l0_mm
-        width_cm = r[0, across] * across_count * l0_mm / 10.0
-        extension = (r[:, box] - r[0, box]) * count * l0_mm
+        box, count, gauge_mm, width_mm = self._gauge()
+        width_cm = width_mm / 10.0
+        extension = (r[:, box] - r[0, box]) * count * m.stitch_length * 1e3
         f, f_across = (r[:, 6] * self.n_y, r[:, 7] * self.n_x) if self.along_x else (r[:, 7] * self.n_x, r[:, 6] * self.n_y)
         force = f * m.f0
         return np.column_stack([self.cycle_of_readings(), r[:, 0], r[:, 1], extension, 100 * extension / gauge_mm,
@@ -125,9 +130,7 @@ class TensileResult:
         did over the cycle's closed path (what friction took), integral of F_x dx + F_y dy [mJ]."""
         t = self.tester_readings()
         r, m = self.readings, self.material
-        l0_mm = m.stitch_length * 1e3
-        gauge_mm = (r[0, 2] * self.n_x if self.along_x else r[0, 3] * (self.n_y + 1)) * l0_mm
-        width_mm = (r[0, 3] * self.n_y if self.along_x else r[0, 2] * self.n_x) * l0_mm
+        _, _, gauge_mm, width_mm = self._gauge()
         # the bars' work: F_x = f_x n_y f0 over dx = dl_x n_x l0, F_y = f_y n_x f0 over dy = dl_y (n_y + 1) l0
         fx_N, fy_N = r[:, 6] * self.n_y * m.f0, r[:, 7] * self.n_x * m.f0
         dx_m, dy_m = np.diff(r[:, 2]) * self.n_x * m.stitch_length, np.diff(r[:, 3]) * (self.n_y + 1) * m.stitch_length
