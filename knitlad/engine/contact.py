@@ -95,6 +95,13 @@ KNIT_CONTACT_FORCE_F0 = 20.0
 KNIT_OVERLAP = 0.05
 
 
+def dashpot_ratio(coefficient_N_s_per_m: float, stiffness_N_per_m: float, node_mass_kg: float) -> float:
+    """The fraction of critical (``ContactModel.damping_ratio``) that a normal dashpot of ``coefficient`` is on a
+    contact between two yarns of nodes of ``node_mass_kg``: c / (2 sqrt(k_n m_eff)), m_eff = m / 2 (each side's
+    interpolated mass is one node's on a uniform yarn), as the pair kernel's dashpot 2 zeta sqrt(k_n m_eff)."""
+    return coefficient_N_s_per_m / (2.0 * math.sqrt(stiffness_N_per_m * 0.5 * node_mass_kg))
+
+
 HELD_FRICTION_REMOVED = "the friction held over several steps was a study, measured a no-go: docs/performance.md"
 
 

@@ -19,7 +19,9 @@ Three dissipations besides friction, each off by default, each with its source
   friction coefficient :data:`SKIN_FRICTION`.
 * The global drag -gamma m v (``Simulation.set_drag``): the damping of the authors' engine (its jersey
   example: a drag of 0.1, then 0.01, per axial-wave time of a segment). A way to reproduce their
-  simulation, not physics: real air gives ~1e2 /s at the ladder's speeds.
+  simulation, not physics: real air gives ~1e2 /s at the ladder's speeds. Their engine also damps each
+  segment's spin at the same rate (``Simulation.set_spin_drag``); :func:`authors_drag_per_s` converts their
+  lambda.
 
 The ledger (:class:`EnergyLedger`, ``Simulation.ledger()``): the rods' energy now (elastic, stored in the
 contacts' springs and in the viscoelastic branches, kinetic, the potential of constant external forces),
@@ -39,6 +41,12 @@ from knitlad.engine.kernels.dissipation import LEDGER_NAMES, DampingParams, bran
 from knitlad.engine.kernels.elastic import edge_vectors
 from knitlad.engine.kernels.integrate import kinetic_energy, potential_energy
 
+# the authors' engine (J. Crassous, Frictional-Fibers, commit b2c502d) in its own units: a segment as long as the
+# yarn's radius (its jersey example: radius 1, l0 1, 120 segments per stitch at d/l0 = 1/60), a node's mass 1,
+# the stretching stiffness k0 = EA 1; so its time unit is the axial wave's time over a radius, r sqrt(rho_L/EA)
+AUTHORS_AXIAL_DASHPOT = 2.8  # lambda_internal of its jersey example (main.c), in sqrt(EA rho_L): 1.98 x critical
+AUTHORS_CONTACT_DASHPOT = 1.0  # lambda_contact_n of its jersey example (main.c), in sqrt(EA rho_L)
+AUTHORS_TWIST_INERTIA = 2.0  # its j = masse (jersey.c) is m r^2 per segment, twice a cylinder's m r^2 / 2
 NYLON_LOSS_FACTOR = 0.03  # the loss factor "on" means: the middle of dry Nylon's 0.01-0.05 (module docstring)
 STITCH_BENDING_HZ = 3.1e3  # c_b kappa0 / 2 pi of the paper's knit: 30.6 m/s x 645 /m / 2 pi
 # C_T of a smooth monofilament sliding along itself: a laminar boundary layer grown over about one stitch
@@ -107,8 +115,33 @@ class AirDrag:
             raise ValueError(f"skin_friction must be >= 0, got {self.skin_friction!r}")
 
 
+def authors_time_unit_s(material) -> float:
+    """The authors' engine's time unit for ``material`` [s]: r sqrt(rho_L / EA), r the yarn's radius (the
+    constants above)."""
+    return 0.5 * material.diameter * math.sqrt(material.line_density / material.stretching_stiffness)
+
+
+def authors_drag_per_s(drag_lambda: float, material) -> float:
+    """The global drag rate gamma [1/s] of the authors' drag ``lambda`` (their code units) on ``material``.
+
+    Their engine (``kernel_le_force_v9.6.cl``, ``kernel_Calculate_le``) puts f = -lambda (x_t - x_t-1)/dt on
+    every node, of mass 1 per segment of length r, so gamma = lambda / (r sqrt(rho_L/EA)) per unit time, and
+    the same lambda on the twist rate of a segment of inertia 2 x a cylinder's gives the spin the same rate.
+    The paper's Nylon (d = 0.14 mm): gamma = 1.94e7 lambda /s, so the README's range 1e-4 to 1e-3 is 1.9e3 to
+    1.9e4 /s. A per-length drag: at any resolution of ours the same lambda is the same gamma."""
+    if not (drag_lambda >= 0 and math.isfinite(drag_lambda)):
+        raise ValueError(f"drag_lambda must be >= 0, got {drag_lambda!r}")
+    return drag_lambda / authors_time_unit_s(material)
+
+
+def authors_contact_dashpot(material) -> float:
+    """The authors' normal contact dashpot c_n [N s/m]: lambda_contact_n sqrt(EA rho_L), absolute per contact
+    (``kernel_contact_v9.6.cl``: fn = kn delta + lambda_n (delta_t - delta_t-1)/dt), whatever the resolution."""
+    return AUTHORS_CONTACT_DASHPOT * math.sqrt(material.stretching_stiffness * material.line_density)
+
+
 def damping_params(drag_per_ms: float, material: MaterialDamping | None, air: AirDrag | None,
-                   supports_moving: bool) -> DampingParams:
+                   supports_moving: bool, spin_drag_per_ms: float = 0.0) -> DampingParams:
     """What the kernels take (internal units) from the SI settings."""
     ratio, tau = (material.branch_ratio, material.relaxation_time_s / units.TIME) if material else (0.0, 1.0)
     if air is None:
@@ -118,7 +151,7 @@ def damping_params(drag_per_ms: float, material: MaterialDamping | None, air: Ai
         nu = air.kinematic_viscosity_m2_s / (units.LENGTH**2 / units.TIME)
         skin = air.skin_friction
     return DampingParams(float(drag_per_ms), float(ratio), float(tau), float(rho), float(nu), float(skin),
-                         bool(supports_moving))
+                         bool(supports_moving), float(spin_drag_per_ms))
 
 
 @dataclass(frozen=True)
@@ -205,6 +238,13 @@ class DissipationControl:
             raise ValueError(f"drag must be >= 0 per second, got {per_s!r}")
         self.drag = per_s * units.TIME
 
+    def set_spin_drag(self, per_s: float) -> None:
+        """A global drag -gamma I omega on every free edge's spin about its axis from the next step on [1/s]
+        (0: none; with twist only): the authors' engine damps the twist rate as the nodes, at the same rate."""
+        if not (per_s >= 0 and math.isfinite(per_s)):
+            raise ValueError(f"spin drag must be >= 0 per second, got {per_s!r}")
+        self.spin_drag = per_s * units.TIME
+
     def set_air(self, air: AirDrag | None) -> None:
         """Air drag on every edge from the next step on (:class:`knitlad.engine.dissipation.AirDrag`; None: none)."""
         if air is not None and not isinstance(air, AirDrag):
@@ -219,7 +259,7 @@ class DissipationControl:
         if m.rail_node.size and not moving:  # a rail carried across itself (ramp_held's rails) is a moving support
             v = self.state.v[m.rail_node]
             moving = bool(np.any(v - np.sum(v * m.rail_axis, axis=1)[:, None] * m.rail_axis))
-        return damping_params(self.drag, self.material_damping, self.air, moving)
+        return damping_params(self.drag, self.material_damping, self.air, moving, self.spin_drag)
 
     def relax_branches(self) -> None:
         """Put the viscoelastic branches at rest at the current shape: as after a long rest, which is how a

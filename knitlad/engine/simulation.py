@@ -417,6 +417,8 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
     material_damping: the yarn's viscoelasticity (:class:`knitlad.engine.dissipation.MaterialDamping`), or None.
         Its branch stiffens the rods at high frequency, which the step counts: set here, not later.
     air: air drag (:class:`knitlad.engine.dissipation.AirDrag`), or None; :meth:`set_air` changes it.
+    spin_drag_per_s: a drag on every edge's spin about its axis, -gamma I omega [1/s] (with twist; the authors'
+        engine's, :func:`knitlad.engine.dissipation.authors_drag_per_s`); :meth:`set_spin_drag` changes it.
     guard_every: steps between blow-up checks.
     contact: yarn-yarn contact (:class:`knitlad.engine.contact.ContactModel`), or None.
     framed_twist: with twist, bend and twist through material frames even without natural curvature.
@@ -429,7 +431,8 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
     def __init__(self, rods: Rods, dt_s: float | None = None, safety: float = DEFAULT_SAFETY, drag_per_s: float = 0.0,
                  guard_every: int = 500, contact: ContactModel | None = None, framed_twist: bool = False,
                  implicit_axial: bool = False, predicted_dashpots: bool = False, obstacles: Sequence[Obstacle] = (),
-                 material_damping: MaterialDamping | None = None, air: AirDrag | None = None) -> None:
+                 material_damping: MaterialDamping | None = None, air: AirDrag | None = None,
+                 spin_drag_per_s: float = 0.0) -> None:
         """Build the model's stepping for ``rods`` (the parameters: the class docstring): the stability limits and
         the step, the contact buffers and the obstacles' state, the forces of the initial state, the energy
         ledger's start. Nothing is stepped. Refuses a step above the stability limit (UnstableTimeStep), a
@@ -461,6 +464,7 @@ class Simulation(SupportControl, ContactReadout, ObstacleReadout, QuasiStatics, 
             material_damping.branch_ratio if material_damping else 0.0)
         self.dt = self.limits.time_step(dt_s, safety)
         self.set_drag(drag_per_s)
+        self.set_spin_drag(spin_drag_per_s)
         self.set_air(air)
         if not (isinstance(guard_every, (int, np.integer)) and guard_every >= 1):
             raise ValueError(f"guard_every must be a whole number of steps >= 1, got {guard_every!r}")

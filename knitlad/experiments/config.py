@@ -21,7 +21,7 @@ from knitlad.fabric.patterns import PATTERNS
 from knitlad.fabric.presets import LADDER_PRESETS, LOOP_PRESETS, PRESET_HELP, STITCH_PRESETS
 from knitlad.experiments.yarn import Yarn
 
-Preset = Literal["fast", "default", "accurate"]
+Preset = Literal[tuple(LADDER_PRESETS)]  # fast, default, accurate, and the authors' engine (crassous2023)
 
 # a field given in a unit of its own and the SI unit its settings take it in: one stem, the unit's suffix
 # (max_time_ms -> max_time_s, pin_radius_mm -> pin_radius_m); every other setting has one name throughout
@@ -34,6 +34,10 @@ def in_si(name: str, value):
         if name.endswith(suffix):
             return name[: -len(suffix)] + si, None if value is None else value * factor
     return name, value
+
+
+# a preset's setting not filled where the run gives another way to set the same (a drag per second, not lambda)
+PRESET_ALTERNATIVES = {"drag_lambda": ("drag_per_s",)}
 
 
 class _WithPreset(BaseModel):
@@ -80,7 +84,9 @@ class _WithPreset(BaseModel):
         """Fill each setting of the preset not given, so a resolved config names what it ran with."""
         if isinstance(data, dict) and data.get("preset", "default") in cls.PRESETS:
             chosen = cls.PRESETS[data.get("preset", "default")]
-            data = {**data, **{k: v for k, v in chosen.items() if data.get(k) is None}}
+            given = {k for k, v in data.items() if v is not None}
+            data = {**data, **{k: v for k, v in chosen.items()
+                               if data.get(k) is None and not given & set(PRESET_ALTERNATIVES.get(k, ()))}}
         return data
 
     @model_validator(mode="before")
@@ -268,7 +274,7 @@ class CutConfig(_WithPreset, _YarnAndKnit):
         "twist_inertia_factor", "framed_twist", "implicit_axial", "predicted_dashpots", "memory_peak_ratio",
         "stop_at_edge", "loss_factor", "loss_peak_hz", "air_drag", "stop_after_stitches", "contact_law",
         "band_row", "band_courses", "band_friction_factor", "pattern", "band", "band_curvature", "bars",
-        "clip_friction", "knit_seed", *KNIT_SOURCES)
+        "clip_friction", "knit_seed", "drag_lambda", "spin_drag", "contact_dashpot", *KNIT_SOURCES)
     # fields added here after the experiments built on this config (cycle, tensile, snag, resistance) had run
     # sweeps: at their default they stay out of those scenes' job ids too (their ADDED_LATER lists their own)
     ADDED_LATER_FOR_ALL: ClassVar[tuple[str, ...]] = ("band_curvature", "bars", "clip_friction", "knit_seed",
@@ -276,6 +282,7 @@ class CutConfig(_WithPreset, _YarnAndKnit):
     COMPOSED: ClassVar[dict[str, str]] = {
         "preset": "the resolution and the settings beside it (PRESETS)",
         "d_over_l0": "material (material_of)",
+        "drag_lambda": "drag_per_s (knitlad.engine.dissipation.authors_drag_per_s)",
         **{name: "material (material_of), d_over_l0, mu, loss_factor, lx, ly" for name in KNIT_SOURCES},
         **{band: "pattern_band, memory_band or friction_band" for band in (
             "band", "band_row", "band_courses", "band_friction_factor", "band_curvature")},
@@ -300,6 +307,13 @@ class CutConfig(_WithPreset, _YarnAndKnit):
     drag_per_s: float = Field(0.0, ge=0, le=1e5, json_schema_extra={"cli": "--drag"}, description=(
         "global drag -gamma m v on every node during the laddering [1/s]: the damping of the paper's engine, "
         "not physics (0: none; docs/dissipation.md)"))
+    drag_lambda: float | None = Field(None, ge=0, le=1, description=(
+        "the global drag in the authors' engine's units (its f = -lambda dx/dt on nodes of mass 1 a yarn's radius "
+        "apart): gamma = lambda / (r sqrt(rho_L/EA)), 1.94e7 lambda /s for the paper's Nylon; their README's "
+        "range 1e-4 to 1e-3; instead of drag; default: the preset's (docs/paper_claims.md) [-]"))
+    spin_drag: bool = Field(False, description=(
+        "the global drag also damps each yarn's spin about its axis at the same rate, -gamma I omega (the "
+        "authors' engine damps the twist rate with the same lambda); needs twist [-]"))
     loss_factor: float = Field(0.0, ge=0, le=1, description=(
         "the yarn's material damping: peak loss factor of its viscoelasticity, a standard linear solid in "
         "stretching and bending [-]; Nylon: 0.03 (0.01 dry to 0.1 humid); 0: none (docs/dissipation.md)"))
@@ -358,6 +372,10 @@ class CutConfig(_WithPreset, _YarnAndKnit):
         "rms, drawn from this seed (a sweep's ensemble gives each member its own); none: the knit as stretched [-]"))
     contact_damping_ratio: float = Field(0.3, ge=0, description=(
         "normal and tangential contact dashpots of the laddering dynamics, fraction of critical [-]"))
+    contact_dashpot: Literal["critical", "absolute"] = Field("critical", description=(
+        "the contact dashpots of the laddering: critical (contact_damping_ratio of critical, normal and "
+        "tangential) or absolute (the authors' engine: a normal dashpot sqrt(EA rho_L) per contact whatever the "
+        "resolution, none along the surface; contact_damping_ratio not used) [-]"))
     stretch_damping_ratio: float = Field(0.2, ge=0, description=(
         "the yarn's axial dashpot during the laddering, fraction of critical [-]"))
     stretch_increment: float = Field(0.005, gt=0, le=0.05, description="affine stretch per relaxation round [l/l0]")
@@ -447,6 +465,7 @@ class CutConfig(_WithPreset, _YarnAndKnit):
         if self.fx is None and self.lx is None:
             raise ValueError("give fx (force control) or lx (position control)")
         check_stretch(self)
+        check_drag(self)
         check_sagitta(self.resolution, self.d_over_l0, self.sagitta_radius)
         check_band(self)
         check_clips(self)
@@ -488,8 +507,11 @@ class CutConfig(_WithPreset, _YarnAndKnit):
         from knitlad.engine.contact import Counting
         from knitlad.experiments.laddering import DynamicsSettings
 
+        from knitlad.engine.dissipation import authors_drag_per_s
+
+        drag = self.drag_per_s if self.drag_lambda is None else authors_drag_per_s(self.drag_lambda, self.material())
         return self.settings_of(
-            DynamicsSettings, contact_counting=Counting(self.contact_counting),
+            DynamicsSettings, contact_counting=Counting(self.contact_counting), drag_per_s=drag,
             friction_band=(self.band_row, self.band_courses, self.band_friction_factor)
             if self.band_row is not None and self.band == "friction" else None)
 
@@ -802,6 +824,14 @@ def check_stretch(cfg: CutConfig) -> None:
                          "affinely (stretch_start affine)")
     if cfg.memory_peak_ratio is not None and cfg.natural_curvature == 0 and cfg.memory_band is None:
         raise ValueError("memory_peak_ratio: shapes the memory of natural_curvature > 0; the yarn has none")
+
+
+def check_drag(cfg: CutConfig) -> None:
+    """One drag, given one way; a drag on the spin needs a spin."""
+    if cfg.drag_lambda is not None and cfg.drag_per_s > 0:
+        raise ValueError(f"drag_lambda: {cfg.drag_lambda:g} and a drag of {cfg.drag_per_s:g} /s both given; give one")
+    if cfg.spin_drag and not cfg.twist:
+        raise ValueError("spin_drag: the yarns carry no twist to damp (twist: true)")
 
 
 def check_observations(cfg: CutConfig) -> None:

@@ -35,8 +35,8 @@ from typing import Callable, Sequence
 import numpy as np
 
 from knitlad.engine import units
-from knitlad.engine.contact import ContactModel, Counting, contact_time_step
-from knitlad.engine.dissipation import AirDrag, EnergyLedger, MaterialDamping
+from knitlad.engine.contact import ContactModel, Counting, contact_time_step, dashpot_ratio
+from knitlad.engine.dissipation import AirDrag, EnergyLedger, MaterialDamping, authors_contact_dashpot
 from knitlad.engine.runloop import Observer, StopRule, run_until
 from knitlad.engine.simulation import Simulation
 from knitlad.engine.state import Rods, cut_edge, with_axial_stiffness, with_twist
@@ -89,6 +89,8 @@ class DynamicsSettings:
     stretch_damping_ratio: float  # the yarn's axial dashpot, fraction of critical
     dt_safety: float  # time step as a fraction of the stability limit
     drag_per_s: float  # global drag on every node [1/s]; 0 is the physics
+    spin_drag: bool  # the global drag also damps each edge's spin, at the same rate (the authors' engine)
+    contact_dashpot: str  # "critical": contact_damping_ratio on both; "absolute": the authors' c_n, no tangential
     twist: bool  # the yarns carry twist: friction also turns them (the friction couple)
     axial_stiffness_factor: float  # EA of the dynamics over the yarn's, every edge keeping its tension at the cut
     twist_inertia_factor: float  # the yarn's inertia about its axis in the dynamics over rho_L d^2/8 per length
@@ -218,13 +220,21 @@ def dynamics_rods(rods: Rods, dynamics: DynamicsSettings, material: Material) ->
 def dynamics_simulation(rods: Rods, knit: StretchedKnit, dynamics: DynamicsSettings, obstacles=()) -> Simulation:
     """A simulation of ``rods`` (:func:`dynamics_rods`) under the dynamics' contact, friction and step, with
     ``obstacles`` (a snag's pin) if any."""
-    contact = stretch_contact(knit.settings, mu=dynamics.mu, damping_ratio=dynamics.contact_damping_ratio,
-                              tangential_damping_ratio=dynamics.contact_damping_ratio,
+    zeta_n = zeta_t = dynamics.contact_damping_ratio
+    if dynamics.contact_dashpot == "absolute":
+        # the authors' normal dashpot is a coefficient, not a ratio: the ratio it is on these nodes, and no
+        # tangential dashpot (their lambda_contact_t = 0)
+        node_kg = float(np.median(rods.model.mass[~rods.model.held])) * units.MASS
+        zeta_n = dashpot_ratio(authors_contact_dashpot(knit.settings.material),
+                               stretch_contact(knit.settings).stiffness, node_kg)
+        zeta_t = 0.0
+    contact = stretch_contact(knit.settings, mu=dynamics.mu, damping_ratio=zeta_n, tangential_damping_ratio=zeta_t,
                               counting=dynamics.contact_counting, yarn_friction=band_yarns(knit, dynamics))
     # a cut frees two end nodes: keep the smaller of the stretch's step (of a yarn as soft) and the new stable step
     stretch_step = math.inf if dynamics.implicit_axial else knit.dt_s / math.sqrt(dynamics.axial_stiffness_factor)
     sim = Simulation(rods, contact=contact, dt_s=min(stretch_step, laddering_time_step(rods, contact, dynamics)),
                      drag_per_s=dynamics.drag_per_s, framed_twist=dynamics.framed_twist,
+                     spin_drag_per_s=dynamics.drag_per_s if dynamics.spin_drag else 0.0,
                      implicit_axial=dynamics.implicit_axial, predicted_dashpots=dynamics.predicted_dashpots,
                      material_damping=dynamics.material_damping, air=dynamics.air, obstacles=obstacles)
     check_feasible(sim.dt_s, dynamics)

@@ -228,3 +228,43 @@ def test_a_run_stop_band_gives_its_courses_contacts_the_bands_friction_and_the_r
     assert c.pair_law[c.edge_class[band][0], c.edge_class[~band][0], FRICTION_FACTOR] == 2.5
     with pytest.raises(ValueError, match="band_row"):
         config(n_x=6, n_y=8, fx=4.0, band_row=3, band_courses=2)  # holds the cut course 4
+
+
+def test_each_choice_of_the_authors_preset_reaches_the_kernels():
+    """The preset crassous2023 (knitlad.fabric.presets, each choice cited to the authors' engine) reaches the
+    simulation that runs the ladder: 140 nodes per stitch and capsules of the yarn's radius in the knit, twist with
+    twice a cylinder's spin inertia, the drag of lambda on the nodes and at the same rate on the spin, every touching
+    pair counted, a normal contact dashpot of sqrt(EA rho_L) and none along the surface, the axial dashpot at
+    2.8 sqrt(EA rho_L). Run here at 16 nodes per stitch for its cost: every other choice is the preset's."""
+    from knitlad.engine.dissipation import authors_drag_per_s
+
+    full = CutConfig(fx=4.0, n_x=4, n_y=4, preset="crassous2023")
+    assert full.stretch_settings().resolution == 140 and full.stretch_settings().sagitta_radius == 0.0
+    cfg = full.replace(resolution=16)
+    run = cut(stretch(cfg.stretch_settings()), cfg.dynamics_settings())
+    sim, m, mat = run.sim, run.sim.model, cfg.material()
+    gamma = authors_drag_per_s(cfg.drag_lambda, mat)
+    assert sim.twist and sim.drag == pytest.approx(gamma * units.TIME) and sim.spin_drag == sim.drag > 0
+    assert sim.damping.spin_drag == sim.spin_drag  # what the kernels take
+    rho, EA, d = mat.line_density, mat.stretching_stiffness, mat.diameter
+    inside = ~m.held[m.edge_a] & ~m.held[m.edge_b]
+    length = m.rest_length[inside] * units.LENGTH
+    spin = m.twist_inertia[inside] * units.MASS * units.LENGTH**2
+    assert spin == pytest.approx(2.0 * rho * length * d**2 / 8, rel=1e-9)
+    axial = m.stretch_damping[inside] * units.FORCE * units.TIME / units.LENGTH
+    assert np.median(axial) == pytest.approx(2.8 * np.sqrt(EA * rho), rel=0.02)
+    c = sim.contacts
+    assert not c.union and c.params.damping_t == 0.0
+    node = np.median(m.mass[~m.held]) * units.MASS
+    c_n = 2 * c.params.damping_n * np.sqrt(sim.contact_model.stiffness * node / 2)
+    assert c_n == pytest.approx(np.sqrt(EA * rho), rel=1e-9)
+    assert np.allclose(c.edge_radius * units.LENGTH, d / 2)
+
+
+def test_a_drag_per_second_given_with_the_authors_preset_replaces_its_lambda():
+    cfg = CutConfig(fx=4.0, preset="crassous2023", drag_per_s=5e3)
+    assert cfg.drag_lambda is None and cfg.dynamics_settings().drag_per_s == 5e3
+    with pytest.raises(ValueError, match="drag_lambda"):
+        CutConfig(fx=4.0, drag_lambda=1e-4, drag_per_s=10.0)
+    with pytest.raises(ValueError, match="spin_drag"):
+        CutConfig(fx=4.0, spin_drag=True)

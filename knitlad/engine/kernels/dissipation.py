@@ -68,12 +68,13 @@ class DampingParams(NamedTuple):
     air_viscosity: float  # kinematic [mm^2/ms]
     skin_friction: float  # tangential drag coefficient C_T [-]
     supports_moving: bool  # some held node has a prescribed velocity: count the work the supports do
+    spin_drag: float  # [1/ms]: -spin_drag I omega on every free edge's spin about its axis (twist only)
 
 
 @njit(**NUMBA_OPTS)
 def no_damping():
     """Statics: no drag, no branch, no air (what a relaxation's force evaluations use)."""
-    return DampingParams(0.0, 0.0, 1.0, 0.0, 1.0, 0.0, False)
+    return DampingParams(0.0, 0.0, 1.0, 0.0, 1.0, 0.0, False, 0.0)
 
 
 @njit(**NUMBA_OPTS)
@@ -251,6 +252,21 @@ def drag_dissipation(held, mass, v, drag):
     for i in prange(v.shape[0]):
         if not held[i]:
             total += drag * mass[i] * (v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] + v[i, 2] * v[i, 2])
+    return total
+
+
+@njit(**NUMBA_OPTS)
+def spin_drag_torques(theta_held, twist_inertia, omega, spin_drag, torque):
+    """torque -= spin_drag I omega on every free edge; returns the power it takes out [uJ/ms].
+
+    The global drag on the spin, as the authors' engine applies it (its ``kernel_Calculate_le``: a moment
+    -lambda (theta_t - theta_t-1)/dt with the lambda of the nodes' drag, so at the same rate)."""
+    total = 0.0
+    for j in range(omega.shape[0]):
+        if not theta_held[j]:
+            c = spin_drag * twist_inertia[j]
+            torque[j] -= c * omega[j]
+            total += c * omega[j] * omega[j]
     return total
 
 

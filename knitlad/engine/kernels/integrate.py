@@ -37,6 +37,7 @@ from knitlad.engine.kernels.dissipation import (
     drag_dissipation,
     no_damping,
     rail_power,
+    spin_drag_torques,
     support_power,
     viscoelastic_forces,
 )
@@ -194,6 +195,10 @@ def compute_forces(m, s, w, c, twist, contact, damping, dt, axial, dashpots, obs
     if damping.drag > 0.0:
         w.ledger[0, GLOBAL_DRAG] += dt * drag_dissipation(m.held, m.mass, v_damp, damping.drag)
     w.torque[:] = 0.0
+    if twist and damping.spin_drag > 0.0:
+        w.ledger[0, GLOBAL_DRAG] += dt * spin_drag_torques(m.theta_held, m.twist_inertia,
+                                                           w.omega_damp if predicted else s.omega,
+                                                           damping.spin_drag, w.torque)
     explicit = axial == AXIAL_EXPLICIT
     if twist == TWIST_FRAMED:
         framed_forces_by_yarn(m, s, w, explicit, v_damp, dt)
