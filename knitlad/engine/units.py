@@ -28,6 +28,7 @@ tension per thread f_x = F_x / (n_y f0), lengths as l/l0, velocities as v/c_b.
 from __future__ import annotations
 
 import math
+import re
 import warnings
 from dataclasses import dataclass, field, replace
 
@@ -214,3 +215,47 @@ class Scales:
             "internal_mass_kg": MASS,
             "internal_time_s": TIME,
         }
+
+
+# a result in the paper's units, read from its name: a tension per thread (f0), a velocity over c_b, a length over l0
+_TENSION = re.compile(r"(^|_)f([xy])(_|$)")
+
+
+def si_twin(key: str) -> tuple[str, str] | None:
+    """The name and SI unit of the twin of the result ``key`` in the paper's units, or None: a tension per thread
+    ``..fx..`` -> ``..force..`` + ``_N`` (``fy`` -> ``force_y``), ``.._over_cb`` -> ``.._m_s``, ``.._over_l0`` ->
+    ``.._mm``."""
+    if key.endswith("_over_cb"):
+        return key[: -len("_over_cb")] + "_m_s", "m/s"
+    if key.endswith("_over_l0"):
+        return key[: -len("_over_l0")] + "_mm", "mm"
+    if _TENSION.search(key) and not key.endswith(("_runs", "_N")):
+        return _TENSION.sub(lambda m: f"{m[1]}force{'_y' if m[2] == 'y' else ''}{m[3]}", key, count=1) + "_N", "N"
+    return None
+
+
+def si_twin_meanings(results: dict[str, tuple[str, str]], threads: str) -> dict[str, tuple[str, str]]:
+    """The (unit, meaning) of the SI twin of each result in ``results`` (key -> (unit, meaning)) that has one;
+    ``threads``: what a tension per thread is multiplied by, in words ("n_y")."""
+    out = {}
+    for key, (unit, _meaning) in results.items():
+        twin = si_twin(key)
+        if twin is None or unit not in ("f0", "c_b", "l0"):
+            continue
+        name, si = twin
+        how = {"f0": f"{key} x {threads} f0: the pull", "c_b": f"{key} x c_b", "l0": f"{key} x l0"}[unit]
+        out[name] = (si, f"{how}, in {si}")
+    return out
+
+
+def si_twins(results: dict, material: Material, threads: int, units_of: dict[str, tuple[str, str]]) -> dict:
+    """The SI twins (:func:`si_twin`) of the results in the paper's units, for ``material`` on ``threads``
+    threads; ``units_of``: each result's (unit, meaning), which says which results are in f0, c_b or l0."""
+    factor = {"f0": threads * material.f0, "c_b": material.c_b, "l0": material.stitch_length * 1e3}
+    out = {}
+    for key, value in results.items():
+        unit = units_of.get(key, ("-",))[0]
+        twin = si_twin(key)
+        if twin is not None and unit in factor and isinstance(value, (int, float)) and not isinstance(value, bool):
+            out[twin[0]] = value * factor[unit]
+    return out

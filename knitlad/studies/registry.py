@@ -23,6 +23,8 @@ from typing import Any, Callable
 
 from pydantic import BaseModel
 
+from knitlad.engine.units import si_twin_meanings, si_twins
+
 from knitlad.experiments.config import (
     CutConfig,
     CycleConfig,
@@ -135,6 +137,7 @@ def run_cycle_job(cfg: CycleConfig, output, folder: Path | None = None, progress
     cycle, ladder = run_protocol_b(cfg.settings(), cfg.cycle_settings(), progress=progress,
                                    knit=knit, **checkpoints)
     summary = {**cycle.summary(), **({f"cut_{k}": v for k, v in ladder.summary().items()} if ladder else {})}
+    summary = with_si(summary, cfg.material(), cfg.n_y, CYCLE_RESULTS)
     if ladder is not None and not output.frames:
         ladder.frames, ladder.frame_times_s = [], []
 
@@ -216,7 +219,7 @@ def run_snag_job(cfg: SnagConfig, output, folder: Path | None = None, progress=N
                  snag_curve_plot(result.pull_m, result.force_N, path.with_suffix(".png"), result.broke))
         return curve + (() if result.ladder is None else _ladder_companions(result.ladder, path))
 
-    return Finished(result, result.summary(), write, beside)
+    return Finished(result, with_si(result.summary(), knit.settings.material, cfg.n_y, SNAG_RESULTS), write, beside)
 
 
 def run_resistance_job(cfg: ResistanceConfig, output, folder: Path | None = None, progress=None) -> Finished:
@@ -249,7 +252,7 @@ def run_resistance_job(cfg: ResistanceConfig, output, folder: Path | None = None
             "fx_target", "fx_ini", "n_lad_over_ny", "released_over_ny", "v_lad_over_cb", "fx_fin_crossed",
             "reached_edge")), path.with_name(f"{path.stem}_report.png"))
 
-    return Finished(result, result.summary(), write, beside)
+    return Finished(result, with_si(result.summary(), cfg.material(), cfg.n_y, RESISTANCE_RESULTS), write, beside)
 
 
 def draw_resistance_report(result, h5: Path, png: Path) -> Path:
@@ -269,11 +272,25 @@ def draw_resistance_report(result, h5: Path, png: Path) -> Path:
         return resistance_report(result, png, picture)
 
 
-def _attributes_only(result) -> Finished:
-    """A reduced model's result, and a writer of a file of attributes (summary, settings, scales)."""
+def with_si(summary: dict, material, threads: int, results: dict[str, tuple[str, str]]) -> dict:
+    """``summary`` and, beside each result in the paper's units, its SI twin (:func:`knitlad.engine.units.si_twin`)
+    for ``material`` on ``threads`` threads."""
+    return {**summary, **si_twins(summary, material, threads, results)}
+
+
+def si_columns(keys: tuple[str, ...], results: dict[str, tuple[str, str]], threads: str):
+    """(summary keys, results) with the SI twins of the results in the paper's units, before the wall times."""
+    twins = si_twin_meanings(results, threads)
+    cut = next((k for k, key in enumerate(keys) if key in ("wall_s", "job_wall_s")), len(keys))
+    return keys[:cut] + tuple(twins) + keys[cut:], {**results, **twins}
+
+
+def _attributes_only(result, results: dict[str, tuple[str, str]] | None = None) -> Finished:
+    """A reduced model's result, and a writer of a file of attributes (summary with its SI twins for one thread,
+    settings, scales)."""
     from knitlad.io.hdf5 import scale_attributes, write_record
 
-    summary = result.summary()
+    summary = with_si(result.summary(), result.settings.material, 1, results or {})
     settings = {k: v for k, v in dataclasses.asdict(result.settings).items() if k != "material"}
     scales = scale_attributes(result.settings.material)
 
@@ -287,14 +304,14 @@ def run_loop_job(cfg: LoopConfig, output, folder: Path | None = None, progress=N
     """The single loop (`knitlad loop`): a file of attributes."""
     from knitlad.experiments.periodic_loop import run_single_loop
 
-    return _attributes_only(run_single_loop(cfg.settings()))
+    return _attributes_only(run_single_loop(cfg.settings()), LOOP_RESULTS)
 
 
 def run_stitch_job(cfg: StitchConfig, output, folder: Path | None = None, progress=None) -> Finished:
     """The periodised stitch (`knitlad stitch`): a file of attributes."""
     from knitlad.fabric.stitch_model import StitchRun
 
-    return _attributes_only(StitchRun(cfg.settings()).run())
+    return _attributes_only(StitchRun(cfg.settings()).run(), STITCH_RESULTS)
 
 
 def run_diagram_job(cfg: DiagramConfig, output, folder: Path | None = None, progress=None) -> Finished:
@@ -515,6 +532,31 @@ RESISTANCE_RESULTS = {
     "fx_fin_crossed_highest": ("f0", "f_x^fin of the courses the ladder crossed, at the highest tension"),
 }
 
+_CYCLE_KEYS, CYCLE_RESULTS_SI = si_columns((
+        "fx_ini", "lx_over_l0", "ly_over_l0", "lx_max", "fx_thr", "delta_l_over_l0", "predicted_damage",
+        "fx_thr_own", "delta_l_own_over_l0", "predicted_damage_own", "cut_n_lad_over_ny", "cut_fx_fin", "cut_fx_fin_crossed", "cut_reached_edge", "cut_n_lad_ever",
+        "cut_loop_sequence", "cut_up_from_4_5_ms", "cut_hindered", "cut_n_lad_cut_row", "cut_n_lad_immediate",
+        "cut_n_lad_released", "cut_n_lad_released_over_ny", "cut_n_lad_released_taut",
+        "cut_n_lad_released_taut_over_ny", "hold_converged", "nan_reasons", "cut_nan_reasons",
+        "wall_s",
+        "job_wall_s"), CYCLE_RESULTS, "n_y")
+_SNAG_KEYS, SNAG_RESULTS_SI = si_columns((
+        "snag_row", "snag_column", "broke", "peak_force_N", "pull_at_break_mm", "break_tension_N", "break_row",
+        "break_column", "pin_work_J", "friction_before_break_J", "ladder_released_J", "fx_ini", "n_lad_over_ny",
+        "v_lad_over_cb", "v_down_over_cb", "fx_fin", "reached_edge", "wall_s", "job_wall_s"), SNAG_RESULTS, "n_y")
+_RESISTANCE_KEYS, RESISTANCE_RESULTS_SI = si_columns((
+        "design_pattern", "design_band", "design_d_over_l0", "design_mu", "verdicts", "holds_up_to",
+        "snag_peak_force_N", "snag_broke",
+        "snag_pull_at_break_mm", "snag_n_lad_over_ny", "snag_v_down_over_cb", "fx_thr_below", "fx_thr_above", "fx_thr_arrest",
+        "fx_thr_arrest_sd", "fx_thr_arrest_runs", "monotonic",
+        "n_lad_over_ny_lowest", "n_lad_over_ny_highest", "v_lad_over_cb_highest", "fx_fin_crossed_highest",
+        "wall_s", "job_wall_s"), RESISTANCE_RESULTS, "n_y")
+_LOOP_KEYS, LOOP_RESULTS_SI = si_columns((
+        "tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before", "steps",
+        "nodes", "lx_over_l0", "lx_end_over_l0", "climb_over_ly", "wall_s", "job_wall_s"), LOOP_RESULTS, "one thread's")
+_STITCH_KEYS, STITCH_RESULTS_SI = si_columns((
+        "fx", "fy", "converged", "max_overlap_over_d", "relax_steps", "wall_s", "job_wall_s"), STITCH_RESULTS, "one thread's")
+
 
 EXPERIMENTS: dict[str, Experiment] = {
     "ladder": Experiment(CutConfig, run_ladder_job, (
@@ -529,41 +571,22 @@ EXPERIMENTS: dict[str, Experiment] = {
         "dissipated_contact_dashpot_J", "dissipated_axial_dashpot_J", "dissipated_material_J", "dissipated_air_J",
         "dissipated_global_drag_J", "dissipated_fracture_J", "owner_changes_J", "ledger_residual", "nan_reasons", "nodes", "steps", "relax_steps", "stretch_reused", "wall_s",
         "wall_stretch_s", "wall_propagate_s", "job_wall_s"), "`knitlad cut`: the laddering experiment", stretch_of, LADDER_RESULTS),
-    "cycle": Experiment(CycleConfig, run_cycle_job, (
-        "fx_ini", "lx_over_l0", "ly_over_l0", "lx_max", "fx_thr", "delta_l_over_l0", "predicted_damage",
-        "fx_thr_own", "delta_l_own_over_l0", "predicted_damage_own", "cut_n_lad_over_ny", "cut_fx_fin", "cut_fx_fin_crossed", "cut_reached_edge", "cut_n_lad_ever",
-        "cut_loop_sequence", "cut_up_from_4_5_ms", "cut_hindered", "cut_n_lad_cut_row", "cut_n_lad_immediate",
-        "cut_n_lad_released", "cut_n_lad_released_over_ny", "cut_n_lad_released_taut",
-        "cut_n_lad_released_taut_over_ny", "hold_converged", "nan_reasons", "cut_nan_reasons",
-        "wall_s",
-        "job_wall_s"), "`knitlad cycle`: protocol B, the damage prediction's loading", stretch_of, CYCLE_RESULTS),
+    "cycle": Experiment(CycleConfig, run_cycle_job, _CYCLE_KEYS, "`knitlad cycle`: protocol B, the damage prediction's loading", stretch_of, CYCLE_RESULTS_SI),
     "tensile": Experiment(TensileConfig, run_tensile_job, (
         "fx_start", "fy_start", "fx_top", "fy_top", "lx_top_over_l0", "ly_top_over_l0", "fx_end", "fy_end", "coupling",
         "dissipated_per_stitch", "hold_converged", "gauge_length_mm", "width_mm", "peak_force_N", "peak_force_N_per_5cm",
         "extension_at_peak_mm", "extension_at_peak_pct", "initial_modulus_N_per_5cm", "hysteresis_energy_mJ", "cycles",
         "wall_s", "job_wall_s"),
         "`knitlad tensile`: the fabric's tensile test", stretch_of, TENSILE_RESULTS),
-    "snag": Experiment(SnagConfig, run_snag_job, (
-        "snag_row", "snag_column", "broke", "peak_force_N", "pull_at_break_mm", "break_tension_N", "break_row",
-        "break_column", "pin_work_J", "friction_before_break_J", "ladder_released_J", "fx_ini", "n_lad_over_ny",
-        "v_lad_over_cb", "v_down_over_cb", "fx_fin", "reached_edge", "wall_s", "job_wall_s"),
-        "`knitlad snag`: a pin pulls a loop out until the yarn breaks; the ladder follows", stretch_of, SNAG_RESULTS),
-    "resistance": Experiment(ResistanceConfig, run_resistance_job, (
-        "design_pattern", "design_band", "design_d_over_l0", "design_mu", "verdicts", "holds_up_to",
-        "snag_peak_force_N", "snag_broke",
-        "snag_pull_at_break_mm", "snag_n_lad_over_ny", "snag_v_down_over_cb", "fx_thr_below", "fx_thr_above", "fx_thr_arrest",
-        "fx_thr_arrest_sd", "fx_thr_arrest_runs", "monotonic",
-        "n_lad_over_ny_lowest", "n_lad_over_ny_highest", "v_lad_over_cb_highest", "fx_fin_crossed_highest",
-        "wall_s", "job_wall_s"),
+    "snag": Experiment(SnagConfig, run_snag_job, _SNAG_KEYS,
+        "`knitlad snag`: a pin pulls a loop out until the yarn breaks; the ladder follows", stretch_of, SNAG_RESULTS_SI),
+    "resistance": Experiment(ResistanceConfig, run_resistance_job, _RESISTANCE_KEYS,
         "`knitlad resistance`: a snag, then the cut at a series of tensions: a knit design's ladder resistance",
-        stretch_of, RESISTANCE_RESULTS),
-    "loop": Experiment(LoopConfig, run_loop_job, (
-        "tau_s", "tau_contact_s", "v_lad_over_cb", "released", "relax_converged", "contacts_before", "steps",
-        "nodes", "lx_over_l0", "lx_end_over_l0", "climb_over_ly", "wall_s", "job_wall_s"),
-        "`knitlad loop`: the single-loop model", results=LOOP_RESULTS),
-    "stitch": Experiment(StitchConfig, run_stitch_job, (
-        "fx", "fy", "converged", "max_overlap_over_d", "relax_steps", "wall_s", "job_wall_s"),
-        "`knitlad stitch`: the periodised stitch", results=STITCH_RESULTS),
+        stretch_of, RESISTANCE_RESULTS_SI),
+    "loop": Experiment(LoopConfig, run_loop_job, _LOOP_KEYS,
+        "`knitlad loop`: the single-loop model", results=LOOP_RESULTS_SI),
+    "stitch": Experiment(StitchConfig, run_stitch_job, _STITCH_KEYS,
+        "`knitlad stitch`: the periodised stitch", results=STITCH_RESULTS_SI),
     "diagram": Experiment(DiagramConfig, run_diagram_job, ("lx_over_l0_at_fx0", "wall_s", "job_wall_s"),
                           "`knitlad diagram`: the width at which the periodised stitch carries f_x = 0, at l_y",
                           results=DIAGRAM_RESULTS),
