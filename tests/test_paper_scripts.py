@@ -165,3 +165,27 @@ def test_the_eq1_ensemble_takes_each_protocols_knits_together():
     assert table.loc[0.36].released_over_eq1_se == pytest.approx(0.2 / np.sqrt(3))
     assert table.loc[0.36].taut_over_eq1 == pytest.approx(0.5) and table.loc[0.36].taut_over_eq1_se == 0
     assert np.isnan(table.loc[0.38].fx_fin_crossed_se)
+
+
+def test_the_drag_ceiling_is_the_largest_lambda_whose_frictionless_change_stays_within_ten_per_cent():
+    """Paired against lambda = 0 at each tension; the worst tension decides; the crossing interpolated linearly;
+    the mu = 0.4 rows do not enter; a failed run is left out."""
+    study = paper_script("authors_drag")
+    rows = []
+    for fx, slope in ((4.0, 0.5), (13.6, 1.0)):  # the change: -slope x lambda / 1e-3 x 100 %
+        for lam in (0.0, 1e-4, 3e-4, 1e-3):
+            rows.append({"mu": 0.0, "fx": fx, "drag_lambda": lam, "status": "ok",
+                         "v_lad_over_cb": np.sqrt(fx) * (1 - slope * lam / 1e-3)})
+            rows.append({**rows[-1], "mu": 0.4, "v_lad_over_cb": 0.01})
+    rows.append({**rows[0], "drag_lambda": 2e-4, "status": "failed", "v_lad_over_cb": 0.0})
+    changes = study.drag_changes(pd.DataFrame(rows))
+    assert len(changes) == 8 and changes.change.max() == 0.0
+    assert changes.set_index(["fx", "drag_lambda"]).change[(13.6, 3e-4)] == pytest.approx(-0.3)
+    largest, reached = study.ceiling(changes)
+    assert largest == 1e-4 and reached == pytest.approx(1e-4)  # -10 % exactly at 1e-4 at f_x 13.6
+    softer = study.drag_changes(pd.DataFrame([{**r, "v_lad_over_cb": r["v_lad_over_cb"] ** 0.5} for r in rows]))
+    assert study.ceiling(softer)[0] == 1e-4 and 1e-4 < study.ceiling(softer)[1] < 3e-4
+    der = study.der_points(pd.DataFrame([{"fx": f, "drag_lambda": 1e-4, "status": "ok", "v_lad_over_cb": v}
+                                         for f, v in ((1.572, 0.2), (1.58, 0.22), (15.67, 1.05))]))
+    low = der.set_index("point").loc[1.58]
+    assert low["count"] == 2 and low["mean"] == pytest.approx(0.21) and low.ratio == pytest.approx(0.21 / 0.176)
