@@ -189,3 +189,10 @@ def test_the_drag_ceiling_is_the_largest_lambda_whose_frictionless_change_stays_
                                          for f, v in ((1.572, 0.2), (1.58, 0.22), (15.67, 1.05))]))
     low = der.set_index("point").loc[1.58]
     assert low["count"] == 2 and low["mean"] == pytest.approx(0.21) and low.ratio == pytest.approx(0.21 / 0.176)
+
+
+def test_the_run_stop_pictures_say_what_each_panel_varies():
+    study = paper_script("run_stop_band")
+    assert study.panel_label("friction x3") == "band friction 3 x the fabric's mu"
+    assert study.panel_label("friction x1") == study.panel_label("none") == "no band (the plain knit)"
+    assert study.panel_label("rib") == "band: rib"

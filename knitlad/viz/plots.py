@@ -572,6 +572,7 @@ def resistance_report(result, path: str | Path, picture: str | Path | None = Non
     ax.axis("off")
     if picture is not None:
         ax.imshow(plt.imread(str(picture)))
-        ax.set_title("the ladder where it stopped (the highest tension that laddered, else the snag's)", fontsize=9)
+        gold = "" if design["band"] == "none" else "; gold: the run-stop band"
+        ax.set_title(f"the ladder where it stopped (the highest tension that laddered, else the snag's{gold})", fontsize=9)
     fig.tight_layout()
     return _save(fig, Path(path))

@@ -26,6 +26,7 @@ from knitlad.io.atomic import atomic_path
 COURSE_COLOURS = np.array([[0.20, 0.45, 0.75], [0.95, 0.60, 0.15], [0.30, 0.65, 0.35], [0.60, 0.40, 0.70]])
 CUT_COLOUR = (0.05, 0.05, 0.05)
 LADDERED_COLOUR = (0.85, 0.15, 0.15)
+BAND_COLOUR = (0.85, 0.65, 0.1)  # the run-stop band's courses (gold)
 
 
 @dataclass
@@ -47,6 +48,7 @@ class Run:
     knit: bool = True  # a laddering run (cells, courses, a cut), else a scene of one's own
     l0: float = 0.0  # the stitch length [m] (the scale bar)
     obstacles: dict | None = None  # a scene of one's own: kind, direction, radius [m], points (frames, k, 3) [m]
+    band: tuple[int, ...] = ()  # the courses of a run-stop band (any kind), counted from the bottom
 
     def field(self, name: str, frame: int) -> np.ndarray:
         """Frame ``frame`` of the per-node dataset ``name`` of the open file (frames/velocities, frames/contact,
@@ -81,7 +83,7 @@ class Run:
         run = Run(Path(path), f["frames/positions"], f["frames/time"][()], f["frames/laddered"][()],
                   f["topology/edges"][()], f["topology/node_course"][()], n_y // 2, f["cells/centres"][()],
                   float(f.attrs["scale_d_m"]), float(f.attrs["box_lx_over_l0"]) * l0,
-                  float(f.attrs["ly_over_l0"]) * l0, l0=l0)
+                  float(f.attrs["ly_over_l0"]) * l0, l0=l0, band=band_courses(settings))
         run.check(f)
         return run, f
 
@@ -107,6 +109,23 @@ class Run:
         if problem:
             f.close()
             raise ValueError(f"{self.path}: a damaged run file: {problem}")
+
+    def cell_centres_at(self, frame: int) -> np.ndarray:
+        """(n_y, n_x, 2) the cells' centres moved with their course's yarn at ``frame`` [m]: each cell by the mean
+        displacement since the first frame of the nodes of its course that started nearest its centre."""
+        n_y, n_x = self.cell_centres.shape[:2]
+        course = self.node_course
+        mine = np.flatnonzero((course >= 0) & (course < n_y))
+        if frame == 0 or mine.size == 0:
+            return self.cell_centres
+        x0 = np.asarray(self.positions[0], dtype=float)[mine, :2]
+        moved = np.asarray(self.positions[frame], dtype=float)[mine, :2] - x0
+        rows = course[mine]
+        columns = np.argmin(np.abs(x0[:, 0, None] - self.cell_centres[rows, :, 0]), axis=1)
+        total, count = np.zeros((n_y, n_x, 2)), np.zeros((n_y, n_x))
+        np.add.at(total, (rows, columns), moved)
+        np.add.at(count, (rows, columns), 1.0)
+        return self.cell_centres + total / np.maximum(count, 1.0)[..., None]
 
     def frame_at(self, t: float) -> int:
         return int(np.argmin(np.abs(self.times_s - t)))
@@ -143,6 +162,16 @@ COLOURINGS = ("course", "speed", "contact", "strain")  # what the tubes' colour 
 CONTACT_COLOURS = np.array([[0.75, 0.75, 0.75], [0.20, 0.45, 0.75], [0.85, 0.15, 0.15]])  # free, touching, sliding
 
 
+def band_courses(settings: dict) -> tuple[int, ...]:
+    """The courses of a run file's run-stop band, whatever it is (friction, memory, knitted), from its settings."""
+    for where, name in (("dynamics", "friction_band"), ("stretch", "memory_band"), ("stretch", "pattern_band")):
+        band = settings.get(where, {}).get(name)
+        if band:
+            first, courses = (band[1], band[2]) if name == "pattern_band" else (band[0], band[1])
+            return tuple(range(int(first), int(first) + int(courses)))
+    return ()
+
+
 def node_colours(run: Run, frame: int, colouring: str) -> tuple[np.ndarray, str]:
     """(n, 3) colours in [0, 1] of the nodes at ``frame``, and the key that says what they mean: the course
     (four colours in turn, the held edge courses grey, the cut course black), the speed or the axial strain
@@ -155,6 +184,9 @@ def node_colours(run: Run, frame: int, colouring: str) -> tuple[np.ndarray, str]
             colours[(course < 0) | (course >= run.cell_centres.shape[0])] = 0.6  # the held edge courses: grey
             colours[course == run.cut_course] = CUT_COLOUR
             key += ", grey the held edge courses, black the cut course"
+            if run.band:
+                colours[np.isin(course, run.band)] = BAND_COLOUR
+                key += f", gold the run-stop band (courses {run.band[0]} to {run.band[-1]})"
         return colours, key
     if colouring == "contact":
         state = np.asarray(run.field("frames/contact", frame), dtype=int)
@@ -210,15 +242,15 @@ def _fabric_actor(run: Run, x: np.ndarray, window: np.ndarray | None, colours: n
     return actor
 
 
-def _cell_actor(run: Run, laddered: np.ndarray, depth: float):
-    """Red squares behind the undone cells."""
+def _cell_actor(run: Run, laddered: np.ndarray, depth: float, centres: np.ndarray):
+    """Red squares behind the undone cells, about ``centres`` ((n_y, n_x, 2) [m])."""
     from vtkmodules.vtkFiltersSources import vtkPlaneSource
     from vtkmodules.vtkFiltersCore import vtkAppendPolyData
     from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
 
     append = vtkAppendPolyData()
     for r, i in zip(*np.nonzero(laddered)):
-        cx, cy = run.cell_centres[r, i]
+        cx, cy = centres[r, i]
         plane = vtkPlaneSource()
         plane.SetOrigin(cx - 0.5 * run.l_x, cy - 0.5 * run.l_y, depth)
         plane.SetPoint1(cx + 0.5 * run.l_x, cy - 0.5 * run.l_y, depth)
@@ -347,10 +379,10 @@ def _picture(run: Run, frame: int, path: Path, view: str, size=(1200, 900), wind
     renderer.SetBackground(1.0, 1.0, 1.0)
     colours, key = node_colours(run, frame, colouring)
     renderer.AddActor(_fabric_actor(run, x, window, colours))
-    cells = _cell_actor(run, run.laddered[frame], float(x[:, 2].min()) - 2 * run.diameter)
+    cells = _cell_actor(run, run.laddered[frame], float(x[:, 2].min()) - 2 * run.diameter, run.cell_centres_at(frame))
     if cells is not None:
         renderer.AddActor(cells)
-        key += "; red squares: cells undone, drawn where they were at the cut"
+        key += "; red squares: cells undone, moved with their course's yarn"
     if run.obstacles is not None and len(run.obstacles["kind"]):
         for actor in _obstacle_actors(run, frame, x):
             renderer.AddActor(actor)

@@ -73,6 +73,14 @@ def by_point(df: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def panel_label(kind: str) -> str:
+    """What a panel varies, in words: 'friction x3' is a band whose yarn has three times the fabric's friction."""
+    if kind.startswith("friction x"):
+        factor = float(kind[len("friction x"):])
+        return "no band (the plain knit)" if factor == 1.0 else f"band friction {factor:g} x the fabric's mu"
+    return "no band (the plain knit)" if kind == "none" else f"band: {kind}"
+
+
 def draw(folder: Path, df: pd.DataFrame, png: str) -> None:
     import matplotlib
 
@@ -86,10 +94,10 @@ def draw(folder: Path, df: pd.DataFrame, png: str) -> None:
         ax.imshow(laddered, origin="lower", cmap="Greys", vmin=0, vmax=1)
         first, last = (int(v) for v in row.band.split("-"))
         ax.axhspan(first - 0.5, last + 0.5, color="tab:orange", alpha=0.35, lw=0)
-        ax.set_title(f"f_x {row.fx_ini:.1f}, {row.kind}", fontsize=8)
+        ax.set_title(f"f_x^ini {row.fx_ini:.1f}\n{panel_label(row.kind)}", fontsize=8)
         ax.set_xticks([])
         ax.set_yticks([])
-    fig.suptitle("undone cells (black) and the band (orange)", fontsize=9)
+    fig.suptitle("undone cells (black) at the stop, the band's courses (orange)", fontsize=9)
     fig.tight_layout()
     fig.savefig(png, dpi=130)
 

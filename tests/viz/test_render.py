@@ -493,3 +493,36 @@ def test_the_obstacles_of_one_s_own_scene_are_stored_and_drawn(tmp_path):
         picture = render_run(file, tmp_path / name, [recorder.times[-1]], ("oblique",), (320, 240))[0]
         covered[name] = ((imageio.imread(picture)[..., :3] < 235).any(axis=2)).mean()
     assert covered["with"] > covered["without"] + 0.1
+
+
+def test_undone_cells_move_with_their_courses_yarn(run_folder):
+    """A knit carried along as a whole carries its cells: every centre moves by the same vector; at the first frame
+    the centres are where the cut left them."""
+    from dataclasses import replace
+
+    from knitlad.viz.render import Run
+
+    run, f = Run.open(run_folder / "ladder.h5")
+    with f:
+        x = np.asarray(run.positions[:2])
+        assert np.array_equal(run.cell_centres_at(0), run.cell_centres)
+        shifted = replace(run, positions=np.stack([x[0], x[0] + np.array([1e-3, -2e-3, 5e-4])]))
+        assert np.allclose(shifted.cell_centres_at(1) - run.cell_centres, [1e-3, -2e-3])
+        still = replace(run, positions=np.stack([x[0], x[0]]))
+        assert np.allclose(still.cell_centres_at(1), run.cell_centres)
+
+
+def test_a_run_stop_band_of_any_kind_is_coloured_and_named_in_the_key(run_folder):
+    from dataclasses import replace
+
+    from knitlad.viz.render import BAND_COLOUR, Run, band_courses, node_colours
+
+    assert band_courses({"stretch": {"pattern_band": ["rib", 5, 2]}, "dynamics": {}}) == (5, 6)
+    assert band_courses({"stretch": {"memory_band": [3, 3, 2.0]}, "dynamics": {}}) == (3, 4, 5)
+    assert band_courses({"stretch": {}, "dynamics": {"friction_band": [6, 1, 2.0]}}) == (6,)
+    assert band_courses({"stretch": {"pattern_band": None}, "dynamics": {"friction_band": None}}) == ()
+    run, f = Run.open(run_folder / "ladder.h5")
+    with f:
+        colours, key = node_colours(replace(run, band=(1, 2)), 0, "course")
+        assert np.all(colours[np.isin(run.node_course, (1, 2))] == BAND_COLOUR) and "band (courses 1 to 2)" in key
+        assert not np.any(np.all(node_colours(run, 0, "course")[0] == BAND_COLOUR, axis=1))
