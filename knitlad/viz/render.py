@@ -231,7 +231,7 @@ def _fabric_actor(run: Run, x: np.ndarray, window: np.ndarray | None, colours: n
     tubes = vtkTubeFilter()
     tubes.SetInputData(poly)
     tubes.SetRadius(0.5 * run.diameter)
-    tubes.SetNumberOfSides(10)
+    tubes.SetNumberOfSides(6)
     tubes.CappingOn()
     mapper = vtkPolyDataMapper()
     mapper.SetInputConnection(tubes.GetOutputPort())
@@ -368,10 +368,10 @@ def _scale_bar(renderer, x: np.ndarray, length: float, label: str) -> None:
     renderer.AddViewProp(text)
 
 
-def _picture(run: Run, frame: int, path: Path, view: str, size=(1200, 900), window=None, label: str = "",
-             colouring: str = "course") -> Path:
-    from vtkmodules.vtkRenderingCore import vtkRenderer, vtkRenderWindow, vtkWindowToImageFilter
-    from vtkmodules.vtkIOImage import vtkPNGWriter
+def _scene(run: Run, frame: int, view: str, window=None, label: str = "", colouring: str = "course"):
+    """A renderer of ``frame``: the yarn as tubes, the undone cells, the obstacles, the key, the caption, the scale
+    bar (front view) and the camera."""
+    from vtkmodules.vtkRenderingCore import vtkRenderer
 
     _vtk()  # the OpenGL and FreeType overrides must be registered before any renderer is made
     x = np.asarray(run.positions[frame], dtype=np.float64)
@@ -387,7 +387,17 @@ def _picture(run: Run, frame: int, path: Path, view: str, size=(1200, 900), wind
         for actor in _obstacle_actors(run, frame, x):
             renderer.AddActor(actor)
         key += "; grey: the obstacles"
-    _text(renderer, key, 0, 0, max(11, size[0] // 90), top=True)
+    return renderer, x, key
+
+
+def _draw(win, run: Run, frame: int, view: str, window=None, label: str = "", colouring: str = "course"):
+    """Render ``frame`` into the off-screen window ``win`` (its size set) and return its pixels, (h, w, 3) uint8."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
+
+    renderer, x, key = _scene(run, frame, view, window, label, colouring)
+    width = win.GetSize()[0]
+    _text(renderer, key, 0, 0, max(11, width // 90), top=True)
     if label:
         _text(renderer, label, 12, 12, 22)
     if view == "front":  # lengths read off a parallel projection: a bar of one stitch length, or of 1 mm
@@ -404,23 +414,46 @@ def _picture(run: Run, frame: int, path: Path, view: str, size=(1200, 900), wind
     renderer.ResetCamera()
     if view == "front":
         camera.Zoom(1.15)
-    win = vtkRenderWindow()
-    win.SetOffScreenRendering(1)
+    renderers = win.GetRenderers()
+    while renderers.GetNumberOfItems():  # the last frame's scene out, this one's in
+        win.RemoveRenderer(renderers.GetFirstRenderer())
     win.AddRenderer(renderer)
-    win.SetSize(*size)
     win.Render()
     grab = vtkWindowToImageFilter()
     grab.SetInput(win)
+    grab.ShouldRerenderOff()  # the window was just rendered: read its pixels, do not draw them a second time
+    grab.ReadFrontBufferOff()
     grab.Update()
+    image = grab.GetOutput()
+    w, h, _ = image.GetDimensions()
+    pixels = vtk_to_numpy(image.GetPointData().GetScalars()).reshape(h, w, -1)[::-1, :, :3]
+    return np.ascontiguousarray(pixels)
+
+
+def _window(size):
+    """An off-screen render window of ``size`` (width, height)."""
+    from vtkmodules.vtkRenderingCore import vtkRenderWindow
+
+    _vtk()
+    win = vtkRenderWindow()
+    win.SetOffScreenRendering(1)
+    win.SetSize(*size)
+    return win
+
+
+def _picture(run: Run, frame: int, path: Path, view: str, size=(1200, 900), window=None, label: str = "",
+             colouring: str = "course") -> Path:
+    """``frame`` drawn as a PNG at ``path`` (:func:`_draw`), written whole or not at all."""
+    import imageio.v2 as imageio
+
+    win = _window(size)
+    try:
+        pixels = _draw(win, run, frame, view, window, label, colouring)
+    finally:
+        win.Finalize()
     with atomic_path(path, suffix=".png") as tmp:
-        writer = vtkPNGWriter()
-        writer.SetFileName(str(tmp))
-        writer.SetInputConnection(grab.GetOutputPort())
-        writer.Write()
-        try:
-            whole_png(tmp)
-        finally:
-            win.Finalize()
+        imageio.imwrite(tmp, pixels, format="png")
+        whole_png(tmp)
     return path
 
 
@@ -474,22 +507,28 @@ def movie(h5: str | Path, path: str | Path, fps: int = 12, size=(960, 720),
           progress: Callable[[int, int], None] | None = None, colouring: str = "course") -> Path:
     """Every frame of the run, front view with a time stamp, as MP4 (or GIF if ``path`` ends so), coloured by
     ``colouring``. ``progress(done, total)`` is called after each frame."""
-    import tempfile
+    import io
 
     import imageio.v2 as imageio
 
     run, f = Run.open(h5)
     path = Path(path)
     try:
-        with tempfile.TemporaryDirectory() as tmp, atomic_path(path, suffix=path.suffix) as out:
+        win = _window(size)  # one window for every frame: a new one costs an OpenGL context each
+        with atomic_path(path, suffix=path.suffix) as out:
             kwargs = dict(fps=fps, macro_block_size=8) if path.suffix == ".mp4" else dict(duration=1 / fps)
-            with imageio.get_writer(out, **kwargs) as writer:
+            # a GIF is made in memory and written in one go: a write that fails (a full disk) then fails once, here,
+            # not again in the writer's finaliser
+            gif = io.BytesIO() if path.suffix == ".gif" else None
+            with imageio.get_writer(gif if gif is not None else out, format=path.suffix[1:].upper() if gif else None,
+                                    **kwargs) as writer:
                 for k in range(len(run.times_s)):
-                    frame = _picture(run, k, Path(tmp) / f"{k:05d}.png", "front", size, label=run.label(k, since=""),
-                                     colouring=colouring)
-                    writer.append_data(imageio.imread(frame))
+                    writer.append_data(_draw(win, run, k, "front", label=run.label(k, since=""), colouring=colouring))
                     if progress:
                         progress(k + 1, len(run.times_s))
+            if gif is not None:
+                Path(out).write_bytes(gif.getvalue())
+        win.Finalize()
     finally:
         f.close()
     return path
