@@ -32,7 +32,7 @@ def drag_changes(frame: pd.DataFrame, mu: float = 0.0, column: str = "v_lad_over
     base = rows[rows.drag_lambda == 0.0].set_index("knit")[column]
     rows["change"] = rows[column] / rows.knit.map(base) - 1.0
     # an ensemble's members (their own knit, the target 0.5 % apart) are one point: their nominal target
-    rows["point"] = rows.fx_nominal if "fx_nominal" in rows else rows.fx
+    rows["point"] = rows.fx_nominal.fillna(rows.fx) if "fx_nominal" in rows else rows.fx
     keep = ["point", "fx", "drag_lambda", column, "change"]
     return rows[keep].sort_values(["point", "drag_lambda", "fx"]).reset_index(drop=True)
 
@@ -55,7 +55,7 @@ def der_points(frame: pd.DataFrame) -> pd.DataFrame:
     """Per DER point: knits, v_lad/c_b mean and standard deviation, the paper's value and the ratio."""
     ok = frame[frame.status == "ok"].copy()
     nominal = ok.fx_nominal if "fx_nominal" in ok else ok.fx
-    ok["point"] = [min(PAPER_DER, key=lambda p: abs(p - f)) for f in nominal]
+    ok["point"] = [min(PAPER_DER, key=lambda p: abs(p - f)) for f in nominal.fillna(ok.fx)]
     out = ok.groupby(["drag_lambda", "point"]).v_lad_over_cb.agg(["count", "mean", "std"]).reset_index()
     out["paper"] = out.point.map(PAPER_DER)
     out["ratio"] = out["mean"] / out.paper
