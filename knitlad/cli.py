@@ -211,10 +211,13 @@ def config_options(model, exclude: tuple[str, ...] = ()):
                 continue
             flag = cli_option(model, name)
             typ = _option_type(f.annotation)
-            shown = f.default is not None and name not in by_preset
+            shown = f.default is not None and not f.is_required()  # a required field has no default to show
+            default = f" [default: {f.default}]" if shown else ""
+            if shown and name in by_preset:  # the default, and the presets that set another value
+                others = {p: t[name] for p, t in model.PRESETS.items() if name in t and t[name] != f.default}
+                default = f" [default: {f.default}" + "".join(f"; {p}: {v}" for p, v in others.items()) + "]"
             # units and defaults are in [brackets], which rich reads as markup unless escaped
-            shown = shown and not f.is_required()  # a required field has no default to show
-            text = f.description + (f" [default: {f.default}]" if shown else "") + (" [required]" if f.is_required() else "")
+            text = f.description + default + (" [required]" if f.is_required() else "")
             help_text = rich_escape(text) if RICH_HELP else text
             decls = [f"{flag}/--no-{flag[2:]}"] if typ is bool else [flag]
             derived.append(inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, annotation=typing.Optional[typ],
