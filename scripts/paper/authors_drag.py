@@ -83,13 +83,13 @@ def single_loop(path: str) -> pd.DataFrame:
 
 
 def spread(values, scale: float = 1.0, digits: int = 3, sign: str = "") -> str:
-    """mean +- standard deviation over knits (one: the value and '(1 knit)')."""
+    """mean +- standard deviation over knits (one: the value and "(1 run)")."""
     v = np.asarray(values, dtype=float) * scale
     v = v[np.isfinite(v)]
     if len(v) == 0:
         return "-"
     if len(v) == 1:
-        return f"{v[0]:{sign}.{digits}f} (1 knit)"
+        return f"{v[0]:{sign}.{digits}f} (1 run)"
     return f"{v.mean():{sign}.{digits}f} +- {v.std(ddof=1):.{digits}f}"
 
 
