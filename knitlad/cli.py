@@ -1347,7 +1347,8 @@ def render(
     out: str = typer.Option(None, "--out", help="Folder of the images; default: render/ beside a run's ladder.h5, "
                             "<file>_render/ beside any other file (each job of a sweep its own)."),
     colour: str = typer.Option("course", "--colour", help="What the yarn's colour shows: course, speed, contact "
-                               "(free, touching, sliding) or strain (axial: the tension)."),
+                               "(free, touching, sliding), strain (axial: the tension) or depth (knit and purl "
+                               "apart: which yarn lies in front)."),
 ) -> None:
     """Images of the fabric: yarns as tubes of their diameter coloured by course, the cut course black, undone cells red."""
     from knitlad.viz.render import render_run
@@ -1383,8 +1384,8 @@ def movie(
     gif: bool = typer.Option(False, "--gif", help="An animated GIF instead of an MP4."),
     fps: int = typer.Option(12, "--fps", help="Frames per second of the movie."),
     width: int = typer.Option(960, "--width", help="Frame width \\[pixels]; height 3/4 of it."),
-    colour: str = typer.Option("course", "--colour", help="What the yarn's colour shows: course, speed, contact "
-                               "or strain."),
+    colour: str = typer.Option("course", "--colour", help="What the yarn's colour shows: course, speed, contact, "
+                               "strain or depth."),
 ) -> None:
     """A movie of the laddering: every stored frame, front view, with a time stamp and the undone cells."""
     from knitlad.viz.render import movie as make_movie

@@ -158,7 +158,7 @@ def _vtk():
     return vtkPoints, vtkCellArray, vtkPolyData, numpy_to_vtk, numpy_to_vtkIdTypeArray
 
 
-COLOURINGS = ("course", "speed", "contact", "strain")  # what the tubes' colour shows (render --colour)
+COLOURINGS = ("course", "speed", "contact", "strain", "depth")  # what the tubes' colour shows (render --colour)
 CONTACT_COLOURS = np.array([[0.75, 0.75, 0.75], [0.20, 0.45, 0.75], [0.85, 0.15, 0.15]])  # free, touching, sliding
 
 
@@ -170,6 +170,37 @@ def band_courses(settings: dict) -> tuple[int, ...]:
             first, courses = (band[1], band[2]) if name == "pattern_band" else (band[0], band[1])
             return tuple(range(int(first), int(first) + int(courses)))
     return ()
+
+
+def local_depth(run: Run, x: np.ndarray) -> np.ndarray:
+    """Each node's height out of the fabric's plane [m] over the fabric's own surface there: the mean height of
+    patches of 2 x 2 stitches (a pattern's repeat of knit and purl: rib's two columns, garter's two courses),
+    interpolated bilinearly between the patches' centres, so a curl or tilt of the fabric is not read as relief;
+    a scene without cells: over its mean."""
+    if not run.knit or run.l_x <= 0 or run.l_y <= 0:
+        return x[:, 2] - np.nanmean(x[:, 2])
+    size = 2.0 * np.array([run.l_x, run.l_y])
+    origin = np.nanmin(x[:, :2], axis=0)
+    patch = np.floor((x[:, :2] - origin) / size).astype(np.int64)
+    shape = tuple(int(n) for n in patch.max(axis=0) + 1)
+    key = patch[:, 0] * shape[1] + patch[:, 1]
+    count = np.bincount(key, minlength=shape[0] * shape[1]).reshape(shape)
+    mean = np.bincount(key, weights=x[:, 2], minlength=count.size).reshape(shape) / np.maximum(count, 1)
+    mean[count == 0] = np.nan
+    mean = np.where(np.isnan(mean), np.nanmean(mean, axis=0, keepdims=True), mean)  # an empty patch: its row's
+    mean = np.where(np.isnan(mean), np.nanmean(mean), mean)
+
+    def between(coordinate, n):  # the lower patch centre's index and the weight of the upper one (beyond the outer
+        f = coordinate - 0.5  # centres: extrapolated, so a tilt leaves no residual at the knit's border)
+        i = np.clip(np.floor(f).astype(np.int64), 0, max(n - 2, 0))
+        return i, (f - i) if n > 1 else np.zeros_like(f)
+
+    i, s = between((x[:, 0] - origin[0]) / size[0], shape[0])
+    j, t = between((x[:, 1] - origin[1]) / size[1], shape[1])
+    i1, j1 = np.minimum(i + 1, shape[0] - 1), np.minimum(j + 1, shape[1] - 1)
+    surface = ((1 - s) * (1 - t) * mean[i, j] + s * (1 - t) * mean[i1, j] + (1 - s) * t * mean[i, j1]
+               + s * t * mean[i1, j1])
+    return x[:, 2] - surface
 
 
 def node_colours(run: Run, frame: int, colouring: str) -> tuple[np.ndarray, str]:
@@ -193,6 +224,12 @@ def node_colours(run: Run, frame: int, colouring: str) -> tuple[np.ndarray, str]
         return CONTACT_COLOURS[np.clip(state, 0, 2)], "colour: grey free, blue touching another yarn, red sliding on it"
     import matplotlib
 
+    if colouring == "depth":  # knit and purl apart in a front view: which yarn lies in front of which
+        z = local_depth(run, np.asarray(run.positions[frame], dtype=float)) * 1e3
+        reach = float(np.nanpercentile(np.abs(z), 98)) or 1.0
+        colours = matplotlib.colormaps["viridis"](np.clip(0.5 + 0.5 * z / reach, 0.0, 1.0))[:, :3]
+        return colours, (f"colour: depth against the fabric around, dark {-reach:.2g} mm (behind) to yellow "
+                         f"{reach:.2g} mm (in front): a knit stitch shows its legs in front, a purl stitch its heads")
     if colouring == "speed":
         value = np.linalg.norm(run.field("frames/velocities", frame), axis=1)
         what, unit = "speed", "m/s"

@@ -526,3 +526,24 @@ def test_a_run_stop_band_of_any_kind_is_coloured_and_named_in_the_key(run_folder
         colours, key = node_colours(replace(run, band=(1, 2)), 0, "course")
         assert np.all(colours[np.isin(run.node_course, (1, 2))] == BAND_COLOUR) and "band (courses 1 to 2)" in key
         assert not np.any(np.all(node_colours(run, 0, "course")[0] == BAND_COLOUR, axis=1))
+
+
+def test_the_depth_colouring_tells_columns_in_front_from_columns_behind_through_the_fabrics_curl(run_folder):
+    """Knit and purl apart: columns alternately 0.1 mm in front and behind, on a fabric tilted by 5 mm over its
+    width (a curl larger than the relief), read as two colours, the front ones yellow; the key says what it shows."""
+    from dataclasses import replace
+
+    from knitlad.viz.render import Run, local_depth, node_colours
+
+    run, f = Run.open(run_folder / "ladder.h5")
+    with f:
+        x = np.asarray(run.positions[0], dtype=float).copy()
+        column = np.floor((x[:, 0] - x[:, 0].min()) / run.l_x).astype(int)
+        front = column % 2 == 0
+        x[:, 2] = np.where(front, 1e-4, -1e-4) + 5e-3 * (x[:, 0] - x[:, 0].min()) / np.ptp(x[:, 0])
+        ribbed = replace(run, positions=x[None])
+        depth = local_depth(ribbed, x)
+        assert np.median(depth[front]) > 5e-5 and np.median(depth[~front]) < -5e-5
+        colours, key = node_colours(ribbed, 0, "depth")
+        yellow = colours[:, 0] + colours[:, 1]  # viridis: yellow has both red and green
+        assert np.median(yellow[front]) > np.median(yellow[~front]) + 0.5 and "depth" in key and "purl" in key
