@@ -21,7 +21,7 @@ from pathlib import Path
 
 import h5py
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 RECORD = ROOT / "docs" / "readme_pictures.json"
 
 
