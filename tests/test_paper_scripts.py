@@ -196,3 +196,10 @@ def test_the_run_stop_pictures_say_what_each_panel_varies():
     assert study.panel_label("friction x3") == "band friction 3 x the fabric's mu"
     assert study.panel_label("friction x1") == study.panel_label("none") == "no band (the plain knit)"
     assert study.panel_label("rib") == "band: rib"
+
+
+def test_the_readme_pictures_script_reads_the_readmes_own_demo_command():
+    """It remakes the README's pictures from the README's command: it must find the README (it once looked for it
+    one folder too deep, after it moved under scripts/paper/)."""
+    command = paper_script("readme_pictures").readme_demo_command()  # the options after `knitlad cut`
+    assert "--stitches" in command and "--out" in command
