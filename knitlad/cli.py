@@ -360,7 +360,7 @@ def cut(
 
     with _prologue("cut", _config.CutConfig, options, stitches, 13.6, out, holds) as (cfg, out_dir, progress):
         earlier = earlier_run_outputs(out_dir)
-        finished = _experiment_or_exit(lambda: _experiment("ladder", cfg, progress=progress), progress)
+        finished = _experiment_or_exit(lambda: _experiment("ladder", cfg, progress=progress), progress, cfg=cfg)
         progress.close(finished=True)
         result, summary = finished.result, finished.summary
         try:
@@ -467,7 +467,7 @@ def _cycle(cfg, out_dir: Path, progress, restart) -> None:
         lambda: _experiment("cycle", cfg, out_dir, progress, after_leg=keep_readings, keep=keep_checkpoint,
                             resume=restart),
         progress, kept=f"the readings so far are in {out_dir / 'cycle.csv'} (if a leg had ended); "
-                       f"knitlad cycle ... --out {out_dir} --resume goes on from the last leg")
+                       f"knitlad cycle ... --out {out_dir} --resume goes on from the last leg", cfg=cfg)
     progress.close(finished=True)
     result, ladder = finished.result
     l0 = cfg.settings().material.stitch_length
@@ -553,7 +553,7 @@ def tensile(
     """
     holds = _earlier_run("tensile", "tensile.h5", "tensile.csv", "tensile_tester.csv", "tensile_results.csv")
     with _prologue("tensile", _config.TensileConfig, options, stitches, 0.68, out, holds) as (cfg, out_dir, progress):
-        finished = _experiment_or_exit(lambda: _experiment("tensile", cfg, progress=progress), progress)
+        finished = _experiment_or_exit(lambda: _experiment("tensile", cfg, progress=progress), progress, cfg=cfg)
         progress.close(finished=True)
         result, summary = finished.result, finished.summary
         _files_or_exit(lambda: _write_experiment(finished, out_dir / "tensile.h5"), summary)
@@ -594,7 +594,7 @@ def snag(
     """
     holds = _earlier_run("snag", "snag.h5", "snag.csv")
     with _prologue("snag", _config.SnagConfig, options, stitches, 4.0, out, holds) as (cfg, out_dir, progress):
-        finished = _experiment_or_exit(lambda: _experiment("snag", cfg, progress=progress), progress)
+        finished = _experiment_or_exit(lambda: _experiment("snag", cfg, progress=progress), progress, cfg=cfg)
         progress.close(finished=True)
         result, summary = finished.result, finished.summary
         _files_or_exit(lambda: _write_experiment(finished, out_dir / "snag.h5"), summary)
@@ -640,7 +640,7 @@ def resistance(
     threshold, the ladder where it stopped).
     """
     with _prologue("resistance", _config.ResistanceConfig, options, stitches, 4.0, out) as (cfg, out_dir, progress):
-        finished = _experiment_or_exit(lambda: _experiment("resistance", cfg, progress=progress), progress)
+        finished = _experiment_or_exit(lambda: _experiment("resistance", cfg, progress=progress), progress, cfg=cfg)
         progress.close(finished=True)
         result, summary = finished.result, finished.summary
         _files_or_exit(lambda: _write_experiment(finished, out_dir / "resistance.h5"), summary)
@@ -1154,7 +1154,14 @@ def _velocity_caveat(result) -> str:
     return f"({span})"
 
 
-def _experiment_or_exit(run, progress, kept: str = "nothing written"):
+def _yarn_option(cfg) -> str:
+    """The option that set the yarn's d/l0 in ``cfg``: the stitch length, the yarn file, or d/l0 itself."""
+    if getattr(cfg, "stitch_length_mm", None) is not None:
+        return "--stitch-length-mm"
+    return "--yarn" if getattr(cfg, "yarn", None) is not None else "--d-over-l0"
+
+
+def _experiment_or_exit(run, progress, kept: str = "nothing written", cfg=None):
     """``run()`` (an experiment, :func:`_experiment`), every way it can end without a result said in
     one line: Ctrl-C (130) and SIGTERM (143), a run that failed (1), settings found infeasible once the knit
     is built (2)."""
@@ -1178,7 +1185,7 @@ def _experiment_or_exit(run, progress, kept: str = "nothing written"):
         raise typer.Exit(1)
     except CourseTooWide as e:  # no stitch of this yarn fits: bad input, found when the knit is built
         progress.close()
-        fail(f"--d-over-l0: {e}")
+        fail(f"{_yarn_option(cfg)}: {e}; a longer stitch, a thinner yarn or a larger --ly fits")
     except InfeasibleRun as e:  # settings whose step cannot serve the run: bad input, found when it is set
         progress.close()
         fail(str(e))
@@ -1440,7 +1447,7 @@ def experiment_command(name: str):
         options: dict = None,
     ) -> None:
         with _prologue(name, entry.config, options, stitches, None, out) as (cfg, out_dir, progress):
-            finished = _experiment_or_exit(lambda: _experiment(name, cfg, progress=progress), progress)
+            finished = _experiment_or_exit(lambda: _experiment(name, cfg, progress=progress), progress, cfg=cfg)
             progress.close(finished=True)
             paths = _files_or_exit(lambda: _write_experiment(finished, out_dir / f"{name}.h5"), finished.summary)
         if json_out:

@@ -218,6 +218,10 @@ def test_a_yarn_too_thick_for_any_stitch_is_one_line_and_nothing_written(tmp_pat
     assert p.returncode == 2, p.stderr
     assert "--d-over-l0" in p.stderr and "Traceback" not in p.stderr and len(p.stderr.strip().splitlines()) == 1
     assert not out.exists()
+    # given as a stitch length, the refusal names the stitch length (the option the user gave)
+    p = run("cut", "--stitch-length-mm", "1.5", "--stitches", "4", "--out", str(out))
+    assert p.returncode == 2 and p.stderr.startswith("knitlad: error: --stitch-length-mm: "), p.stderr
+    assert not out.exists()
 
 
 @pytest.mark.parametrize("args, where", [(["sweep", "configs/smoke.yaml", "--workers", "two"], "--workers"),
