@@ -151,6 +151,27 @@ def _stitch_length_mm():
         "9.74 mm for the paper's Nylon, the yarn's diameter over d_over_l0 for another yarn"))
 
 
+# the authors' engine's model (preset crassous2023, knitlad.fabric.presets): its drag and its contact dashpot
+def _drag_lambda():
+    return Field(None, ge=0, le=1, description=(
+        "the global drag in the authors' engine's units (its f = -lambda dx/dt on nodes of mass 1 a yarn's radius "
+        "apart): gamma = lambda / (r sqrt(rho_L/EA)), 1.94e7 lambda /s for the paper's Nylon; their README's "
+        "range 1e-4 to 1e-3; instead of drag; default: the preset's (docs/paper_claims.md) [-]"))
+
+
+def _spin_drag():
+    return Field(False, description=(
+        "the global drag also damps each yarn's spin about its axis at the same rate, -gamma I omega (the "
+        "authors' engine damps the twist rate with the same lambda); needs twist [-]"))
+
+
+def _contact_dashpot():
+    return Field("critical", description=(
+        "the contact dashpots of the laddering: critical (contact_damping_ratio of critical, normal and "
+        "tangential) or absolute (the authors' engine: a normal dashpot sqrt(EA rho_L) per contact whatever the "
+        "resolution, none along the surface; contact_damping_ratio not used) [-]"))
+
+
 KNIT_SOURCES = ("yarn", "stitch_length_mm", "wales_per_cm", "courses_per_cm")
 MAX_D_OVER_L0 = 0.1  # d_over_l0's bound: a jersey tighter than this jams before it is knitted
 NYLON_DIAMETER_MM = 0.14
@@ -307,13 +328,8 @@ class CutConfig(_WithPreset, _YarnAndKnit):
     drag_per_s: float = Field(0.0, ge=0, le=1e5, json_schema_extra={"cli": "--drag"}, description=(
         "global drag -gamma m v on every node during the laddering [1/s]: the damping of the paper's engine, "
         "not physics (0: none; docs/dissipation.md)"))
-    drag_lambda: float | None = Field(None, ge=0, le=1, description=(
-        "the global drag in the authors' engine's units (its f = -lambda dx/dt on nodes of mass 1 a yarn's radius "
-        "apart): gamma = lambda / (r sqrt(rho_L/EA)), 1.94e7 lambda /s for the paper's Nylon; their README's "
-        "range 1e-4 to 1e-3; instead of drag; default: the preset's (docs/paper_claims.md) [-]"))
-    spin_drag: bool = Field(False, description=(
-        "the global drag also damps each yarn's spin about its axis at the same rate, -gamma I omega (the "
-        "authors' engine damps the twist rate with the same lambda); needs twist [-]"))
+    drag_lambda: float | None = _drag_lambda()
+    spin_drag: bool = _spin_drag()
     loss_factor: float = Field(0.0, ge=0, le=1, description=(
         "the yarn's material damping: peak loss factor of its viscoelasticity, a standard linear solid in "
         "stretching and bending [-]; Nylon: 0.03 (0.01 dry to 0.1 humid); 0: none (docs/dissipation.md)"))
@@ -372,10 +388,7 @@ class CutConfig(_WithPreset, _YarnAndKnit):
         "rms, drawn from this seed (a sweep's ensemble gives each member its own); none: the knit as stretched [-]"))
     contact_damping_ratio: float = Field(0.3, ge=0, description=(
         "normal and tangential contact dashpots of the laddering dynamics, fraction of critical [-]"))
-    contact_dashpot: Literal["critical", "absolute"] = Field("critical", description=(
-        "the contact dashpots of the laddering: critical (contact_damping_ratio of critical, normal and "
-        "tangential) or absolute (the authors' engine: a normal dashpot sqrt(EA rho_L) per contact whatever the "
-        "resolution, none along the surface; contact_damping_ratio not used) [-]"))
+    contact_dashpot: Literal["critical", "absolute"] = _contact_dashpot()
     stretch_damping_ratio: float = Field(0.2, ge=0, description=(
         "the yarn's axial dashpot during the laddering, fraction of critical [-]"))
     stretch_increment: float = Field(0.005, gt=0, le=0.05, description="affine stretch per relaxation round [l/l0]")
@@ -507,11 +520,8 @@ class CutConfig(_WithPreset, _YarnAndKnit):
         from knitlad.engine.contact import Counting
         from knitlad.experiments.laddering import DynamicsSettings
 
-        from knitlad.engine.dissipation import authors_drag_per_s
-
-        drag = self.drag_per_s if self.drag_lambda is None else authors_drag_per_s(self.drag_lambda, self.material())
         return self.settings_of(
-            DynamicsSettings, contact_counting=Counting(self.contact_counting), drag_per_s=drag,
+            DynamicsSettings, contact_counting=Counting(self.contact_counting), drag_per_s=drag_of(self),
             friction_band=(self.band_row, self.band_courses, self.band_friction_factor)
             if self.band_row is not None and self.band == "friction" else None)
 
@@ -824,6 +834,16 @@ def check_stretch(cfg: CutConfig) -> None:
                          "affinely (stretch_start affine)")
     if cfg.memory_peak_ratio is not None and cfg.natural_curvature == 0 and cfg.memory_band is None:
         raise ValueError("memory_peak_ratio: shapes the memory of natural_curvature > 0; the yarn has none")
+
+
+def drag_of(cfg: CutConfig) -> float:
+    """The global drag of the laddering [1/s]: ``drag_per_s``, or the authors' ``drag_lambda`` converted
+    (:func:`knitlad.engine.dissipation.authors_drag_per_s`)."""
+    if cfg.drag_lambda is None:
+        return cfg.drag_per_s
+    from knitlad.engine.dissipation import authors_drag_per_s
+
+    return authors_drag_per_s(cfg.drag_lambda, cfg.material())
 
 
 def check_drag(cfg: CutConfig) -> None:

@@ -312,7 +312,11 @@ def expand(cfg: SweepConfig, max_jobs: int = MAX_JOBS) -> list[Job]:
         sizes = " x ".join(f"{c:.3g}" if c >= 1e6 else str(c) for c in counts.values())
         raise SweepError(f"sweep.axes: {n_jobs:.3g} jobs ({sizes}), more than {max_jobs}; use fewer values or "
                          "--max-jobs")
-    preset_sets = model.preset_fields() if hasattr(model, "preset_fields") else ()
+    # the settings the swept presets fill (each preset's table): all given, the preset axis changes nothing
+    swept = cfg.sweep.axes.get("preset") if hasattr(model, "PRESETS") else None
+    presets = swept if isinstance(swept, list) and all(isinstance(p, str) for p in swept) else list(
+        getattr(model, "PRESETS", {}))
+    preset_sets = tuple(dict.fromkeys(k for p in presets for k in model.PRESETS.get(p, {})))
     if "preset" in cfg.sweep.axes and preset_sets and all(k in cfg.fixed or k in cfg.sweep.axes for k in preset_sets):
         raise SweepError(f"sweep.axes.preset: has no effect where {', '.join(preset_sets)} are given (the preset "
                          "only sets them)")
