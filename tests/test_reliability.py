@@ -850,3 +850,12 @@ def test_a_tensile_test_that_cannot_write_its_files_leaves_none_of_them(tmp_path
                         "--readings-per-leg", "2", "--hold-ms", "0.2", "--out", str(out), preexec_fn=small_files)
     assert p.returncode == 1 and "could not be written" in p.stderr.strip().splitlines()[-1], p.stderr
     assert not out.exists() or not [f.name for f in out.iterdir() if f.name.startswith("tensile")]
+
+
+def test_a_preset_axis_with_the_authors_preset_changes_what_the_accuracy_settings_leave_open(tmp_path):
+    """The four settings every preset fills are given; the authors' preset fills more (twist, its drag, its
+    dashpots), so an axis over fast and crassous2023 still changes the runs: expanded, not refused."""
+    fixed = {**{k: v for k, v in TINY.items() if k != "preset"}, "lx": 0.4, "resolution": 16, "sagitta_radius": 0,
+             "implicit_axial": False, "dt_safety": 0.35}
+    jobs = load_sweep(config(tmp_path, {"fixed": fixed, "sweep": {"axes": {"preset": ["fast", "crassous2023"]}}}))[1]
+    assert len(jobs) == 2 and {j.params["preset"] for j in jobs} == {"fast", "crassous2023"}
