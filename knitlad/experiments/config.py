@@ -299,7 +299,7 @@ class CutConfig(_WithPreset, _YarnAndKnit):
     # fields added here after the experiments built on this config (cycle, tensile, snag, resistance) had run
     # sweeps: at their default they stay out of those scenes' job ids too (their ADDED_LATER lists their own)
     ADDED_LATER_FOR_ALL: ClassVar[tuple[str, ...]] = ("band_curvature", "bars", "clip_friction", "knit_seed",
-                                                      *KNIT_SOURCES)
+                                                      "drag_lambda", "spin_drag", "contact_dashpot", *KNIT_SOURCES)
     COMPOSED: ClassVar[dict[str, str]] = {
         "preset": "the resolution and the settings beside it (PRESETS)",
         "d_over_l0": "material (material_of)",

@@ -479,9 +479,11 @@ def test_a_field_added_to_the_laddering_config_later_keeps_every_scenes_ids(scen
     its two finished jobs to it)."""
     job = expand(SweepConfig.model_validate({"scene": scene, "fixed": {"n_x": 6, "n_y": 6, **fixed},
                                              "sweep": {"axes": {"mu": [0.4]}}}))[0]
-    before = {k: v for k, v in job.params.items() if k != "band_curvature"}
+    later = ("band_curvature", "drag_lambda", "spin_drag", "contact_dashpot")  # the last three: the authors' preset's
+    before = {k: v for k, v in job.params.items() if k not in later}
     assert job.id == job_id(scene, before, job.output)
     assert job_id(scene, {**job.params, "band_curvature": 2.0}, job.output) != job.id
+    assert job_id(scene, {**job.params, "contact_dashpot": "absolute"}, job.output) != job.id
 
 
 def test_an_ensemble_member_that_stretched_to_another_members_knit_is_said_and_counted_once():
