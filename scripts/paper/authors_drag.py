@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from knitlad.io.summary import mean_sd
+
 CEILING_CHANGE = 0.10  # the paper's beta sqrt(f) law kept within 10 %
 PAPER_DER = {1.58: 0.176, 15.67: 1.05}  # the paper's DER v_lad/c_b, 42 x 42, mu 0.4 (Fig. 3c)
 
@@ -82,17 +84,6 @@ def single_loop(path: str) -> pd.DataFrame:
     return table
 
 
-def spread(values, scale: float = 1.0, digits: int = 3, sign: str = "") -> str:
-    """mean +- standard deviation over knits (one: the value and "(1 run)")."""
-    v = np.asarray(values, dtype=float) * scale
-    v = v[np.isfinite(v)]
-    if len(v) == 0:
-        return "-"
-    if len(v) == 1:
-        return f"{v[0]:{sign}.{digits}f} (1 run)"
-    return f"{v.mean():{sign}.{digits}f} +- {v.std(ddof=1):.{digits}f}"
-
-
 def markdown(changes: pd.DataFrame, title: str) -> str:
     """One row per point and lambda, over its knits."""
     from knitlad.engine.dissipation import authors_drag_per_s
@@ -101,7 +92,7 @@ def markdown(changes: pd.DataFrame, title: str) -> str:
     lines = [f"| {title}: f_x | lambda | gamma [1/s] | knits | v_lad/c_b | change [%] |", "|---|---|---|---|---|---|"]
     for (point, lam), g in changes.groupby(["point", "drag_lambda"]):
         lines.append(f"| {point:g} | {lam:g} | {authors_drag_per_s(lam, NYLON):.3g} | {len(g)} | "
-                     f"{spread(g.v_lad_over_cb)} | {spread(g.change, 100, 1, '+')} |")
+                     f"{mean_sd(g.v_lad_over_cb, '.3f', '.3f')} | {mean_sd(g.change, '+.1f', '.1f', 100)} |")
     return "\n".join(lines)
 
 

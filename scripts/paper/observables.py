@@ -22,16 +22,7 @@ import pandas as pd
 
 from knitlad.experiments.resistance import LADDERING_ONSET_CELLS
 from knitlad.fabric.measure import arrest_threshold
-
-
-def mean_sd(values) -> str:
-    v = np.asarray(values, dtype=float)
-    v = v[np.isfinite(v)]
-    if len(v) == 0:
-        return "-"
-    if len(v) == 1:
-        return f"{v[0]:.3g} (1 run)"
-    return f"{v.mean():.3g} +- {v.std(ddof=1):.2g}"
+from knitlad.io.summary import mean_sd
 
 
 def arrested(frame: pd.DataFrame) -> pd.Series:
