@@ -1,3 +1,4 @@
+"""knitlad/io/summary.py: the tables' helpers."""
 
 
 def test_a_point_over_its_knits_is_mean_and_standard_deviation_and_one_run_says_so():
