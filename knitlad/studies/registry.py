@@ -24,7 +24,6 @@ from typing import Any, Callable
 from pydantic import BaseModel
 
 from knitlad.engine.units import si_twin_meanings, si_twins
-
 from knitlad.experiments.config import (
     CutConfig,
     CycleConfig,
